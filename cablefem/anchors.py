@@ -1,0 +1,87 @@
+"""Anchor forces: the consistent reaction at every anchor, gathered across MPI ranks.
+
+The force that the span transmits at anchor ``a`` (pointing into the span) is
+``N_a = −R_a``, where ``R_a`` is the assembled residual of the *unconstrained* weak form at
+the anchor's degrees of freedom (``../shared/docs/physics.md`` section 3, step 1). It holds
+the inertia, damping and weight of the half element next to the anchor, which makes it more
+accurate than the first element's tension.
+
+In dynamics the residual needs the acceleration at the output time. The generalised-α method
+satisfies equilibrium at its intermediate stage, not at ``t_{n+1}``; so the acceleration is
+recomputed from the semi-discrete equation of motion at ``t_{n+1}``: ``M_ff a_f = −r_f(u, v,
+a_b)`` with the anchors' prescribed accelerations ``a_b``. The reaction is then the one that
+balances the discrete equations exactly at that time.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from dolfinx.fem import petsc as fpetsc
+from mpi4py import MPI
+from petsc4py import PETSc
+
+from .petsc_utils import ADD, FORWARD, INSERT, REVERSE, lu_options, set_default_options
+
+__all__ = ["AnchorForces"]
+
+
+class AnchorForces:
+    """Computes ``N_a`` for every anchor of a :class:`~cablefem.model.CableModel`."""
+
+    def __init__(self, model) -> None:
+        self.model = model
+        self.R = fpetsc.create_vector(model.f_dynamic)
+        self.M = fpetsc.assemble_matrix(model.m_form, model.bcs, diagonal=1.0)
+        self.M.assemble()
+        prefix = model.prefix + "mass_"
+        set_default_options(prefix, lu_options(model.comm.size))
+        self.ksp = PETSc.KSP().create(model.comm)
+        self.ksp.setOptionsPrefix(prefix)
+        self.ksp.setOperators(self.M)
+        self.ksp.setFromOptions()
+        self.da = self.M.createVecRight()
+
+    def _assemble(self) -> None:
+        with self.R.localForm() as loc:
+            loc.set(0.0)
+        fpetsc.assemble_vector(self.R, self.model.f_dynamic)
+        self.R.ghostUpdate(addv=ADD, mode=REVERSE)
+
+    def equilibrium_acceleration(self, t: float) -> None:
+        """Set ``model.a`` to the acceleration that satisfies the equations of motion at
+        ``t`` for the current ``model.u`` and ``model.v`` (anchors: prescribed)."""
+        m = self.model
+        m.a.x.array[:] = 0.0
+        for anc in m.anchors:
+            if anc.dofs.size:
+                m.a.x.array[anc.flat_dofs] = np.tile(anc.acceleration(t), anc.dofs.size)
+        self._assemble()
+        self.R.scale(-1.0)
+        fpetsc.set_bc(self.R, m.bcs, scale=0.0)  # zero rows: anchors keep a_b
+        self.ksp.solve(self.R, self.da)
+        if self.ksp.getConvergedReason() < 0:
+            raise RuntimeError(f"mass-matrix solve failed at t={t:g} "
+                               f"(KSP reason {self.ksp.getConvergedReason()})")
+        self.da.ghostUpdate(addv=INSERT, mode=FORWARD)
+        m.a.vector.axpy(1.0, self.da)
+        m.a.vector.ghostUpdate(addv=INSERT, mode=FORWARD)
+
+    def compute(self, t: float, dynamic: bool = True) -> np.ndarray:
+        """Anchor forces ``N_a`` (n_anchors, 3) in N, identical on every rank.
+
+        With ``dynamic=False`` velocity and acceleration are taken as zero (statics).
+        """
+        m = self.model
+        if dynamic:
+            self.equilibrium_acceleration(t)
+        else:
+            m.a.x.array[:] = 0.0
+        self._assemble()
+        n_owned = m.V.dofmap.index_map.size_local
+        local = np.zeros((len(m.anchors), 3))
+        arr = self.R.array_r
+        for i, anc in enumerate(m.anchors):
+            own = anc.dofs[anc.dofs < n_owned]
+            if own.size:
+                local[i] = -arr[3 * own[0]: 3 * own[0] + 3]
+        return m.comm.allreduce(local, op=MPI.SUM)

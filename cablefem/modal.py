@@ -1,0 +1,141 @@
+"""Modal analysis about the static state with SLEPc.
+
+Generalised symmetric eigenproblem ``K0 φ = ω² M φ`` with ``K0`` the tangent stiffness at
+static equilibrium (elastic plus geometric stiffness) and ``M`` the consistent mass (plus
+point masses). Anchor rows: ``K0`` has 1 on the diagonal and ``M`` 0, which sends the
+constrained directions to infinite eigenvalues; shift-and-invert about 0 returns the lowest
+finite ones. PETSc/SLEPc options prefix ``<model prefix>modal_``.
+
+Every mode is classified: *in-plane* or *out-of-plane* (the plane of the chord and gravity,
+by the share of the mode's nodal amplitude normal to it) and, for a level cable with a
+mirror-symmetric mesh, *symmetric* or *antisymmetric* about mid-span (by the correlation of
+the mode with its mirror image).
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from dataclasses import dataclass
+
+import numpy as np
+from dolfinx import fem
+from dolfinx.fem import petsc as fpetsc
+from petsc4py import PETSc
+from slepc4py import SLEPc
+
+from .petsc_utils import lu_options, set_default_options
+
+__all__ = ["ModalResult", "solve_modes", "classify_mode"]
+
+log = logging.getLogger(__name__)
+
+
+@dataclass
+class ModalResult:
+    omegas: np.ndarray  #: natural circular frequencies, rad/s (ascending)
+    shapes: list[fem.Function]  #: mode shapes (max nodal amplitude 1)
+    labels: list[dict]  #: classification of each mode
+    wall_time: float
+
+    @property
+    def frequencies_hz(self) -> np.ndarray:
+        return self.omegas / (2 * np.pi)
+
+
+def classify_mode(stations: np.ndarray, shape: np.ndarray, chord: np.ndarray,
+                  gravity_dir: np.ndarray | None, level: bool) -> dict:
+    """Classify a nodal mode shape (n_nodes, 3) in station order.
+
+    Returns ``{"plane": "in-plane"|"out-of-plane"|"n/a", "symmetry": "symmetric"|
+    "antisymmetric"|"n/a", "out_of_plane_share": float, "symmetry_correlation": float}``.
+    """
+    e_c = chord / np.linalg.norm(chord)
+    out: dict = {"plane": "n/a", "symmetry": "n/a"}
+    norm2 = float(np.sum(shape * shape))
+    if gravity_dir is not None:
+        n = np.cross(e_c, gravity_dir)
+        if np.linalg.norm(n) > 1e-8:
+            n /= np.linalg.norm(n)
+            share = float(np.sum((shape @ n) ** 2) / norm2)
+            out["out_of_plane_share"] = share
+            out["plane"] = "out-of-plane" if share > 0.5 else "in-plane"
+    if level:
+        L = stations[-1]
+        mirrored = np.column_stack([np.interp(L - stations, stations, shape[:, k])
+                                    for k in range(3)])
+        P = np.eye(3) - 2.0 * np.outer(e_c, e_c)
+        corr = float(np.sum(shape * (mirrored @ P.T)) / norm2)
+        out["symmetry_correlation"] = corr
+        if corr > 0.5:
+            out["symmetry"] = "symmetric"
+        elif corr < -0.5:
+            out["symmetry"] = "antisymmetric"
+    return out
+
+
+def solve_modes(model, n: int = 6) -> ModalResult:
+    """The ``n`` lowest natural frequencies and modes about the current state ``model.u``
+    (call :func:`cablefem.statics.solve_static` first)."""
+    t0 = time.perf_counter()
+    K = fpetsc.assemble_matrix(model.j_static, model.bcs, diagonal=1.0)
+    K.assemble()
+    M = fpetsc.assemble_matrix(model.m_form, model.bcs, diagonal=0.0)
+    M.assemble()
+    prefix = model.prefix + "modal_"
+    set_default_options(prefix, {"st_type": "sinvert", "eps_target": 0.0,
+                                 "eps_tol": 1e-12, **{"st_" + k: v for k, v in
+                                                      lu_options(model.comm.size).items()}})
+    eps = SLEPc.EPS().create(model.comm)
+    eps.setOptionsPrefix(prefix)
+    eps.setOperators(K, M)
+    eps.setProblemType(SLEPc.EPS.ProblemType.GHEP)
+    eps.setWhichEigenpairs(SLEPc.EPS.Which.TARGET_MAGNITUDE)
+    eps.setDimensions(n, max(2 * n + 1, n + 15))
+    eps.setFromOptions()
+    eps.solve()
+    nconv = eps.getConverged()
+    if nconv < n:
+        raise RuntimeError(f"modal analysis: only {nconv} of {n} eigenpairs converged")
+    vals, shapes = [], []
+    vr = K.createVecRight()
+    for i in range(nconv):
+        lam = eps.getEigenpair(i, vr).real
+        f = fem.Function(model.V, name=f"mode_{i + 1}")
+        vr.copy(f.vector)
+        f.x.scatter_forward()
+        vals.append(lam)
+        shapes.append(f)
+    order = np.argsort(vals)[:n]
+    omegas = np.sqrt(np.maximum(np.array(vals)[order], 0.0))
+    if np.any(np.array(vals)[order] < 0):
+        log.warning("modal: negative eigenvalue(s): the static state is not stable")
+    shapes = [shapes[i] for i in order]
+    a0, a1 = model.anchors
+    chord = a1.position - a0.position
+    g = model.case.gravity
+    gdir = np.asarray(g.direction, float) if g.g > 0 else None
+    level = gdir is not None and abs(chord @ gdir) < 1e-9 * np.linalg.norm(chord)
+    st = model.geometry.stations
+    level = level and np.allclose(st, st[-1] - st[::-1], atol=1e-12 * st[-1])
+    labels = []
+    for i, f in enumerate(shapes):
+        nodal = model.gather_nodal(f)
+        lab = None
+        if model.comm.rank == 0:
+            amax = np.max(np.abs(nodal))
+            lab = classify_mode(st, nodal / amax, chord, gdir, level)
+            sign = np.sign(nodal.flat[np.argmax(np.abs(nodal))])
+            lab["scale"] = float(sign / amax)
+        lab = model.comm.bcast(lab, root=0)
+        f.x.array[:] *= lab.pop("scale")
+        f.name = f"mode_{i + 1}"
+        labels.append(lab)
+    eps.destroy()
+    K.destroy()
+    M.destroy()
+    res = ModalResult(omegas, shapes, labels, time.perf_counter() - t0)
+    for i, (w, lab) in enumerate(zip(omegas, labels)):
+        log.info("mode %d: omega = %.6g rad/s (f = %.6g Hz) %s %s", i + 1, w, w / 2 / np.pi,
+                 lab["plane"], lab["symmetry"])
+    return res

@@ -1,0 +1,375 @@
+"""A cable model: mesh, function spaces, unknowns, anchors and the string's forms.
+
+:class:`CableModel` turns a validated :class:`cablefem.case.Case` into dolfinx objects and
+keeps them in the open: ``model.mesh``, ``model.V``, the unknowns ``model.u``, ``model.v``,
+``model.a``, the boundary conditions ``model.bcs`` and the UFL residuals
+``model.F_static`` / ``model.F_dynamic`` with their Jacobians. A user may add a term to a
+residual and call :meth:`CableModel.compile` again before solving.
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass, field
+
+import numpy as np
+import ufl
+from dolfinx import fem, mesh as dmesh
+from mpi4py import MPI
+from petsc4py import PETSc
+
+from . import catenary, string
+from .case import Case, CaseError
+from .motion import Motion
+from .network import CableGeometry, create_line_mesh, polyline_cable, straight_cable, \
+    graded_stations
+
+__all__ = ["CableModel", "AnchorBC"]
+
+log = logging.getLogger(__name__)
+
+
+@dataclass
+class AnchorBC:
+    """One anchor of the cable: where it is, how it moves, which degrees of freedom it holds."""
+
+    name: str
+    node: int  #: node index in the cable's station order
+    reference: np.ndarray  #: reference (stress-free) position X of the anchor node, m
+    position: np.ndarray  #: static position of the anchor, m
+    kind: str  #: "clamped" or "pinned"
+    direction: np.ndarray | None  #: unit clamp direction into the cable (clamped only)
+    motion: Motion | None
+    dofs: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int32))
+    owned: bool = False  #: True on the one rank that owns the anchor's dofs
+
+    @property
+    def flat_dofs(self) -> np.ndarray:
+        """Unrolled (x, y, z) indices of the anchor's dofs in a local array."""
+        return (3 * self.dofs[:, None] + np.arange(3)[None, :]).reshape(-1)
+
+    def displacement(self, t: float) -> np.ndarray:
+        """Prescribed displacement of the anchor node from its reference position, m."""
+        d = self.position - self.reference
+        if self.motion is not None:
+            d = d + self.motion.displacement(t)
+        return d
+
+    def velocity(self, t: float) -> np.ndarray:
+        return np.zeros(3) if self.motion is None else np.asarray(self.motion.velocity(t))
+
+    def acceleration(self, t: float) -> np.ndarray:
+        return np.zeros(3) if self.motion is None else np.asarray(self.motion.acceleration(t))
+
+
+def _chord_frame(p: np.ndarray, q: np.ndarray, gdir: np.ndarray) -> tuple[float, float]:
+    """Horizontal span and rise of the chord p -> q in the vertical plane of gravity."""
+    d = q - p
+    up = -gdir
+    rise = float(d @ up)
+    span = float(np.linalg.norm(d - rise * up))
+    return span, rise
+
+
+class CableModel:
+    """The extensible string of one cable, ready to be solved.
+
+    Parameters
+    ----------
+    case
+        A validated case (:func:`cablefem.case.load_case`).
+    comm
+        MPI communicator; the mesh is partitioned over it.
+    prefix
+        PETSc options prefix of every solver of this model (``cable_`` by default, so that
+        ``-cable_ts_type`` or ``-cable_static_snes_rtol`` reach them).
+    """
+
+    def __init__(self, case: Case, comm: MPI.Comm = MPI.COMM_WORLD, prefix: str = "cable_"):
+        self.case = case
+        self.comm = comm
+        self.prefix = prefix
+        sec = case.section
+        self.g_vec = np.asarray(case.gravity.direction, dtype=float) * case.gravity.g
+        self.weight = sec.mass * case.gravity.g  # N/m
+        self.tension_only = case.solver.tension_only
+
+        self.geometry, self.initial_shape = self._build_geometry()
+        self.length = self.geometry.length
+        self.mesh = create_line_mesh(comm, self.geometry.points, self.geometry.cells)
+        self.mesh.topology.create_connectivity(0, 1)
+        self.V = fem.VectorFunctionSpace(self.mesh, ("Lagrange", 1), dim=3)
+        self.W = fem.FunctionSpace(self.mesh, ("DG", 0))
+        self.u = fem.Function(self.V, name="displacement")
+        self.v = fem.Function(self.V, name="velocity")
+        self.a = fem.Function(self.V, name="acceleration")
+        self.u_static = fem.Function(self.V, name="static_displacement")
+        self.u_bc = fem.Function(self.V, name="prescribed_displacement")
+        self.du = ufl.TestFunction(self.V)
+        self.dw = ufl.TrialFunction(self.V)
+        self.t0 = string.reference_tangent(self.mesh)
+
+        m = self.mesh
+        self.EA = fem.Constant(m, PETSc.ScalarType(sec.EA))
+        self.m = fem.Constant(m, PETSc.ScalarType(sec.mass))
+        self.gravity = fem.Constant(m, np.asarray(self.g_vec, dtype=PETSc.ScalarType))
+        self.load_factor = fem.Constant(m, PETSc.ScalarType(1.0))
+        self.shift_v = fem.Constant(m, PETSc.ScalarType(0.0))
+        self.shift_a = fem.Constant(m, PETSc.ScalarType(0.0))
+        self.loads = [(fem.Constant(m, np.asarray(ld.value, dtype=PETSc.ScalarType)), ld)
+                      for ld in case.loads]
+        self.point_loads = [(fem.Constant(m, np.asarray(pl.value, dtype=PETSc.ScalarType)), pl)
+                            for pl in case.point_loads]
+
+        self.anchors = self._build_anchors()
+        self.bcs = [fem.dirichletbc(self.u_bc, a.dofs) for a in self.anchors]
+        self._point_tags()
+        self.build_forms()
+        self.compile()
+        self._nodal_map()
+        self.set_time(0.0)
+
+    # ------------------------------------------------------------------ geometry
+    def _build_geometry(self):
+        case = self.case
+        sec = case.section
+        a0, a1 = case.anchors
+        names = (a0.name, a1.name)
+        gdir = np.asarray(case.gravity.direction, dtype=float)
+        extra = [pm.s for pm in case.point_masses] + [pl.s for pl in case.point_loads]
+        geo = case.geometry
+        if geo.kind == "polyline":
+            poly = np.asarray(geo.polyline, dtype=float)
+            p = np.asarray(a0.position if a0.position is not None else poly[0], dtype=float)
+            q = np.asarray(a1.position if a1.position is not None else poly[-1], dtype=float)
+            length = float(np.sum(np.linalg.norm(np.diff(poly, axis=0), axis=1)))
+        else:
+            p = np.asarray(a0.position, dtype=float)
+            q = np.asarray(a1.position, dtype=float)
+            span, rise = _chord_frame(p, q, gdir)
+            try:
+                if geo.kind == "length":
+                    length = float(geo.value)
+                elif geo.kind == "horizontal_tension":
+                    length = catenary.length_for_horizontal_tension(
+                        span, rise, float(geo.value), self.weight, sec.EA)
+                else:
+                    length = catenary.length_for_sag_ratio(
+                        span, rise, float(geo.value), self.weight, sec.EA)
+            except ValueError as err:
+                raise CaseError([(f"geometry.{geo.kind}", str(err))], case.source) from None
+        bad = [(f"point masses/loads s={s:g}", f"must satisfy 0 < s < l = {length:g} m")
+               for s in extra if not 0.0 < s < length]
+        if bad:
+            raise CaseError(bad, case.source)
+        if geo.kind == "polyline":
+            g = polyline_cable(poly, case.mesh.elements, case.mesh.grading, names, tuple(extra))
+        else:
+            stations = graded_stations(length, case.mesh.elements, case.mesh.grading,
+                                       tuple(extra))
+            g = straight_cable(p, (q - p) / np.linalg.norm(q - p), stations, names)
+        # initial shape: the elastic catenary through the anchors (exact for the bare cable)
+        try:
+            shape = catenary.catenary_between(p, q, length, self.weight, sec.EA, gdir)
+            r0 = shape.position(g.stations)
+        except ValueError as err:
+            raise CaseError([("geometry", f"no static equilibrium of the bare cable: {err}")],
+                            case.source) from None
+        self._anchor_positions = (p, q)
+        return g, r0
+
+    def _locate_node(self, k: int) -> np.ndarray:
+        """Local vertex indices (0 or 1 of them) of reference node ``k``."""
+        X = self.geometry.points[k]
+        tol = 1e-9 * max(1.0, float(np.max(np.abs(self.geometry.points))))
+
+        def marker(x):
+            return np.linalg.norm(x.T - X[None, :], axis=1) < tol
+
+        return dmesh.locate_entities(self.mesh, 0, marker)
+
+    def _build_anchors(self) -> list[AnchorBC]:
+        out = []
+        imap = self.V.dofmap.index_map
+        for spec, pos in zip(self.case.anchors, self._anchor_positions):
+            k = self.geometry.anchor_nodes[spec.name]
+            verts = self._locate_node(k)
+            dofs = fem.locate_dofs_topological(self.V, 0, verts)
+            owned = bool(np.any(dofs < imap.size_local))
+            other = self._anchor_positions[1] if k == 0 else self._anchor_positions[0]
+            direction = None
+            if spec.kind == "clamped":
+                direction = spec.direction
+                if direction is None:
+                    direction = (other - pos) / np.linalg.norm(other - pos)
+                direction = np.asarray(direction, dtype=float)
+                direction = direction / np.linalg.norm(direction)
+            out.append(AnchorBC(spec.name, k, self.geometry.points[k].copy(), pos.copy(),
+                                spec.kind, direction, spec.motion, dofs, owned))
+        nowners = [self.comm.allreduce(int(a.owned)) for a in out]
+        if any(n != 1 for n in nowners):
+            raise RuntimeError(f"anchor ownership is not unique across ranks: {nowners}")
+        return out
+
+    def _point_tags(self) -> None:
+        """Vertex tags for point masses and point loads (one tag per loaded node)."""
+        nodes = sorted({self.geometry.node_at(pm.s) for pm in self.case.point_masses}
+                       | {self.geometry.node_at(pl.s) for pl in self.case.point_loads})
+        self._node_tag = {k: i + 1 for i, k in enumerate(nodes)}
+        ents, vals = [], []
+        for k, tag in self._node_tag.items():
+            v = self._locate_node(k)
+            ents.append(v)
+            vals.append(np.full(v.size, tag, dtype=np.int32))
+        ents_a = np.concatenate(ents).astype(np.int32) if ents else np.zeros(0, np.int32)
+        vals_a = np.concatenate(vals) if vals else np.zeros(0, np.int32)
+        order = np.argsort(ents_a)
+        tags = dmesh.meshtags(self.mesh, 0, ents_a[order], vals_a[order])
+        self.dS = ufl.Measure("dS", domain=self.mesh, subdomain_data=tags)
+
+    # ------------------------------------------------------------------ forms
+    def build_forms(self) -> None:
+        """Build the UFL residuals and Jacobians (override or extend, then :meth:`compile`)."""
+        u, v, a, du, dw, t0 = self.u, self.v, self.a, self.du, self.dw, self.t0
+        case = self.case
+        self.F_internal = string.internal_work(u, du, t0, self.EA, self.tension_only)
+        # the cable's own weight, then "extra" loads that statics may ramp (load_factor)
+        F_ext = string.load_work(self.m * self.gravity, du)
+        extra = None
+        for c, _ in self.loads:
+            extra = string.load_work(c, du) if extra is None else extra + string.load_work(c, du)
+        for pm in case.point_masses:
+            tag = self._node_tag[self.geometry.node_at(pm.s)]
+            term = pm.mass * ufl.inner(self.gravity, du("+")) * self.dS(tag)
+            extra = term if extra is None else extra + term
+        for c, pl in self.point_loads:
+            tag = self._node_tag[self.geometry.node_at(pl.s)]
+            term = ufl.inner(c, du("+")) * self.dS(tag)
+            extra = term if extra is None else extra + term
+        if extra is not None:
+            F_ext = F_ext + self.load_factor * extra
+        self.F_external = F_ext
+
+        F_inertia = string.inertia_work(self.m, a, du)
+        for pm in case.point_masses:
+            tag = self._node_tag[self.geometry.node_at(pm.s)]
+            F_inertia = F_inertia + pm.mass * ufl.inner(a("+"), du("+")) * self.dS(tag)
+        self.F_inertia = F_inertia
+
+        damp = case.damping
+        F_damp = None
+        if damp.model == "rayleigh" and (damp.alpha > 0 or damp.beta > 0):
+            F_damp = damp.alpha * ufl.replace(F_inertia, {a: v})
+            if damp.beta > 0:
+                K0 = ufl.derivative(
+                    string.internal_work(self.u_static, du, t0, self.EA, self.tension_only),
+                    self.u_static, dw)
+                F_damp = F_damp + damp.beta * ufl.action(K0, v)
+        elif damp.model == "axial" and damp.beta > 0:
+            F_damp = string.axial_damping_work(u, v, du, t0, self.EA, damp.beta)
+        self.F_damping = F_damp
+
+        self.F_static = self.F_internal - self.F_external
+        self.F_dynamic = F_inertia + self.F_internal - self.F_external
+        if F_damp is not None:
+            self.F_dynamic = self.F_dynamic + F_damp
+        self.J_static = ufl.derivative(self.F_static, u, dw)
+        J = ufl.derivative(self.F_dynamic, u, dw) + self.shift_a * ufl.derivative(
+            self.F_dynamic, a, dw)
+        if F_damp is not None:
+            J = J + self.shift_v * ufl.derivative(self.F_dynamic, v, dw)
+        self.J_dynamic = J
+        self.M_form = ufl.derivative(F_inertia, a, dw)
+
+    def compile(self) -> None:
+        """JIT-compile the forms (FFCx caches them: later runs take milliseconds)."""
+        self.f_static = fem.form(self.F_static)
+        self.j_static = fem.form(self.J_static)
+        self.f_dynamic = fem.form(self.F_dynamic)
+        self.j_dynamic = fem.form(self.J_dynamic)
+        self.m_form = fem.form(self.M_form)
+        self.tension_expr = fem.Expression(
+            string.tension(self.u, self.t0, self.EA, self.tension_only),
+            self.W.element.interpolation_points())
+        self.strain_expr = fem.Expression(string.axial_strain(self.u, self.t0),
+                                          self.W.element.interpolation_points())
+        self.energy_forms = (
+            fem.form(0.5 * ufl.inner(self.v, self.v) * self.m * ufl.dx),
+            fem.form(string.strain_energy_density(self.u, self.t0, self.EA, self.tension_only)
+                     * ufl.dx),
+            fem.form(-ufl.inner(self.m * self.gravity, self.u) * ufl.dx))
+
+    # ------------------------------------------------------------------ time
+    def set_time(self, t: float) -> None:
+        """Set prescribed anchor displacements and time-dependent loads to time ``t``."""
+        if t == getattr(self, "_time", None):
+            return
+        self._time = t
+        arr = self.u_bc.x.array
+        for anc in self.anchors:
+            if anc.dofs.size:
+                arr[anc.flat_dofs] = np.tile(anc.displacement(t), anc.dofs.size)
+        for c, ld in self.loads:
+            c.value[:] = np.asarray(ld.value) * ld.time.value(t)
+        for c, pl in self.point_loads:
+            c.value[:] = np.asarray(pl.value) * pl.time.value(t)
+
+    # ------------------------------------------------------------------ fields
+    def tension_field(self, name: str = "tension") -> fem.Function:
+        f = fem.Function(self.W, name=name)
+        f.interpolate(self.tension_expr)
+        return f
+
+    def strain_field(self, name: str = "strain") -> fem.Function:
+        f = fem.Function(self.W, name=name)
+        f.interpolate(self.strain_expr)
+        return f
+
+    def slack_elements(self) -> int:
+        """Number of elements that carry no tension (strain <= 0), over all ranks."""
+        e = self.strain_field()
+        n_owned = self.mesh.topology.index_map(1).size_local
+        return self.comm.allreduce(int(np.count_nonzero(e.x.array[:n_owned] <= 0.0)))
+
+    def energies(self) -> dict[str, float]:
+        """Kinetic, strain and gravity potential energy (J), summed over ranks."""
+        vals = [self.comm.allreduce(fem.assemble_scalar(f), op=MPI.SUM)
+                for f in self.energy_forms]
+        return {"kinetic": vals[0], "strain": vals[1], "gravity": vals[2]}
+
+    # ------------------------------------------------------------------ nodal gather
+    def _nodal_map(self) -> None:
+        """Owned dof block -> node index in station order (for gathering to rank 0)."""
+        from scipy.spatial import cKDTree
+
+        n_owned = self.V.dofmap.index_map.size_local
+        xyz = self.V.tabulate_dof_coordinates()[:n_owned]
+        tree = cKDTree(self.geometry.points)
+        dist, idx = tree.query(xyz)
+        scale = max(1.0, float(np.max(np.abs(self.geometry.points))))
+        if dist.size and dist.max() > 1e-8 * scale:
+            raise RuntimeError("could not map mesh dofs to cable nodes")
+        self._owned_nodes = idx.astype(np.int64)
+
+    def gather_nodal(self, f: fem.Function, root: int = 0) -> np.ndarray | None:
+        """Values of a P1 vector function at the nodes in station order, on ``root`` only."""
+        n_owned = self.V.dofmap.index_map.size_local
+        local = f.x.array[: 3 * n_owned].reshape(-1, 3)
+        parts = self.comm.gather((self._owned_nodes, local.copy()), root=root)
+        if self.comm.rank != root:
+            return None
+        out = np.full((len(self.geometry.stations), 3), np.nan)
+        for idx, vals in parts:
+            out[idx] = vals
+        return out
+
+    def scatter_nodal(self, values: np.ndarray, f: fem.Function) -> None:
+        """Set a P1 vector function from nodal values in station order (given on all ranks)."""
+        n_owned = self.V.dofmap.index_map.size_local
+        f.x.array[: 3 * n_owned] = np.asarray(values)[self._owned_nodes].reshape(-1)
+        f.x.scatter_forward()
+
+    def dimensionless_groups(self) -> dict:
+        from .properties import dimensionless_groups
+
+        return dimensionless_groups(self.case.section, self.length, self.case.gravity.g)

@@ -1,0 +1,146 @@
+"""Static equilibrium of the string with PETSc SNES (Newton with line search).
+
+Start: the elastic catenary through the anchors (exact for the bare cable up to the
+discretisation, :mod:`cablefem.catenary`). If Newton fails from there, the *extra* loads
+(point masses' weight, point loads, distributed loads beyond the cable's own weight) are
+ramped by load continuation from the bare-cable catenary (where they are zero and the guess
+is an equilibrium) to their full value, with an adaptive load increment.
+
+PETSc options prefix: ``<model prefix>static_`` (default ``cable_static_``).
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from dataclasses import dataclass
+
+import numpy as np
+from dolfinx.fem import petsc as fpetsc
+from mpi4py import MPI
+from petsc4py import PETSc
+
+from .anchors import AnchorForces
+from .petsc_utils import (SNESHistory, assemble_jacobian, assemble_residual, copy_in,
+                          lu_options, set_default_options)
+
+__all__ = ["StaticResult", "StaticError", "solve_static"]
+
+log = logging.getLogger(__name__)
+
+
+class StaticError(RuntimeError):
+    """Static equilibrium could not be found; the message says where and why."""
+
+
+@dataclass
+class StaticResult:
+    anchor_forces: np.ndarray  #: (n_anchors, 3) N, force of the span at each anchor
+    newton_iterations: int
+    continuation_steps: int
+    slack_elements: int
+    max_tension: float
+    min_tension: float
+    wall_time: float
+
+
+def _make_snes(model, history: SNESHistory) -> tuple[PETSc.SNES, PETSc.Vec]:
+    prefix = model.prefix + "static_"
+    scale = max(model.weight * model.length, 1e-300)
+    defaults = {"snes_type": "newtonls", "snes_linesearch_type": "bt", "snes_max_it": 50,
+                "snes_rtol": 1e-10, "snes_atol": 1e-10 * scale, "snes_stol": 0.0,
+                **lu_options(model.comm.size)}
+    set_default_options(prefix, defaults, model.case.solver.petsc_options)
+    b = fpetsc.create_vector(model.f_static)
+    A = fpetsc.create_matrix(model.j_static)
+    snes = PETSc.SNES().create(model.comm)
+    snes.setOptionsPrefix(prefix)
+
+    def F(snes, x, f):
+        copy_in(x, model.u)
+        assemble_residual(f, model.f_static, model.j_static, model.bcs, x)
+
+    def J(snes, x, jac, pre):
+        copy_in(x, model.u)
+        assemble_jacobian(jac, model.j_static, model.bcs)
+
+    snes.setFunction(F, b)
+    snes.setJacobian(J, A)
+    snes.setMonitor(history)
+    snes.setFromOptions()
+    return snes, b
+
+
+def _try(snes, x, history) -> tuple[bool, int]:
+    history.clear()
+    snes.solve(None, x)
+    return snes.getConvergedReason() > 0, snes.getIterationNumber()
+
+
+def solve_static(model, max_continuation_steps: int = 200) -> StaticResult:
+    """Solve the static equilibrium of ``model``; leaves it in ``model.u`` and
+    ``model.u_static``."""
+    t_start = time.perf_counter()
+    history = SNESHistory()
+    snes, _ = _make_snes(model, history)
+    model.set_time(0.0)
+    guess = model.initial_shape - model.geometry.points
+    model.scatter_nodal(guess, model.u)
+    x = model.u.vector.copy()
+    model.load_factor.value = 1.0
+    ok, its = _try(snes, x, history)
+    total_its, steps = its, 0
+    if not ok:
+        log.info("statics: Newton failed from the catenary (%s); load continuation",
+                 history.text())
+        has_extra = bool(model.case.point_masses or model.case.point_loads or model.case.loads)
+        if not has_extra:
+            raise StaticError(
+                "static equilibrium not found: Newton failed from the elastic catenary and "
+                f"there is no extra load to ramp. Newton history: {history.text()}. "
+                "Check the geometry (a weightless or very slack cable has no unique "
+                "equilibrium) or set solver.petsc_options.")
+        model.scatter_nodal(guess, model.u)
+        x = model.u.vector.copy()
+        lam, dlam = 0.0, 0.25
+        last = x.copy()
+        while lam < 1.0:
+            if steps >= max_continuation_steps or dlam < 1e-6:
+                raise StaticError(
+                    f"load continuation stalled at load factor {lam:.4g} (increment "
+                    f"{dlam:.2e}); last Newton history: {history.text()}")
+            trial = min(1.0, lam + dlam)
+            model.load_factor.value = trial
+            x.copy(last)
+            ok, its = _try(snes, x, history)
+            total_its += its
+            steps += 1
+            if ok:
+                lam = trial
+                dlam *= 1.5
+                log.info("statics: load factor %.4g converged in %d iterations", lam, its)
+            else:
+                last.copy(x)  # back to the last converged state
+                dlam *= 0.5
+        model.load_factor.value = 1.0
+    copy_in(x, model.u)
+    if not np.all(np.isfinite(model.u.x.array)):
+        raise StaticError("static solution contains NaN/inf")
+    model.u_static.x.array[:] = model.u.x.array
+    model.v.x.array[:] = 0.0
+    forces = AnchorForces(model).compute(0.0, dynamic=False)
+    T = model.tension_field()
+    n_owned = model.mesh.topology.index_map(1).size_local
+    tmax = model.comm.allreduce(float(np.max(T.x.array[:n_owned], initial=-np.inf)),
+                                op=MPI.MAX)
+    tmin = model.comm.allreduce(float(np.min(T.x.array[:n_owned], initial=np.inf)),
+                                op=MPI.MIN)
+    slack = model.slack_elements()
+    if slack:
+        log.warning("statics: %d slack element(s) carry no tension", slack)
+    res = StaticResult(forces, total_its, steps, slack, tmax, tmin,
+                       time.perf_counter() - t_start)
+    log.info("statics: converged in %d Newton iterations (%d continuation steps), "
+             "tension %.6g..%.6g N, %.2f s", total_its, steps, tmin, tmax, res.wall_time)
+    snes.destroy()
+    return res
