@@ -1,0 +1,180 @@
+"""Output: XDMF for ParaView, CSV histories and the JSON summary, MPI-correct.
+
+* ``string.xdmf`` (+ ``.h5``): displacement, velocity (P1, point data), tension and strain
+  (DG0, cell data) over time, written collectively by dolfinx. The mesh is the stress-free
+  reference; in ParaView apply *Warp By Vector* with ``displacement`` to see the cable.
+* ``moments.xdmf`` (+ ``.h5``): the composite curvature and bending moment on a line mesh of
+  its own, graded towards the clamped anchors, written by rank 0 with meshio from gathered
+  data. Points are the static deformed positions; ``displacement`` moves them to the
+  current ones (*Warp By Vector* again).
+* ``anchors.csv``: one row per output time and anchor, written by rank 0 and flushed at
+  every row, so that an interrupted run keeps what it computed.
+* ``summary.json``: written atomically (temporary file, then rename) by rank 0.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+import os
+from pathlib import Path
+
+import numpy as np
+from dolfinx import fem
+from dolfinx.io import XDMFFile
+from mpi4py import MPI
+
+__all__ = ["StringWriter", "AnchorCSV", "MomentsWriter", "write_json", "write_modes",
+           "jsonable"]
+
+
+def jsonable(obj):
+    """Convert numpy scalars/arrays and non-finite floats to plain JSON values."""
+    if isinstance(obj, dict):
+        return {str(k): jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [jsonable(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return jsonable(obj.tolist())
+    if isinstance(obj, (np.floating, float)):
+        x = float(obj)
+        return x if math.isfinite(x) else None
+    if isinstance(obj, (np.integer,)):
+        return int(obj)
+    if isinstance(obj, (np.bool_,)):
+        return bool(obj)
+    if isinstance(obj, Path):
+        return str(obj)
+    return obj
+
+
+def write_json(path: Path, data: dict, comm: MPI.Comm = MPI.COMM_WORLD) -> None:
+    """Write ``data`` as JSON from rank 0, atomically; collective (all ranks call it)."""
+    if comm.rank == 0:
+        path = Path(path)
+        tmp = path.with_suffix(path.suffix + ".tmp")
+        tmp.write_text(json.dumps(jsonable(data), indent=2) + "\n")
+        os.replace(tmp, path)
+    comm.Barrier()
+
+
+class StringWriter:
+    """``string.xdmf``: the string's fields over time (collective)."""
+
+    def __init__(self, model, path: Path) -> None:
+        self.model = model
+        self.file = XDMFFile(model.comm, str(path), "w")
+        self.file.write_mesh(model.mesh)
+        self.tension = fem.Function(model.W, name="tension")
+        self.strain = fem.Function(model.W, name="strain")
+
+    def write(self, t: float) -> None:
+        m = self.model
+        self.tension.interpolate(m.tension_expr)
+        self.strain.interpolate(m.strain_expr)
+        for f in (m.u, m.v, self.tension, self.strain):
+            if not np.all(np.isfinite(f.x.array)):
+                raise FloatingPointError(f"non-finite {f.name} at t = {t:g}: not written")
+        for f in (m.u, m.v, self.tension, self.strain):
+            self.file.write_function(f, t)
+
+    def close(self) -> None:
+        self.file.close()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+
+class AnchorCSV:
+    """``anchors.csv``, one row per output time and anchor (rank 0 writes; others no-op)."""
+
+    def __init__(self, path: Path, columns: list[str], comm: MPI.Comm = MPI.COMM_WORLD):
+        self.columns = columns
+        self.fh = None
+        if comm.rank == 0:
+            self.fh = open(path, "w", newline="")
+            self.writer = csv.writer(self.fh)
+            self.writer.writerow(columns)
+            self.fh.flush()
+
+    def write(self, rows: list[dict]) -> None:
+        if self.fh is None:
+            return
+        for row in rows:
+            self.writer.writerow([_cell(row.get(c, "")) for c in self.columns])
+        self.fh.flush()
+
+    def close(self) -> None:
+        if self.fh is not None:
+            self.fh.close()
+            self.fh = None
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+
+def _cell(v) -> str:
+    if isinstance(v, str):
+        return v
+    if isinstance(v, (bool, np.bool_)):
+        return str(int(v))
+    if isinstance(v, (int, np.integer)):
+        return str(int(v))
+    x = float(v)
+    return "" if not math.isfinite(x) else repr(x)
+
+
+class MomentsWriter:
+    """``moments.xdmf``: composite curvature and moment on a line mesh of its own (rank 0)."""
+
+    def __init__(self, path: Path, points: np.ndarray, comm: MPI.Comm = MPI.COMM_WORLD):
+        self.points0 = np.asarray(points, float)
+        self.writer = None
+        if comm.rank == 0:
+            import meshio
+
+            path = Path(path).resolve()
+            self.writer = meshio.xdmf.TimeSeriesWriter(path)
+            cwd = os.getcwd()
+            os.chdir(path.parent)  # meshio opens "<stem>.h5" in the current folder
+            try:
+                self.writer.__enter__()
+            finally:
+                os.chdir(cwd)
+            n = len(points)
+            cells = [("line", np.column_stack([np.arange(n - 1), np.arange(1, n)]))]
+            self.writer.write_points_cells(self.points0, cells)
+
+    def write(self, t: float, positions: np.ndarray, curvature: np.ndarray,
+              moment: np.ndarray, stations: np.ndarray) -> None:
+        if self.writer is None:
+            return
+        data = {"displacement": positions - self.points0, "curvature": curvature,
+                "moment": moment, "moment_magnitude": np.linalg.norm(moment, axis=1),
+                "s": stations}
+        for k, v in data.items():
+            if not np.all(np.isfinite(v)):
+                raise FloatingPointError(f"non-finite composite {k} at t = {t:g}")
+        self.writer.write_data(t, point_data=data)
+
+    def close(self) -> None:
+        if self.writer is not None:
+            self.writer.__exit__(None, None, None)
+            self.writer = None
+
+
+def write_modes(model, modal, path: Path) -> None:
+    """Mode shapes to XDMF; mode ``i`` is stored at "time" ``i`` (ParaView's time slider)."""
+    with XDMFFile(model.comm, str(path), "w") as f:
+        f.write_mesh(model.mesh)
+        shape = fem.Function(model.V, name="mode_shape")
+        for i, mode in enumerate(modal.shapes):
+            shape.x.array[:] = mode.x.array
+            f.write_function(shape, float(i + 1))

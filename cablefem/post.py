@@ -1,0 +1,145 @@
+"""From anchor forces to anchor bending moments: the columns of ``anchors.csv``.
+
+Pure NumPy (no dolfinx), so that ``cablefem post`` can apply it to anchor-force histories
+from any string solver. For a clamped anchor at every time (``../shared/docs/physics.md``
+sections 3-4):
+
+* the layer's closed form from the anchor force ``N_a`` (:func:`cablefem.asymptotics.layer`),
+* plus the string's own curvature at the anchor, ``EI κ_string(0)`` with
+  ``κ_string = t × (m a − f) / T`` (``a`` the anchor's acceleration, ``f`` the distributed
+  load at the anchor, weight included): ``M(0) = M_a(0) b_a + EI κ_string(0)``.
+
+``moment`` is the magnitude of that vector and ``Mx, My, Mz`` its components (internal
+moment in the anchor's direction of travel, into the span); ``moment_layer`` is the layer's
+term alone. Slack or invalid anchors get ``valid = 0`` and empty moment fields, never a
+silent zero.
+"""
+
+from __future__ import annotations
+
+import csv
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from . import asymptotics
+
+__all__ = ["ANCHOR_COLUMNS", "MOMENT_COLUMNS", "anchor_moments", "read_anchor_forces",
+           "AnchorHistory"]
+
+ANCHOR_COLUMNS = ["time", "anchor", "Nx", "Ny", "Nz", "tension"]
+MOMENT_COLUMNS = ["delta", "moment", "Mx", "My", "Mz", "psi0", "layer_length",
+                  "moment_layer", "valid"]
+
+
+def anchor_moments(forces: np.ndarray, direction: np.ndarray, EI: float, EA: float,
+                   mass: float, accel: np.ndarray, load: np.ndarray, length: float,
+                   omega: float | None = None, form: str = "exact") -> dict[str, np.ndarray]:
+    """Anchor moment columns for one clamped anchor over ``n`` times.
+
+    Parameters
+    ----------
+    forces : (n, 3) force the span transmits at the anchor, into the span, N.
+    direction : (3,) clamp direction into the cable.
+    EI, EA : N m², N. mass : kg/m. length : stress-free cable length, m.
+    accel : (n, 3) acceleration of the anchor, m/s². load : (3,) or (n, 3) distributed
+        load per stress-free length at the anchor, weight included, N/m.
+    omega : highest excitation circular frequency (rad/s) for the quasi-static check.
+    """
+    N = np.atleast_2d(np.asarray(forces, float))
+    qs = (mass, omega) if omega else None
+    lay = asymptotics.layer(N, direction, EI, EA, form=form, length=length, quasi_static=qs)
+    kap = asymptotics.string_curvature(lay.tangent, lay.tension, mass, accel, load)
+    with np.errstate(invalid="ignore"):
+        M = lay.moment_vector + EI * kap
+    M = np.where(lay.slack[:, None], np.nan, M)
+    return {"delta": lay.delta, "moment": np.linalg.norm(M, axis=1), "Mx": M[:, 0],
+            "My": M[:, 1], "Mz": M[:, 2], "psi0": lay.psi0, "layer_length": lay.layer_length,
+            "moment_layer": lay.moment, "valid": lay.valid.astype(int),
+            "tension": lay.tension, "normal": lay.normal, "slack": lay.slack}
+
+
+@dataclass
+class AnchorHistory:
+    """Anchor-force histories read from a CSV: ``forces[name]`` is (n, 3), ``times`` (n,)."""
+
+    times: np.ndarray
+    forces: dict[str, np.ndarray]
+
+
+def read_anchor_forces(path: str | Path) -> AnchorHistory:
+    """Read a long-format CSV with columns ``time, anchor, Nx, Ny, Nz`` (others ignored),
+    one row per time and anchor, as cablefem writes and as other tools can export.
+
+    Raises ``ValueError`` naming the file, line and column on malformed input.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise ValueError(f"{path}: no such file")
+    rows: dict[str, list[tuple[float, float, float, float]]] = {}
+    with path.open(newline="") as fh:
+        reader = csv.DictReader(fh)
+        need = {"time", "anchor", "Nx", "Ny", "Nz"}
+        if reader.fieldnames is None or not need <= {f.strip() for f in reader.fieldnames}:
+            raise ValueError(f"{path}: header must contain time, anchor, Nx, Ny, Nz "
+                             f"(got {reader.fieldnames})")
+        for lineno, row in enumerate(reader, start=2):
+            row = {k.strip(): (v or "").strip() for k, v in row.items() if k}
+            try:
+                vals = tuple(float(row[k]) for k in ("time", "Nx", "Ny", "Nz"))
+            except ValueError:
+                raise ValueError(f"{path}:{lineno}: time, Nx, Ny, Nz must be numbers") from None
+            if not np.all(np.isfinite(vals)):
+                raise ValueError(f"{path}:{lineno}: non-finite value")
+            rows.setdefault(row["anchor"], []).append(vals)
+    if not rows:
+        raise ValueError(f"{path}: no data rows")
+    times = None
+    forces = {}
+    for name, r in rows.items():
+        a = np.array(r)
+        if np.any(np.diff(a[:, 0]) <= 0):
+            raise ValueError(f"{path}: times of anchor '{name}' are not strictly increasing")
+        if times is None:
+            times = a[:, 0]
+        elif a.shape[0] != times.size or not np.allclose(a[:, 0], times):
+            raise ValueError(f"{path}: anchor '{name}' has other times than the first anchor")
+        forces[name] = a[:, 1:]
+    return AnchorHistory(times, forces)
+
+
+def composite_field(node_s: np.ndarray, r: np.ndarray, a: np.ndarray, EA: float, EI: float,
+                    mass: float, load: np.ndarray, stations: np.ndarray,
+                    anchor_s: list[float], deltas: np.ndarray, ells: np.ndarray,
+                    normals: np.ndarray, tension_only: bool = True
+                    ) -> tuple[np.ndarray, np.ndarray]:
+    """Composite curvature along the cable at one time (physics.md section 4).
+
+    ``node_s`` (n,), ``r`` (n, 3), ``a`` (n, 3): stations, positions and accelerations of
+    the string's nodes; ``stations`` (P,): where to evaluate; ``anchor_s``, ``deltas``,
+    ``ells``, ``normals``: the clamped anchors (at ``s = 0`` or ``s = l``) and their layers.
+    Returns positions (P, 3) and the composite curvature (P, 3) in 1/m, as vectors in the
+    direction of increasing ``s`` (multiply by EI for the moment).
+    The string's curvature on each P1 element uses the element's tangent and tension and
+    the interpolated acceleration: P1 elements are straight, so their tangent is not
+    differentiated.
+    """
+    pos = np.column_stack([np.interp(stations, node_s, r[:, k]) for k in range(3)])
+    acc = np.column_stack([np.interp(stations, node_s, a[:, k]) for k in range(3)])
+    e = np.clip(np.searchsorted(node_s, stations, side="right") - 1, 0, node_s.size - 2)
+    chord = r[1:] - r[:-1]
+    lam = np.linalg.norm(chord, axis=1) / np.diff(node_s)
+    T = EA * (lam - 1.0)
+    if tension_only:
+        T = np.maximum(T, 0.0)
+    tang = chord / np.linalg.norm(chord, axis=1)[:, None]
+    ks = asymptotics.string_curvature(tang[e], T[e], mass, acc, load)
+    ks = np.nan_to_num(ks, nan=0.0)  # slack element: no string curvature from tension
+    L = node_s[-1]
+    if len(anchor_s) == 0:
+        return pos, ks
+    sig = np.array([stations - s0 if s0 < 0.5 * L else L - stations for s0 in anchor_s])
+    orient = np.array([1.0 if s0 < 0.5 * L else -1.0 for s0 in anchor_s])
+    kap = asymptotics.composite_curvature(ks, sig, deltas, ells, normals, orientation=orient)
+    return pos, kap

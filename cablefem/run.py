@@ -1,0 +1,338 @@
+"""The data path of one run: case -> model -> statics -> modes -> dynamics -> anchor forces
+-> asymptotics -> output. Used by the command line and importable by scripts and tests.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from mpi4py import MPI
+
+from . import __version__, asymptotics
+from .case import Case
+from .dynamics import DynamicsError, DynamicsStats, integrate
+from .io import AnchorCSV, MomentsWriter, StringWriter, write_json, write_modes
+from .log import Progress
+from .modal import solve_modes
+from .model import CableModel
+from .post import ANCHOR_COLUMNS, MOMENT_COLUMNS, anchor_moments, composite_field
+from .statics import solve_static
+
+__all__ = ["RunResult", "RunError", "run_case", "steady_state_stats", "static_sag_ratio"]
+
+log = logging.getLogger(__name__)
+
+
+class RunError(RuntimeError):
+    """A run stopped before the end; the files written so far are valid."""
+
+
+@dataclass
+class RunResult:
+    """What a run computed (histories live on every rank)."""
+
+    summary: dict
+    times: np.ndarray
+    forces: dict[str, np.ndarray]  #: anchor -> (n_t, 3)
+    moments: dict[str, dict[str, np.ndarray]] = field(default_factory=dict)
+    model: CableModel | None = None
+
+
+def steady_state_stats(times: np.ndarray, values: np.ndarray, fraction: float = 1 / 3) -> dict:
+    """Peak and RMS of ``values`` over the last ``fraction`` of the run (NaNs skipped)."""
+    if times.size < 2:
+        return {"peak": float(np.nanmax(values)) if values.size else None,
+                "rms": None, "window": None}
+    t0 = times[-1] - fraction * (times[-1] - times[0])
+    sel = times >= t0
+    v = values[sel]
+    v = v[np.isfinite(v)]
+    if v.size == 0:
+        return {"peak": None, "rms": None, "window": [float(t0), float(times[-1])]}
+    return {"peak": float(np.max(np.abs(v))), "rms": float(np.sqrt(np.mean(v * v))),
+            "mean": float(np.mean(v)), "window": [float(t0), float(times[-1])]}
+
+
+def static_sag_ratio(r: np.ndarray, p: np.ndarray, q: np.ndarray, gdir: np.ndarray) -> float:
+    """Mid-span sag / chord from nodal positions: the distance along gravity from the chord
+    down to the cable where the cable's horizontal projection is at mid-chord."""
+    up = -gdir
+    d = q - p
+    h = d - (d @ up) * up
+    span = np.linalg.norm(h)
+    if span < 1e-12 * np.linalg.norm(d):
+        return float("nan")
+    eh = h / span
+    x = (r - p) @ eh
+    z = (r - p) @ up
+    zc = np.interp(0.5 * span, x, z) if np.all(np.diff(x) > 0) else np.nan
+    return float((0.5 * (d @ up) - zc) / np.linalg.norm(d))
+
+
+class _Emitter:
+    """Writes the output: anchor rows (buffered, their moment columns computed in vectorised
+    batches) and, at field times, the string fields and the composite moment field."""
+
+    FLUSH_ROWS = 256
+
+    def __init__(self, model: CableModel, outdir: Path, form: str, omega: float | None):
+        self.model = model
+        self.outdir = outdir
+        self.form = form
+        self.omega = omega
+        self.clamped = [a for a in model.anchors if a.kind == "clamped"]
+        sec = model.case.section
+        self.EI, self.EA, self.m = sec.EI, sec.EA, sec.mass
+        cols = ANCHOR_COLUMNS + (MOMENT_COLUMNS if self.clamped else [])
+        self.string = StringWriter(model, outdir / "string.xdmf")
+        self.csv = AnchorCSV(outdir / "anchors.csv", cols, model.comm)
+        self.times: list[float] = []
+        self.forces: dict[str, list[np.ndarray]] = {a.name: [] for a in model.anchors}
+        self.columns: dict[str, dict[str, list]] = {
+            a.name: {k: [] for k in MOMENT_COLUMNS} for a in self.clamped}
+        self._pending = 0
+        self.moments = None
+        self.stations = None
+
+    def load_at(self, t: float) -> np.ndarray:
+        f = self.m * self.model.g_vec
+        for _, ld in self.model.loads:
+            f = f + np.asarray(ld.value) * ld.time.value(t)
+        return f
+
+    def _moments(self, anc, times: np.ndarray, N: np.ndarray) -> dict:
+        acc = np.array([anc.acceleration(t) for t in times])
+        load = np.array([self.load_at(t) for t in times])
+        return anchor_moments(N, anc.direction, self.EI, self.EA, self.m, acc, load,
+                              self.model.length, self.omega, self.form)
+
+    def add(self, t: float, forces: np.ndarray) -> None:
+        """Record the anchor forces at ``t`` (written in batches)."""
+        self.times.append(t)
+        for anc, N in zip(self.model.anchors, forces):
+            self.forces[anc.name].append(np.asarray(N, float))
+        self._pending += 1
+        if self._pending >= self.FLUSH_ROWS:
+            self.flush()
+
+    def flush(self) -> None:
+        """Compute the moment columns of the pending rows and write them to anchors.csv."""
+        n = self._pending
+        if n == 0:
+            return
+        times = np.array(self.times[-n:])
+        per_anchor = {}
+        for anc in self.clamped:
+            res = self._moments(anc, times, np.array(self.forces[anc.name][-n:]))
+            for k in MOMENT_COLUMNS:
+                self.columns[anc.name][k].extend(res[k].tolist())
+            per_anchor[anc.name] = res
+        rows = []
+        for i, t in enumerate(times):
+            for anc in self.model.anchors:
+                N = self.forces[anc.name][len(self.times) - n + i]
+                row = {"time": t, "anchor": anc.name, "Nx": N[0], "Ny": N[1], "Nz": N[2],
+                       "tension": float(np.linalg.norm(N))}
+                if anc.name in per_anchor:
+                    row.update({k: per_anchor[anc.name][k][i] for k in MOMENT_COLUMNS})
+                rows.append(row)
+        self.csv.write(rows)
+        self._pending = 0
+
+    def fields(self, t: float, forces: np.ndarray) -> None:
+        """Write the string fields and the composite moment field at ``t`` (collective)."""
+        m = self.model
+        self.string.write(t)
+        if not self.clamped:
+            return
+        idx = {a.name: i for i, a in enumerate(m.anchors)}
+        layers = {c.name: self._moments(c, np.array([t]), forces[idx[c.name]][None, :])
+                  for c in self.clamped}
+        s_a = [m.geometry.stations[c.node] for c in self.clamped]
+        if self.moments is None:
+            # tension can rise in dynamics: resolve half the static layer length as well
+            ells0 = [0.5 * layers[c.name]["layer_length"][0] for c in self.clamped]
+            self.stations = asymptotics.graded_stations(
+                m.length, s_a, [e if np.isfinite(e) else np.nan for e in ells0])
+        r = self._nodal_positions()
+        a = m.gather_nodal(m.a)
+        pos = kap = None
+        if m.comm.rank == 0:
+            get = lambda k: np.array([layers[c.name][k][0] for c in self.clamped])  # noqa
+            deltas = np.where(get("slack"), np.nan, get("delta"))
+            pos, kap = composite_field(m.geometry.stations, r, a, self.EA, self.EI, self.m,
+                                       self.load_at(t), self.stations, s_a, deltas,
+                                       get("layer_length"), np.nan_to_num(get("normal")),
+                                       m.tension_only)
+        if self.moments is None:
+            self.moments = MomentsWriter(self.outdir / "moments.xdmf",
+                                         m.comm.bcast(pos, root=0), m.comm)
+        self.moments.write(t, pos, kap, None if kap is None else self.EI * kap,
+                           self.stations)
+
+    def _nodal_positions(self) -> np.ndarray | None:
+        u = self.model.gather_nodal(self.model.u)
+        return None if u is None else self.model.geometry.points + u
+
+    def close(self) -> None:
+        try:
+            self.flush()
+        finally:
+            self.string.close()
+            self.csv.close()
+            if self.moments is not None:
+                self.moments.close()
+
+
+def run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *,
+             modes: int | None = None, dynamics: bool = True, t_end: float | None = None,
+             form: str = "exact", progress: bool = True, figures: bool = True) -> RunResult:
+    """Run a case: statics, modes, and dynamics when the case has a ``[dynamics]`` table.
+
+    Writes ``summary.json``, ``anchors.csv``, ``string.xdmf``, ``modes.xdmf`` and, with a
+    clamped anchor, ``moments.xdmf`` and figures under ``outdir``. On a failure the files
+    written so far stay valid, ``summary.json`` says what happened, and :class:`RunError` is
+    raised.
+    """
+    wall0 = time.perf_counter()
+    outdir = Path(outdir)
+    if comm.rank == 0:
+        outdir.mkdir(parents=True, exist_ok=True)
+    comm.Barrier()
+    model = CableModel(case, comm)
+    t_build = time.perf_counter() - wall0
+    groups = model.dimensionless_groups()
+    log.info("%s: l = %.6g m, %d elements, eps = %s, eps_b = %s", case.title, model.length,
+             len(model.geometry.stations) - 1, _g(groups.get("eps")),
+             _g(groups.get("eps_b")))
+    summary: dict = {"cablefem": __version__, "status": "running", "case": case.to_dict(),
+                     "mpi_ranks": comm.size, "length": model.length,
+                     "elements": len(model.geometry.stations) - 1,
+                     "degrees_of_freedom": 3 * len(model.geometry.stations),
+                     "dimensionless": groups, "wall_time": {"build": t_build}}
+    static = solve_static(model)
+    r = model.gather_nodal(model.u)
+    sag = None
+    if comm.rank == 0 and case.gravity.g > 0:
+        a0, a1 = model.anchors
+        sag = static_sag_ratio(model.geometry.points + r, a0.position, a1.position,
+                               np.asarray(case.gravity.direction, float))
+    sag = comm.bcast(sag, root=0)
+    summary["static"] = {
+        "anchor_forces": {a.name: f for a, f in zip(model.anchors, static.anchor_forces)},
+        "newton_iterations": static.newton_iterations,
+        "continuation_steps": static.continuation_steps,
+        "slack_elements": static.slack_elements, "max_tension": static.max_tension,
+        "min_tension": static.min_tension, "sag_ratio": sag}
+    summary["wall_time"]["statics"] = static.wall_time
+
+    n_modes = case.modal.modes if modes is None else modes
+    if n_modes:
+        modal = solve_modes(model, n_modes)
+        write_modes(model, modal, outdir / "modes.xdmf")
+        summary["modes"] = [{"omega": w, "frequency_hz": w / (2 * np.pi), **lab}
+                            for w, lab in zip(modal.omegas, modal.labels)]
+        summary["wall_time"]["modal"] = modal.wall_time
+        # the static state again: the modal solve does not change model.u, but be explicit
+        model.u.x.array[:] = model.u_static.x.array
+
+    omega = _max_excitation(case)
+    emitter = _Emitter(model, outdir, form, omega)
+    stats = DynamicsStats()
+    error = None
+    try:
+        if case.dynamics is not None and dynamics:
+            dyn = case.dynamics
+            t_stop = dyn.t_end if t_end is None else t_end
+            bar = Progress(t_stop, "dynamics", comm, enabled=progress)
+            stride = math.gcd(dyn.output_every, dyn.fields_every)
+            for t, forces in integrate(model, t_stop, dyn.dt, dyn.rho_inf, stride, stats):
+                step, last = stats.steps, t >= t_stop - 1e-9 * dyn.dt
+                if step % dyn.output_every == 0 or last:
+                    emitter.add(t, forces)
+                if step % dyn.fields_every == 0 or last:
+                    emitter.fields(t, forces)
+                bar.update(t, f"step {step}")
+            bar.close()
+            summary["dynamics"] = {
+                "t_end": t_stop, "dt": dyn.dt, "rho_inf": dyn.rho_inf, "steps": stats.steps,
+                "rejected_steps": stats.rejected_steps,
+                "newton_iterations": stats.newton_iterations,
+                "newton_per_step": stats.newton_iterations / max(stats.steps, 1),
+                "outputs": len(stats.output_times)}
+            summary["wall_time"]["dynamics"] = stats.wall_time
+        else:
+            emitter.add(0.0, static.anchor_forces)
+            emitter.fields(0.0, static.anchor_forces)
+    except (DynamicsError, FloatingPointError) as err:
+        error = err
+        summary["status"] = "failed"
+        summary["error"] = str(err)
+        log.error("%s", err)
+    finally:
+        emitter.close()
+
+    times = np.array(emitter.times)
+    forces = {k: np.array(v).reshape(-1, 3) for k, v in emitter.forces.items()}
+    moments = {name: {k: np.array(v) for k, v in cols.items()}
+               for name, cols in emitter.columns.items()}
+    summary["anchors"] = {}
+    for a in model.anchors:
+        entry = {"kind": a.kind, "position": a.position,
+                 "direction": a.direction if a.direction is not None else None,
+                 "static_tension": float(np.linalg.norm(static.anchor_forces[
+                     model.anchors.index(a)]))}
+        if a.kind == "clamped":
+            st = anchor_moments(static.anchor_forces[model.anchors.index(a)][None, :],
+                                a.direction, case.section.EI, case.section.EA,
+                                case.section.mass, np.zeros((1, 3)), emitter.load_at(0.0),
+                                model.length, None, form)
+            entry["static_moment"] = float(st["moment"][0])
+            entry["static_moment_layer"] = float(st["moment_layer"][0])
+            entry["static_delta"] = float(st["delta"][0])
+            entry["layer_length"] = float(st["layer_length"][0])
+        if a.name in moments and len(times):
+            mo = moments[a.name]
+            entry["valid_fraction"] = float(np.mean(mo["valid"]))
+            if len(times) > 1:
+                entry["steady_state_moment"] = steady_state_stats(times, mo["moment"])
+        summary["anchors"][a.name] = entry
+    if summary["status"] == "running":
+        summary["status"] = "completed"
+    if figures and len(times) > 1 and moments:
+        from .plots import anchor_figures
+
+        summary["figures"] = anchor_figures(outdir, times, moments, comm)
+    summary["wall_time"]["total"] = time.perf_counter() - wall0
+    write_json(outdir / "summary.json", summary, comm)
+    log.info("results in %s (%.2f s)", outdir, summary["wall_time"]["total"])
+    result = RunResult(summary, times, forces, moments, model)
+    if error is not None:
+        raise RunError(f"{error} -- results up to t = {times[-1] if times.size else 0:g} "
+                       f"are in {outdir}") from error
+    return result
+
+
+def _max_excitation(case: Case) -> float | None:
+    """Highest circular frequency of the anchor motions and loads (quasi-static check)."""
+    om = []
+    for a in case.anchors:
+        if a.motion is not None:
+            d = a.motion.describe()
+            w = d.get("omega")
+            if w is not None:
+                om.append(float(np.max(np.atleast_1d(w))))
+    for ld in list(case.loads) + list(case.point_loads):
+        d = ld.time.describe() if hasattr(ld.time, "describe") else {}
+        if d.get("omega") is not None:
+            om.append(float(d["omega"]))
+    return max(om) if om else None
+
+
+def _g(x) -> str:
+    return "n/a" if x is None else f"{x:.4g}"
