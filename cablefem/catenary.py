@@ -390,7 +390,7 @@ class Catenary3D:
         """Tension vector ``T t`` [N] at ``s``, ``t`` the unit tangent towards increasing s."""
         if self.cat is None:
             return self.tension(s)[0] * self.e_h
-        return self.cat.H * self.e_h + self.cat.vertical_force(s) * self.up
+        return self.cat.H * self.e_h - self.cat.vertical_force(s) * self.up
 
     def force_at_p(self) -> np.ndarray:
         """Force [N] the span transmits at p, pointing into the span: ``T(0) t(0)``."""

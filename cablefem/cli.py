@@ -1,0 +1,188 @@
+"""Command line: ``cablefem run|modes|post|keys``.
+
+Exit codes: 0 success; 1 a solve failed (the files written so far are valid and
+``summary.json`` says why); 2 bad input (case file, options, CSV), reported one line per
+problem before any expensive work, without a traceback.
+
+PETSc options go after the other arguments, e.g. ``cablefem run case.toml --output out
+-cable_ts_type alpha2 -cable_snes_monitor``; every solver has the ``cable_`` prefix
+(``cable_static_`` for statics, ``cable_modal_`` for the eigensolver).
+"""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import sys
+from pathlib import Path
+
+__all__ = ["main"]
+
+EXIT_OK, EXIT_FAILED, EXIT_INPUT = 0, 1, 2
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message: str) -> None:  # one line, exit 2, no usage dump
+        sys.stderr.write(f"cablefem: error: {message} (see 'cablefem {self.prog.split()[-1]} "
+                         "--help')\n" if " " in self.prog else f"cablefem: error: {message}\n")
+        raise SystemExit(EXIT_INPUT)
+
+
+def _parser() -> argparse.ArgumentParser:
+    from .case import format_case_reference
+
+    keys = format_case_reference()
+    p = _Parser(prog="cablefem", formatter_class=argparse.RawDescriptionHelpFormatter,
+                description="Bending moments at the anchors of vibrating cables: FEniCSx "
+                            "extensible string + matched asymptotics.",
+                epilog="Run 'cablefem keys' for every case-file key.")
+    p.add_argument("--version", action="store_true", help="print the version and exit")
+    sub = p.add_subparsers(dest="command", parser_class=_Parser)
+
+    def common(sp):
+        sp.add_argument("case", type=Path, help="case file (TOML)")
+        sp.add_argument("--output", "-o", type=Path, required=True, help="output folder")
+        sp.add_argument("--quiet", "-q", action="store_true", help="warnings and errors only")
+
+    run = sub.add_parser("run", formatter_class=argparse.RawDescriptionHelpFormatter,
+                         help="statics, modes and dynamics of a case",
+                         description="Static equilibrium, modal analysis and (with a "
+                         "[dynamics] table) time integration; anchor forces and moments.\n"
+                         "Writes summary.json, anchors.csv, string.xdmf, modes.xdmf, "
+                         "moments.xdmf, figures.",
+                         epilog="Case file keys:\n\n" + keys)
+    common(run)
+    run.add_argument("--t-end", type=float, help="override dynamics.t_end (s)")
+    run.add_argument("--model", choices=["string"], default="string",
+                     help="outer model (only 'string' in this version)")
+    run.add_argument("--moment-form", choices=["exact", "explicit"], default="exact",
+                     help="anchor moment from the exact first integral (default) or the "
+                          "paper's explicit form")
+    run.add_argument("--no-figures", action="store_true", help="skip the PNG figures")
+    run.add_argument("--static-only", action="store_true", help="skip the dynamics")
+
+    modes = sub.add_parser("modes", formatter_class=argparse.RawDescriptionHelpFormatter,
+                           help="static equilibrium and natural modes",
+                           description="Static equilibrium and the lowest natural modes "
+                           "(SLEPc); writes summary.json, modes.xdmf.",
+                           epilog="Case file keys:\n\n" + keys)
+    common(modes)
+    modes.add_argument("--n", type=int, help="number of modes (default: modal.modes)")
+
+    post = sub.add_parser("post", help="anchor moments from another solver's anchor forces",
+                          description="Apply the inner (boundary-layer) solution to "
+                          "anchor-force histories from any string solver: a CSV with columns "
+                          "time, anchor, Nx, Ny, Nz (force of the span at the anchor, into the "
+                          "span), one row per time and anchor; anchor names as in the case.")
+    post.add_argument("forces", type=Path, help="anchor-force CSV")
+    post.add_argument("--case", type=Path, required=True, help="case file (TOML)")
+    post.add_argument("--output", "-o", type=Path, required=True, help="output folder")
+    post.add_argument("--moment-form", choices=["exact", "explicit"], default="exact")
+    post.add_argument("--quiet", "-q", action="store_true")
+
+    sub.add_parser("keys", help="print every case-file key with its unit and range")
+    return p
+
+
+def _petsc_options(extra: list[str]) -> None:
+    """Put ``-key value`` pairs left over by argparse into PETSc's options database."""
+    from petsc4py import PETSc
+
+    opts = PETSc.Options()
+    i = 0
+    while i < len(extra):
+        tok = extra[i]
+        if not tok.startswith("-") or len(tok) < 2:
+            raise SystemExit(_input_error(f"unexpected argument '{tok}'"))
+        key = tok.lstrip("-")
+        val = None
+        if i + 1 < len(extra) and not _is_option(extra[i + 1]):
+            val = extra[i + 1]
+            i += 1
+        opts.setValue(key, val if val is not None else "")
+        i += 1
+
+
+def _is_option(tok: str) -> bool:
+    if not tok.startswith("-"):
+        return False
+    try:
+        float(tok)
+        return False
+    except ValueError:
+        return True
+
+
+def _input_error(msg: str) -> int:
+    sys.stderr.write(f"cablefem: error: {msg}\n")
+    return EXIT_INPUT
+
+
+def main(argv: list[str] | None = None) -> int:
+    argv = sys.argv[1:] if argv is None else argv
+    parser = _parser()
+    args, extra = parser.parse_known_args(argv)
+    if args.version:
+        from . import __version__
+
+        print(f"cablefem {__version__}")
+        return EXIT_OK
+    if args.command is None:
+        parser.print_help()
+        return EXIT_INPUT
+    if args.command == "keys":
+        from .case import format_case_reference
+
+        print(format_case_reference())
+        return EXIT_OK
+    if extra and args.command == "post":
+        return _input_error(f"unexpected arguments {extra}")
+
+    from .case import CaseError, load_case
+
+    case_path = args.case
+    try:
+        case = load_case(case_path)
+    except CaseError as err:
+        sys.stderr.write(str(err) + "\n")
+        return EXIT_INPUT
+    if getattr(args, "t_end", None) is not None and args.t_end <= 0:
+        return _input_error(f"--t-end must be > 0 (s), got {args.t_end}")
+    if getattr(args, "n", None) is not None and args.n < 1:
+        return _input_error(f"--n must be >= 1, got {args.n}")
+
+    from .log import setup_logging
+
+    setup_logging(logging.WARNING if args.quiet else logging.INFO)
+    if args.command == "post":
+        from .postcmd import run_post
+
+        try:
+            run_post(case, args.forces, args.output, form=args.moment_form)
+        except ValueError as err:
+            return _input_error(str(err))
+        return EXIT_OK
+
+    _petsc_options(extra)
+    from .run import RunError, run_case
+    from .statics import StaticError
+
+    try:
+        if args.command == "run":
+            run_case(case, args.output, t_end=args.t_end, form=args.moment_form,
+                     dynamics=not args.static_only, figures=not args.no_figures,
+                     progress=not args.quiet)
+        else:
+            run_case(case, args.output, modes=args.n, dynamics=False, figures=False,
+                     progress=not args.quiet)
+    except CaseError as err:
+        sys.stderr.write(str(err) + "\n")
+        return EXIT_INPUT
+    except (RunError, StaticError) as err:
+        sys.stderr.write(f"cablefem: run failed: {err}\n")
+        return EXIT_FAILED
+    return EXIT_OK
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,99 @@
+"""``cablefem post``: anchor moments from anchor-force histories of any string solver.
+
+No dolfinx: the case file gives the section, the clamp directions, gravity and the loads;
+the CSV gives the forces. Writes ``anchors.csv`` (with the moment columns),
+``summary.json`` and the figures. The composite field along the cable needs the string's
+positions and is therefore only written by ``cablefem run``.
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from pathlib import Path
+
+import numpy as np
+from mpi4py import MPI
+
+from . import __version__, catenary
+from .case import Case
+from .io import AnchorCSV, write_json
+from .plots import anchor_figures
+from .post import ANCHOR_COLUMNS, MOMENT_COLUMNS, anchor_moments, read_anchor_forces
+from .run import _max_excitation, steady_state_stats
+
+__all__ = ["run_post", "case_length"]
+
+log = logging.getLogger(__name__)
+
+
+def case_length(case: Case) -> float:
+    """Stress-free length of the case's cable (the catenary for tension/sag geometry)."""
+    geo = case.geometry
+    if geo.kind in ("length", "polyline"):
+        return float(geo.length)
+    p, q = (np.asarray(a.position, float) for a in case.anchors)
+    up = -np.asarray(case.gravity.direction, float)
+    d = q - p
+    rise = float(d @ up)
+    span = float(np.linalg.norm(d - rise * up))
+    w = case.section.mass * case.gravity.g
+    if geo.kind == "horizontal_tension":
+        return catenary.length_for_horizontal_tension(span, rise, geo.value, w, case.section.EA)
+    return catenary.length_for_sag_ratio(span, rise, geo.value, w, case.section.EA)
+
+
+def run_post(case: Case, forces_csv: Path, outdir: Path, form: str = "exact",
+             comm: MPI.Comm = MPI.COMM_WORLD) -> dict:
+    """Post-process ``forces_csv`` with ``case``; raises ValueError on bad input."""
+    t0 = time.perf_counter()
+    hist = read_anchor_forces(forces_csv)
+    names = [a.name for a in case.anchors]
+    unknown = sorted(set(hist.forces) - set(names))
+    if unknown:
+        raise ValueError(f"{forces_csv}: anchors {unknown} are not in the case "
+                         f"(case anchors: {names})")
+    length = case_length(case)
+    outdir = Path(outdir)
+    if comm.rank == 0:
+        outdir.mkdir(parents=True, exist_ok=True)
+    comm.Barrier()
+    sec = case.section
+    g_vec = np.asarray(case.gravity.direction, float) * case.gravity.g
+    times = hist.times
+    omega = _max_excitation(case)
+    moments, summary_anchors = {}, {}
+    for a in case.anchors:
+        if a.name not in hist.forces or a.kind != "clamped":
+            continue
+        acc = np.array([a.motion.acceleration(t) if a.motion else np.zeros(3) for t in times])
+        load = np.array([sec.mass * g_vec + sum((np.asarray(ld.value) * ld.time.value(t)
+                                                 for ld in case.loads), np.zeros(3))
+                         for t in times])
+        res = anchor_moments(hist.forces[a.name], a.direction, sec.EI, sec.EA, sec.mass, acc,
+                             load, length, omega, form)
+        moments[a.name] = {k: res[k] for k in MOMENT_COLUMNS}
+        summary_anchors[a.name] = {
+            "first_moment": float(res["moment"][0]),
+            "valid_fraction": float(np.mean(res["valid"])),
+            "steady_state_moment": steady_state_stats(times, res["moment"])}
+    cols = ANCHOR_COLUMNS + MOMENT_COLUMNS
+    with AnchorCSV(outdir / "anchors.csv", cols, comm) as out:
+        rows = []
+        for i, t in enumerate(times):
+            for name, N in hist.forces.items():
+                row = {"time": t, "anchor": name, "Nx": N[i, 0], "Ny": N[i, 1],
+                       "Nz": N[i, 2], "tension": float(np.linalg.norm(N[i]))}
+                if name in moments:
+                    row.update({k: moments[name][k][i] for k in MOMENT_COLUMNS})
+                rows.append(row)
+        out.write(rows)
+    figs = anchor_figures(outdir, times, moments, comm) if moments and times.size > 1 else []
+    summary = {"cablefem": __version__, "status": "completed", "command": "post",
+               "forces": str(forces_csv), "case": case.to_dict(), "length": length,
+               "anchors": summary_anchors, "figures": figs,
+               "wall_time": {"total": time.perf_counter() - t0}}
+    write_json(outdir / "summary.json", summary, comm)
+    log.info("post-processed %d times x %d anchors into %s", times.size, len(hist.forces),
+             outdir)
+    return summary
