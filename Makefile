@@ -13,7 +13,7 @@ demo: setup
 
 test: setup
 	$(PY) -m pytest -q -p no:cacheprovider tests
-	bash .ci/mpitest -q -p no:cacheprovider -m "not serial and not slow" tests
+	bash .ci/mpitest -q --color=no -p no:cacheprovider -m "not serial and not slow" tests
 
 test-slow: setup
 	$(PY) -m pytest -q -p no:cacheprovider -m slow tests

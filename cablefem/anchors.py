@@ -20,7 +20,7 @@ from dolfinx.fem import petsc as fpetsc
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from .petsc_utils import ADD, FORWARD, INSERT, REVERSE, lu_options, set_default_options
+from .petsc_utils import ADD, FORWARD, INSERT, REVERSE, default_options, lu_options
 
 __all__ = ["AnchorForces"]
 
@@ -34,11 +34,11 @@ class AnchorForces:
         self.M = fpetsc.assemble_matrix(model.m_form, model.bcs, diagonal=1.0)
         self.M.assemble()
         prefix = model.prefix + "mass_"
-        set_default_options(prefix, lu_options(model.comm.size))
         self.ksp = PETSc.KSP().create(model.comm)
         self.ksp.setOptionsPrefix(prefix)
         self.ksp.setOperators(self.M)
-        self.ksp.setFromOptions()
+        with default_options(prefix, lu_options(model.comm.size)):
+            self.ksp.setFromOptions()
         self.da = self.M.createVecRight()
 
     def _assemble(self) -> None:

@@ -31,7 +31,7 @@ from petsc4py import PETSc
 
 from .anchors import AnchorForces
 from .petsc_utils import (SNESHistory, assemble_jacobian, assemble_residual, copy_in,
-                          lu_options, set_default_options)
+                          default_options, lu_options)
 
 __all__ = ["DynamicsError", "DynamicsStats", "integrate"]
 
@@ -58,13 +58,12 @@ class DynamicsStats:
 
 def _make_ts(model, dt: float, rho_inf: float, history: SNESHistory):
     prefix = model.prefix
-    scale = max(model.weight * model.length, 1e-300)
+    scale = model.force_scale
     defaults = {"ts_type": "alpha2", "ts_alpha_radius": rho_inf, "ts_max_reject": 8,
                 "ts_max_snes_failures": -1, "snes_type": "newtonls",
                 "snes_linesearch_type": "basic", "snes_rtol": 1e-9,
                 "snes_atol": 1e-11 * scale, "snes_stol": 0.0, "snes_max_it": 25,
                 **lu_options(model.comm.size)}
-    set_default_options(prefix, defaults, model.case.solver.petsc_options)
 
     F_vec = fpetsc.create_vector(model.f_dynamic)
     J_mat = fpetsc.create_matrix(model.j_dynamic)
@@ -89,7 +88,8 @@ def _make_ts(model, dt: float, rho_inf: float, history: SNESHistory):
     ts.setI2Jacobian(I2Jacobian, J_mat)
     ts.setTimeStep(dt)
     ts.setExactFinalTime(PETSc.TS.ExactFinalTime.MATCHSTEP)
-    ts.setFromOptions()
+    with default_options(prefix, defaults, model.case.solver.petsc_options):
+        ts.setFromOptions()
     ts.getSNES().setMonitor(history)
     return ts, (F_vec, J_mat)
 

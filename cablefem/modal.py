@@ -24,7 +24,7 @@ from dolfinx.fem import petsc as fpetsc
 from petsc4py import PETSc
 from slepc4py import SLEPc
 
-from .petsc_utils import lu_options, set_default_options
+from .petsc_utils import default_options, lu_options
 
 __all__ = ["ModalResult", "solve_modes", "classify_mode"]
 
@@ -83,16 +83,16 @@ def solve_modes(model, n: int = 6) -> ModalResult:
     M = fpetsc.assemble_matrix(model.m_form, model.bcs, diagonal=0.0)
     M.assemble()
     prefix = model.prefix + "modal_"
-    set_default_options(prefix, {"st_type": "sinvert", "eps_target": 0.0,
-                                 "eps_tol": 1e-12, **{"st_" + k: v for k, v in
-                                                      lu_options(model.comm.size).items()}})
+    defaults = {"st_type": "sinvert", "eps_target": 0.0, "eps_tol": 1e-12,
+                **{"st_" + k: v for k, v in lu_options(model.comm.size).items()}}
     eps = SLEPc.EPS().create(model.comm)
     eps.setOptionsPrefix(prefix)
     eps.setOperators(K, M)
     eps.setProblemType(SLEPc.EPS.ProblemType.GHEP)
     eps.setWhichEigenpairs(SLEPc.EPS.Which.TARGET_MAGNITUDE)
     eps.setDimensions(n, max(2 * n + 1, n + 15))
-    eps.setFromOptions()
+    with default_options(prefix, defaults):
+        eps.setFromOptions()
     eps.solve()
     nconv = eps.getConverged()
     if nconv < n:

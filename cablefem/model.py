@@ -172,6 +172,8 @@ class CableModel:
         try:
             shape = catenary.catenary_between(p, q, length, self.weight, sec.EA, gdir)
             r0 = shape.position(g.stations)
+            self.force_scale = float(max(self.weight * length,
+                                         np.max(shape.tension(g.stations))))
         except ValueError as err:
             raise CaseError([("geometry", f"no static equilibrium of the bare cable: {err}")],
                             case.source) from None
@@ -270,6 +272,9 @@ class CableModel:
         self.F_damping = F_damp
 
         self.F_static = self.F_internal - self.F_external
+        # the same with compression allowed: statics uses it to get off a guess on which
+        # every element is slack (zero tangent stiffness under the tension-only law)
+        self.F_static_bilateral = string.internal_work(u, du, t0, self.EA, False) - F_ext
         self.F_dynamic = F_inertia + self.F_internal - self.F_external
         if F_damp is not None:
             self.F_dynamic = self.F_dynamic + F_damp
@@ -285,6 +290,9 @@ class CableModel:
         """JIT-compile the forms (FFCx caches them: later runs take milliseconds)."""
         self.f_static = fem.form(self.F_static)
         self.j_static = fem.form(self.J_static)
+        self.f_static_bilateral = fem.form(self.F_static_bilateral)
+        self.j_static_bilateral = fem.form(ufl.derivative(self.F_static_bilateral, self.u,
+                                                          self.dw))
         self.f_dynamic = fem.form(self.F_dynamic)
         self.j_dynamic = fem.form(self.J_dynamic)
         self.m_form = fem.form(self.M_form)

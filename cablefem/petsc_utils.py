@@ -9,7 +9,7 @@ from dolfinx import fem
 from dolfinx.fem import petsc as fpetsc
 from petsc4py import PETSc
 
-__all__ = ["set_default_options", "assemble_residual", "assemble_jacobian", "SNESHistory",
+__all__ = ["default_options", "assemble_residual", "assemble_jacobian", "SNESHistory",
            "lu_options", "copy_in"]
 
 INSERT, ADD = PETSc.InsertMode.INSERT, PETSc.InsertMode.ADD
@@ -25,19 +25,38 @@ def lu_options(comm_size: int = 1) -> dict[str, str]:
     return opts
 
 
-def set_default_options(prefix: str, defaults: dict[str, object],
-                        user: dict[str, object] | None = None) -> None:
-    """Put ``defaults`` under ``prefix`` unless already set (command line wins), then
-    ``user`` options from the case file (they override defaults, not the command line)."""
-    opts = PETSc.Options()
-    for key, val in (user or {}).items():
-        k = prefix + key.lstrip("-")
-        if not opts.hasName(k):
-            opts.setValue(k, _fmt(val))
-    for key, val in defaults.items():
-        k = prefix + key
-        if not opts.hasName(k):
-            opts.setValue(k, _fmt(val))
+class default_options:
+    """Context manager: put ``defaults`` (and the case file's ``user`` options) under
+    ``prefix`` in PETSc's options database for one ``setFromOptions`` call, then take them
+    out again, so that they do not leak into the next model built in the same process.
+    Options already in the database (the command line) win over both.
+
+    Use::
+
+        with default_options(prefix, {"snes_rtol": 1e-10}, case_options):
+            snes.setFromOptions()
+    """
+
+    def __init__(self, prefix: str, defaults: dict[str, object],
+                 user: dict[str, object] | None = None) -> None:
+        self.prefix = prefix
+        self.values = {**defaults, **{k.lstrip("-"): v for k, v in (user or {}).items()}}
+        self.inserted: list[str] = []
+
+    def __enter__(self):
+        opts = PETSc.Options()
+        for key, val in self.values.items():
+            k = self.prefix + key
+            if not opts.hasName(k):
+                opts.setValue(k, _fmt(val))
+                self.inserted.append(k)
+        return self
+
+    def __exit__(self, *exc):
+        opts = PETSc.Options()
+        for k in self.inserted:
+            opts.delValue(k)
+        self.inserted.clear()
 
 
 def _fmt(val: object) -> str:

@@ -22,7 +22,7 @@ from petsc4py import PETSc
 
 from .anchors import AnchorForces
 from .petsc_utils import (SNESHistory, assemble_jacobian, assemble_residual, copy_in,
-                          lu_options, set_default_options)
+                          default_options, lu_options)
 
 __all__ = ["StaticResult", "StaticError", "solve_static"]
 
@@ -44,30 +44,35 @@ class StaticResult:
     wall_time: float
 
 
-def _make_snes(model, history: SNESHistory) -> tuple[PETSc.SNES, PETSc.Vec]:
+def _make_snes(model, history: SNESHistory, bilateral: bool = False
+               ) -> tuple[PETSc.SNES, PETSc.Vec]:
     prefix = model.prefix + "static_"
-    scale = max(model.weight * model.length, 1e-300)
+    # absolute tolerance: round-off of the residual grows with the tension (EA v3), so scale
+    # it with the larger of the cable's weight and its catenary tension
     defaults = {"snes_type": "newtonls", "snes_linesearch_type": "bt", "snes_max_it": 50,
-                "snes_rtol": 1e-10, "snes_atol": 1e-10 * scale, "snes_stol": 0.0,
+                "snes_rtol": 1e-10, "snes_atol": 1e-10 * model.force_scale,
+                "snes_stol": 1e-14,
                 **lu_options(model.comm.size)}
-    set_default_options(prefix, defaults, model.case.solver.petsc_options)
-    b = fpetsc.create_vector(model.f_static)
-    A = fpetsc.create_matrix(model.j_static)
+    f_form = model.f_static_bilateral if bilateral else model.f_static
+    j_form = model.j_static_bilateral if bilateral else model.j_static
+    b = fpetsc.create_vector(f_form)
+    A = fpetsc.create_matrix(j_form)
     snes = PETSc.SNES().create(model.comm)
     snes.setOptionsPrefix(prefix)
 
     def F(snes, x, f):
         copy_in(x, model.u)
-        assemble_residual(f, model.f_static, model.j_static, model.bcs, x)
+        assemble_residual(f, f_form, j_form, model.bcs, x)
 
     def J(snes, x, jac, pre):
         copy_in(x, model.u)
-        assemble_jacobian(jac, model.j_static, model.bcs)
+        assemble_jacobian(jac, j_form, model.bcs)
 
     snes.setFunction(F, b)
     snes.setJacobian(J, A)
     snes.setMonitor(history)
-    snes.setFromOptions()
+    with default_options(prefix, defaults, model.case.solver.petsc_options):
+        snes.setFromOptions()
     return snes, b
 
 
@@ -90,6 +95,20 @@ def solve_static(model, max_continuation_steps: int = 200) -> StaticResult:
     model.load_factor.value = 1.0
     ok, its = _try(snes, x, history)
     total_its, steps = its, 0
+    if not ok and model.tension_only:
+        # every element slack on the guess (e.g. a coarse mesh of a stiff cable: the chords
+        # of the sampled catenary are shorter than the elements): compression allowed first
+        log.info("statics: tension-only Newton failed from the catenary (%s); solving with "
+                 "compression allowed first", history.text())
+        bsnes, _ = _make_snes(model, history, bilateral=True)
+        model.scatter_nodal(guess, model.u)
+        x = model.u.vector.copy()
+        ok, its = _try(bsnes, x, history)
+        total_its += its
+        bsnes.destroy()
+        if ok:
+            ok, its = _try(snes, x, history)
+            total_its += its
     if not ok:
         log.info("statics: Newton failed from the catenary (%s); load continuation",
                  history.text())

@@ -1,0 +1,65 @@
+"""Shared fixtures: collective teardown, an MPI-safe temporary folder, case factories.
+
+Tests that run under ``mpirun -n 2`` must not create different objects on different ranks;
+everything here is collective or rank-independent.
+"""
+
+from __future__ import annotations
+
+import gc
+from pathlib import Path
+
+import numpy as np
+import pytest
+from mpi4py import MPI
+
+from cablefem.case import parse_case
+
+
+@pytest.fixture(autouse=True)
+def _collective_teardown():
+    """Destructors of PETSc objects can be collective: collect, then wait for all ranks."""
+    yield
+    gc.collect()
+    MPI.COMM_WORLD.Barrier()
+
+
+@pytest.fixture
+def mpi_tmp_path(tmp_path) -> Path:
+    """One temporary folder shared by all ranks (rank 0's, broadcast)."""
+    return Path(MPI.COMM_WORLD.bcast(str(tmp_path), root=0))
+
+
+def level_case(EA=17857.14, EI=4e-4, mass=1.0, g=1.0, length=1.0, chord=1.0013333,
+               elements=30, motion=None, damping=None, dynamics=None, **extra):
+    """A level cable between p = (0,0,0) and q = (chord,0,0), clamped along the chord
+    (physics.md section 7 coordinates); keyword overrides for every table."""
+    d = {"title": "test", "section": {"EA": EA, "EI": EI, "mass": mass},
+         "gravity": {"g": g}, "geometry": {"length": length},
+         "mesh": {"elements": elements},
+         "anchors": [{"name": "p", "position": [0.0, 0.0, 0.0], "direction": [1.0, 0, 0]},
+                     {"name": "q", "position": [chord, 0.0, 0.0], "direction": [-1.0, 0, 0]}]}
+    if motion is not None:
+        d["anchors"][1]["motion"] = motion
+    if damping is not None:
+        d["damping"] = damping
+    if dynamics is not None:
+        d["dynamics"] = dynamics
+    for key, val in extra.items():
+        d[key] = val
+    return d
+
+
+@pytest.fixture
+def make_case():
+    """Factory: ``make_case(**overrides)`` -> a validated Case of a level clamped cable."""
+
+    def factory(**kw):
+        return parse_case(level_case(**kw))
+
+    return factory
+
+
+def observed_order(h: np.ndarray, err: np.ndarray) -> float:
+    """Least-squares slope of log(err) against log(h)."""
+    return float(np.polyfit(np.log(h), np.log(err), 1)[0])
