@@ -115,7 +115,8 @@ def solve_modes(model, n: int = 6) -> ModalResult:
     chord = a1.position - a0.position
     g = model.case.gravity
     gdir = np.asarray(g.direction, float) if g.g > 0 else None
-    level = gdir is not None and abs(chord @ gdir) < 1e-9 * np.linalg.norm(chord)
+    # mirror symmetry about mid-span: a level cable, or any straight weightless one
+    level = gdir is None or abs(chord @ gdir) < 1e-9 * np.linalg.norm(chord)
     st = model.geometry.stations
     level = level and np.allclose(st, st[-1] - st[::-1], atol=1e-12 * st[-1])
     labels = []
