@@ -20,7 +20,8 @@ from dolfinx.fem import petsc as fpetsc
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from .petsc_utils import ADD, FORWARD, INSERT, REVERSE, default_options, lu_options
+from .petsc_utils import (ADD, FORWARD, INSERT, REVERSE, case_options, default_options,
+                          lu_options)
 
 __all__ = ["AnchorForces"]
 
@@ -37,9 +38,10 @@ class AnchorForces:
         self.ksp = PETSc.KSP().create(model.comm)
         self.ksp.setOptionsPrefix(prefix)
         self.ksp.setOperators(self.M)
-        with default_options(prefix, lu_options(model.comm.size)):
+        with default_options(prefix, lu_options(model.comm.size),
+                             case_options(model, "mass")):
             self.ksp.setFromOptions()
-        self.da = self.M.createVecRight()
+        self.da = model.a.vector.duplicate()  # ghosted, like the Function's vector
 
     def _assemble(self) -> None:
         with self.R.localForm() as loc:

@@ -31,7 +31,7 @@ from petsc4py import PETSc
 
 from .anchors import AnchorForces
 from .petsc_utils import (SNESHistory, assemble_jacobian, assemble_residual, copy_in,
-                          default_options, lu_options)
+                          case_options, default_options, lu_options)
 
 __all__ = ["DynamicsError", "DynamicsStats", "integrate"]
 
@@ -54,6 +54,11 @@ class DynamicsStats:
     linear_iterations: int = 0
     wall_time: float = 0.0
     output_times: list[float] = field(default_factory=list)
+
+
+_TS_REASONS = {-1: "Newton failed (TS_DIVERGED_NONLINEAR_SOLVE)",
+               -2: "Newton failed and the step was rejected more than -cable_ts_max_reject "
+                   "times (TS_DIVERGED_STEP_REJECTED)"}
 
 
 def _make_ts(model, dt: float, rho_inf: float, history: SNESHistory):
@@ -88,7 +93,7 @@ def _make_ts(model, dt: float, rho_inf: float, history: SNESHistory):
     ts.setI2Jacobian(I2Jacobian, J_mat)
     ts.setTimeStep(dt)
     ts.setExactFinalTime(PETSc.TS.ExactFinalTime.MATCHSTEP)
-    with default_options(prefix, defaults, model.case.solver.petsc_options):
+    with default_options(prefix, defaults, case_options(model, "")):
         ts.setFromOptions()
     ts.getSNES().setMonitor(history)
     return ts, (F_vec, J_mat)
@@ -134,13 +139,16 @@ def integrate(model, t_end: float, dt: float, rho_inf: float = 0.9, output_every
             ts.setTimeStep(t_end - t)
         history.clear()
         rejected_before = ts.getStepRejections()
-        ts.step()
+        try:
+            ts.step()
+        except PETSc.Error:  # raised when the step is rejected more than ts_max_reject times
+            pass
         reason = ts.getConvergedReason()
         stats.rejected_steps += ts.getStepRejections() - rejected_before
         if reason < 0:
             raise DynamicsError(
                 f"time integration stopped at t = {t:.6g} s (step {step + 1}, dt = "
-                f"{ts.getTimeStep():.3g} s): PETSc TS reason {reason}; last Newton "
+                f"{ts.getTimeStep():.3g} s): {_TS_REASONS.get(reason, reason)}; last Newton "
                 f"history: {history.text()}", t)
         t = ts.getTime()
         step += 1

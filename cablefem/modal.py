@@ -24,7 +24,7 @@ from dolfinx.fem import petsc as fpetsc
 from petsc4py import PETSc
 from slepc4py import SLEPc
 
-from .petsc_utils import default_options, lu_options
+from .petsc_utils import case_options, default_options, lu_options
 
 __all__ = ["ModalResult", "solve_modes", "classify_mode"]
 
@@ -91,7 +91,7 @@ def solve_modes(model, n: int = 6) -> ModalResult:
     eps.setProblemType(SLEPc.EPS.ProblemType.GHEP)
     eps.setWhichEigenpairs(SLEPc.EPS.Which.TARGET_MAGNITUDE)
     eps.setDimensions(n, max(2 * n + 1, n + 15))
-    with default_options(prefix, defaults):
+    with default_options(prefix, defaults, case_options(model, "modal")):
         eps.setFromOptions()
     eps.solve()
     nconv = eps.getConverged()

@@ -9,7 +9,8 @@ from dolfinx import fem
 from dolfinx.fem import petsc as fpetsc
 from petsc4py import PETSc
 
-__all__ = ["default_options", "assemble_residual", "assemble_jacobian", "SNESHistory",
+__all__ = ["default_options", "case_options", "assemble_residual", "assemble_jacobian",
+           "SNESHistory",
            "lu_options", "copy_in"]
 
 INSERT, ADD = PETSc.InsertMode.INSERT, PETSc.InsertMode.ADD
@@ -57,6 +58,21 @@ class default_options:
         for k in self.inserted:
             opts.delValue(k)
         self.inserted.clear()
+
+
+def case_options(model, solver: str = "") -> dict[str, object]:
+    """The case file's ``solver.petsc_options`` meant for one solver: keys that start with
+    ``static_`` / ``modal_`` / ``mass_`` go to that solver (without the word), the others to
+    the time integrator (``solver=""``)."""
+    out = {}
+    special = ("static_", "modal_", "mass_")
+    for key, val in model.case.solver.petsc_options.items():
+        key = key.lstrip("-")
+        if solver and key.startswith(solver + "_"):
+            out[key[len(solver) + 1:]] = val
+        elif not solver and not key.startswith(special):
+            out[key] = val
+    return out
 
 
 def _fmt(val: object) -> str:

@@ -22,7 +22,7 @@ from petsc4py import PETSc
 
 from .anchors import AnchorForces
 from .petsc_utils import (SNESHistory, assemble_jacobian, assemble_residual, copy_in,
-                          default_options, lu_options)
+                          case_options, default_options, lu_options)
 
 __all__ = ["StaticResult", "StaticError", "solve_static"]
 
@@ -71,7 +71,7 @@ def _make_snes(model, history: SNESHistory, bilateral: bool = False
     snes.setFunction(F, b)
     snes.setJacobian(J, A)
     snes.setMonitor(history)
-    with default_options(prefix, defaults, model.case.solver.petsc_options):
+    with default_options(prefix, defaults, case_options(model, "static")):
         snes.setFromOptions()
     return snes, b
 

@@ -1,0 +1,50 @@
+"""Helpers for the dynamics tests: a taut string set into free vibration in its first
+discrete mode, and the value of a nodal dof gathered over ranks."""
+
+from __future__ import annotations
+
+import numpy as np
+from mpi4py import MPI
+
+from cablefem.case import parse_case
+from cablefem.dynamics import DynamicsStats, integrate
+from cablefem.model import CableModel
+from cablefem.statics import solve_static
+
+from conftest import level_case
+
+EA, L0, L, M = 100.0, 1.0, 1.01, 1.0  # T = EA (L/l - 1) = 1, stretch 1.01
+T = EA * (L / L0 - 1)
+
+
+def omega_discrete(n: int, k: int = 1) -> float:
+    """Exact transverse frequency of the P1/consistent-mass taut string (test_modal)."""
+    h = L0 / n
+    th = k * np.pi * h / L0
+    return float(np.sqrt(6 * T / (L / L0) / (M * h * h) * (1 - np.cos(th)) / (2 + np.cos(th))))
+
+
+def node_value(model, f, k: int, comp: int) -> float:
+    """Component ``comp`` of P1 function ``f`` at node ``k`` (station order), all ranks."""
+    idx = np.nonzero(model._owned_nodes == k)[0]
+    val = f.x.array[3 * idx[0] + comp] if idx.size else 0.0
+    return model.comm.allreduce(float(val), op=MPI.SUM)
+
+
+def free_vibration(n=20, amplitude=1e-3, t_end=3.0, dt=0.01, rho_inf=1.0, damping=None,
+                   record=None):
+    """Taut weightless string released from A sin(pi s/l) e_y; yields (t, model, forces)."""
+    d = level_case(EA=EA, EI=1e-6, mass=M, g=0.0, length=L0, chord=L, elements=n,
+                   damping=damping,
+                   dynamics={"t_end": t_end, "dt": dt, "rho_inf": rho_inf})
+    model = CableModel(parse_case(d), MPI.COMM_WORLD)
+    solve_static(model)
+    s = model.geometry.stations
+    shape = np.zeros((s.size, 3))
+    shape[:, 1] = amplitude * np.sin(np.pi * s / L0)
+    u0 = model.gather_nodal(model.u)
+    u0 = model.comm.bcast(u0, root=0)
+    model.scatter_nodal(u0 + shape, model.u)
+    stats = DynamicsStats()
+    for t, forces in integrate(model, t_end, dt, rho_inf, 1, stats):
+        yield t, model, forces
