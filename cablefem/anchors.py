@@ -34,6 +34,9 @@ class AnchorForces:
         self.R = fpetsc.create_vector(model.f_dynamic)
         self.M = fpetsc.assemble_matrix(model.m_form, model.bcs, diagonal=1.0)
         self.M.assemble()
+        self.M_full = fpetsc.assemble_matrix(model.m_form)  # unconstrained: anchor rows kept
+        self.M_full.assemble()
+        self.Mda = self.M_full.createVecLeft()
         prefix = model.prefix + "mass_"
         self.ksp = PETSc.KSP().create(model.comm)
         self.ksp.setOptionsPrefix(prefix)
@@ -41,6 +44,7 @@ class AnchorForces:
         with default_options(prefix, lu_options(model.comm.size),
                              case_options(model, "mass")):
             self.ksp.setFromOptions()
+        self.rhs = self.R.duplicate()
         self.da = model.a.vector.duplicate()  # ghosted, like the Function's vector
 
     def _assemble(self) -> None:
@@ -59,8 +63,9 @@ class AnchorForces:
                 m.a.x.array[anc.flat_dofs] = np.tile(anc.acceleration(t), anc.dofs.size)
         self._assemble()
         self.R.scale(-1.0)
-        fpetsc.set_bc(self.R, m.bcs, scale=0.0)  # zero rows: anchors keep a_b
-        self.ksp.solve(self.R, self.da)
+        self.R.copy(self.rhs)
+        fpetsc.set_bc(self.rhs, m.bcs, scale=0.0)  # zero rows: anchors keep a_b
+        self.ksp.solve(self.rhs, self.da)
         if self.ksp.getConvergedReason() < 0:
             raise RuntimeError(f"mass-matrix solve failed at t={t:g} "
                                f"(KSP reason {self.ksp.getConvergedReason()})")
@@ -72,16 +77,21 @@ class AnchorForces:
         """Anchor forces ``N_a`` (n_anchors, 3) in N, identical on every rank.
 
         With ``dynamic=False`` velocity and acceleration are taken as zero (statics).
+        In dynamics the residual is linear in the acceleration, so the anchor rows of
+        ``F(u, v, a_b + δa)`` are those of ``F(u, v, a_b)`` plus ``M δa``: one assembly.
         """
         m = self.model
         if dynamic:
-            self.equilibrium_acceleration(t)
+            self.equilibrium_acceleration(t)  # leaves -F(u, v, a_b) in self.R
+            self.M_full.mult(self.da, self.Mda)
+            self.R.axpby(1.0, -1.0, self.Mda)  # R = M da - (-F) = F(u, v, a)
+            arr = self.R.array_r
         else:
             m.a.x.array[:] = 0.0
-        self._assemble()
+            self._assemble()
+            arr = self.R.array_r
         n_owned = m.V.dofmap.index_map.size_local
         local = np.zeros((len(m.anchors), 3))
-        arr = self.R.array_r
         for i, anc in enumerate(m.anchors):
             own = anc.dofs[anc.dofs < n_owned]
             if own.size:

@@ -197,9 +197,11 @@ CASE_KEYS: dict[str, KeyDoc | TableDoc] = {
     }),
     "solver": TableDoc("table", None, "", "Solver settings.", {
         "tension_only": KeyDoc("boolean", True, "", "No compression: T = EA max(v3, 0)."),
-        "petsc_options": KeyDoc("table of options", {}, "", "PETSc options without prefix or "
-                                "'-' (values string/number/boolean); the solver adds "
-                                "'cable_'."),
+        "petsc_options": KeyDoc(
+            "table of options", {}, "",
+            "PETSc options without '-' (values string/number/boolean), e.g. ts_type, "
+            "snes_rtol: they go to the time integrator (prefix 'cable_'); keys starting "
+            "static_, modal_ or mass_ go to statics, the eigensolver or the mass solve."),
     }),
 }
 

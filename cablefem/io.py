@@ -14,7 +14,6 @@
 
 from __future__ import annotations
 
-import csv
 import json
 import math
 import os
@@ -97,15 +96,15 @@ class AnchorCSV:
         self.fh = None
         if comm.rank == 0:
             self.fh = open(path, "w", newline="")
-            self.writer = csv.writer(self.fh)
-            self.writer.writerow(columns)
+            self.fh.write(",".join(columns) + "\n")
             self.fh.flush()
 
     def write(self, rows: list[dict]) -> None:
         if self.fh is None:
             return
-        for row in rows:
-            self.writer.writerow([_cell(row.get(c, "")) for c in self.columns])
+        cols = self.columns
+        self.fh.write("".join(",".join(_cell(row.get(c, "")) for c in cols) + "\n"
+                              for row in rows))
         self.fh.flush()
 
     def close(self) -> None:
@@ -122,7 +121,7 @@ class AnchorCSV:
 
 def _cell(v) -> str:
     if isinstance(v, str):
-        return v
+        return v if not any(ch in v for ch in ',"\n') else '"' + v.replace('"', '""') + '"'
     if isinstance(v, (bool, np.bool_)):
         return str(int(v))
     if isinstance(v, (int, np.integer)):

@@ -13,12 +13,14 @@ __all__ = ["anchor_figures", "is_spatial"]
 
 
 def is_spatial(psi0: np.ndarray, valid: np.ndarray) -> bool:
-    """True when the bending plane turns (ψ0 spreads by more than 1°) over the steady state."""
+    """True when the bending plane turns: its azimuth ψ0, taken modulo π (a plane is a line:
+    ψ0 jumps by π when an in-plane moment changes sign), spreads by more than 1°."""
     p = psi0[(valid > 0) & np.isfinite(psi0)]
     if p.size < 3:
         return False
-    z = np.exp(1j * p)
-    spread = np.angle(z / np.mean(z) if abs(np.mean(z)) > 0 else z)
+    z = np.exp(2j * p)  # doubling the angle identifies psi0 and psi0 + pi
+    m = np.mean(z)
+    spread = np.angle(z / m) / 2 if abs(m) > 1e-12 else np.angle(z) / 2
     return float(np.ptp(spread)) > np.radians(1.0)
 
 
@@ -37,18 +39,23 @@ def anchor_figures(outdir: Path, times: np.ndarray, moments: dict[str, dict[str,
                                  sharex=True, squeeze=False)
         for ax, (name, mo) in zip(axes[:, 0], moments.items()):
             ok = mo["valid"] > 0
-            M = np.where(ok, mo["moment"], np.nan)
-            ax.plot(times, M, lw=0.8, label="composite: layer + string curvature")
-            ax.plot(times, np.where(ok, mo["moment_layer"], np.nan), lw=0.6, ls="--",
-                    label="layer closed form alone")
+            M = np.column_stack([mo["Mx"], mo["My"], mo["Mz"]])
+            first = np.flatnonzero(ok & (mo["moment"] > 0))
+            b0 = M[first[0]] / mo["moment"][first[0]] if first.size else np.zeros(3)
+            signed = np.where(ok, M @ b0, np.nan)
+            ax.plot(times, signed, lw=0.8, label="M . b0 (b0: initial bending-plane normal)")
+            if is_spatial(mo["psi0"], mo["valid"]):
+                ax.plot(times, np.where(ok, mo["moment"], np.nan), lw=0.5, color="0.5",
+                        label="|M| (the bending plane turns)")
             if np.any(~ok):
                 ax.plot(times[~ok], np.zeros(np.count_nonzero(~ok)), "rx", ms=3,
                         label="invalid (slack / thick layer): no moment")
+            ax.axhline(0.0, color="k", lw=0.4)
             ax.set_ylabel(f"M at anchor {name}")
             ax.grid(True, lw=0.3)
-            ax.legend(loc="upper right", fontsize=7)
+            ax.legend(loc="upper left", fontsize=7)
         axes[-1, 0].set_xlabel("time t")
-        fig.suptitle("Bending moment at the clamped anchors (matched asymptotics)")
+        fig.suptitle("Bending moment at the clamped anchors: inner solution + string curvature")
         fig.tight_layout()
         fig.savefig(outdir / "anchor_moments.png", dpi=130)
         plt.close(fig)
