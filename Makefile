@@ -1,25 +1,8 @@
-# The two commands of the README:
-#   make demo  -- set up whatever is missing, then run the paper's in-plane case (case A)
-#   make test  -- set up whatever is missing, then run the tests (serial, then 2 MPI ranks)
-PY := .venv/bin/python
-OUT ?= output
-
-.PHONY: setup demo test test-serial test-mpi test-slow bench lint
+# Shortcuts for ./dev.sh (which needs nothing but bash on a fresh machine).
+.PHONY: demo demo-spatial test test-slow bench setup lint
+demo demo-spatial test test-slow bench:
+	./dev.sh $@
 setup:
-	@bash .ci/setup
-
-demo: setup
-	$(PY) demos/demo_paper_inplane.py --output $(OUT)/paper_inplane
-
-test: setup
-	$(PY) -m pytest -q -p no:cacheprovider tests
-	bash .ci/mpitest -q --color=no -p no:cacheprovider -m "not serial and not slow" tests
-
-test-slow: setup
-	$(PY) -m pytest -q -p no:cacheprovider -m slow tests
-
-bench: setup
-	$(PY) benchmarks/bench_string.py
-
+	bash .ci/setup
 lint:
 	ruff check cablefem tests demos benchmarks

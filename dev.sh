@@ -1,0 +1,27 @@
+#!/usr/bin/env bash
+# The project's commands (the README's two are `./dev.sh demo` and `./dev.sh test`).
+# Each sets up whatever is missing first (.ci/setup: Debian packages, .venv, the project).
+set -euo pipefail
+cd "$(dirname "${BASH_SOURCE[0]}")"
+PY=.venv/bin/python
+case "${1:-}" in
+  demo)      # the paper's in-plane case (case A) -> ${OUT:-output}/paper_inplane
+    bash .ci/setup
+    exec "$PY" demos/demo_paper_inplane.py --output "${OUT:-output}/paper_inplane" ;;
+  demo-spatial)
+    bash .ci/setup
+    exec "$PY" demos/demo_paper_spatial.py --output "${OUT:-output}/paper_spatial" ;;
+  test)      # serial suite, then the same suite on 2 MPI ranks
+    bash .ci/setup
+    "$PY" -m pytest -q -p no:cacheprovider tests
+    exec bash .ci/mpitest -q --color=no -p no:cacheprovider -m "not serial and not slow" tests ;;
+  test-slow)
+    bash .ci/setup
+    exec "$PY" -m pytest -q -p no:cacheprovider -m slow tests ;;
+  bench)
+    bash .ci/setup
+    exec "$PY" benchmarks/bench_string.py ;;
+  *)
+    echo "usage: ./dev.sh demo|demo-spatial|test|test-slow|bench" >&2
+    exit 2 ;;
+esac
