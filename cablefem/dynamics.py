@@ -10,10 +10,14 @@ The residual ``F(t, U, V, A)`` is the model's UFL form ``F_dynamic``; the Jacobi
 ``dF/du + shift_v dF/du̇ + shift_a dF/dü`` (PETSc passes the shifts). An anchor's prescribed
 motion ``g(t)`` enters as the rows ``U − g(t)`` at the stage time.
 
-A step whose Newton solve fails is cut (PETSc's ``-ts_adapt_scale_solve_failed``, 0.25 by
-default) and retried, up to ``-ts_max_reject`` times; the step then grows back to the nominal
-``dt`` by doubling. When it cannot continue, :class:`DynamicsError` says at which time, with
-the last Newton history; everything written up to then stays valid.
+A step whose Newton solve fails is retried as 4, 16, ... equal sub-steps up to the next
+point of the nominal time grid (at most ``max_cuts`` times; PETSc's ``alpha2`` with its
+default adaptor would retry with the same step), and the run goes on with those sub-steps for
+``cooldown`` nominal steps before it tries a larger one: the step size changes seldom and
+only at grid points (generalised-α is second order at constant step only), and outputs stay
+on the nominal grid. When it cannot continue,
+:class:`DynamicsError` says at which time, with the last Newton history, and leaves the last
+converged state in ``model.u`` and ``model.v``; everything written up to then stays valid.
 
 Options prefix: the model's (``cable_``): ``-cable_ts_type``, ``-cable_snes_rtol``, ...
 """
@@ -30,8 +34,8 @@ from dolfinx.fem import petsc as fpetsc
 from petsc4py import PETSc
 
 from .anchors import AnchorForces
-from .petsc_utils import (SNESHistory, assemble_jacobian, assemble_residual, copy_in,
-                          case_options, default_options, lu_options)
+from .petsc_utils import (SNESHistory, assemble_jacobian_rows, assemble_residual_rows,
+                          case_options, copy_in, default_options, lu_options)
 
 __all__ = ["DynamicsError", "DynamicsStats", "integrate"]
 
@@ -64,12 +68,15 @@ _TS_REASONS = {-1: "Newton failed (TS_DIVERGED_NONLINEAR_SOLVE)",
 def _make_ts(model, dt: float, rho_inf: float, history: SNESHistory):
     prefix = model.prefix
     scale = model.force_scale
-    defaults = {"ts_type": "alpha2", "ts_alpha_radius": rho_inf, "ts_max_reject": 8,
+    defaults = {"ts_type": "alpha2", "ts_alpha_radius": rho_inf, "ts_max_reject": 0,
                 "ts_max_snes_failures": -1, "snes_type": "newtonls",
                 "snes_linesearch_type": "basic", "snes_rtol": 1e-9,
                 "snes_atol": 1e-11 * scale, "snes_stol": 0.0, "snes_max_it": 25,
                 **lu_options(model.comm.size)}
 
+    n_owned = model.V.dofmap.index_map.size_local
+    bc_rows = np.concatenate([a.flat_dofs for a in model.anchors]).astype(np.int32)
+    bc_rows = bc_rows[bc_rows < 3 * n_owned]  # owned rows; each rank zeroes its own
     F_vec = fpetsc.create_vector(model.f_dynamic)
     J_mat = fpetsc.create_matrix(model.j_dynamic)
 
@@ -78,13 +85,13 @@ def _make_ts(model, dt: float, rho_inf: float, history: SNESHistory):
         copy_in(U, model.u)
         copy_in(V, model.v)
         copy_in(A, model.a)
-        assemble_residual(F, model.f_dynamic, model.j_dynamic, model.bcs, U)
+        assemble_residual_rows(F, model.f_dynamic, model.bcs, U)
 
     def I2Jacobian(ts, t, U, V, A, shift_v, shift_a, J, P):
         model.shift_v.value = shift_v
         model.shift_a.value = shift_a
         # SNES evaluates the residual at the same state just before: model.u/v/a are current
-        assemble_jacobian(J, model.j_dynamic, model.bcs)
+        assemble_jacobian_rows(J, model.j_dynamic, bc_rows)
 
     ts = PETSc.TS().create(model.comm)
     ts.setOptionsPrefix(prefix)
@@ -100,7 +107,8 @@ def _make_ts(model, dt: float, rho_inf: float, history: SNESHistory):
 
 
 def integrate(model, t_end: float, dt: float, rho_inf: float = 0.9, output_every: int = 1,
-              stats: DynamicsStats | None = None) -> Iterator[tuple[float, np.ndarray]]:
+              stats: DynamicsStats | None = None, max_cuts: int = 6, cooldown: int = 8
+              ) -> Iterator[tuple[float, np.ndarray]]:
     """Integrate from the current state (``model.u``, normally the static equilibrium, at rest)
     to ``t_end``; yields ``(t, anchor_forces)`` at ``t = 0`` and every ``output_every`` steps
     and at ``t_end``, with ``model.u``, ``model.v`` and ``model.a`` at that time.
@@ -133,24 +141,45 @@ def integrate(model, t_end: float, dt: float, rho_inf: float = 0.9, output_every
     t = 0.0
     step = 0
     eps_t = 1e-9 * dt
+    level = 0  # every nominal step is split into 4**level equal sub-steps
+    calm = 0  # nominal steps done without a failure at the current level
     while t < t_end - eps_t:
-        h = ts.getTimeStep()
-        if t + h > t_end - eps_t:
-            ts.setTimeStep(t_end - t)
+        t_start, t_next = t, min(t + dt, t_end)  # one step of the nominal grid
         history.clear()
-        rejected_before = ts.getStepRejections()
-        try:
-            ts.step()
-        except PETSc.Error:  # raised when the step is rejected more than ts_max_reject times
-            pass
-        reason = ts.getConvergedReason()
-        stats.rejected_steps += ts.getStepRejections() - rejected_before
-        if reason < 0:
-            raise DynamicsError(
-                f"time integration stopped at t = {t:.6g} s (step {step + 1}, dt = "
-                f"{ts.getTimeStep():.3g} s): {_TS_REASONS.get(reason, reason)}; last Newton "
-                f"history: {history.text()}", t)
-        t = ts.getTime()
+        if level and calm >= cooldown:  # try a larger step again, seldom: each change of
+            level, calm = level - 1, 0  # step size costs generalised-alpha some accuracy
+        failed = False
+        while t < t_next - eps_t:
+            sub = (t_next - t_start) / 4**level
+            ts.setTimeStep((t_next - t) / max(1, round((t_next - t) / sub)))
+            try:
+                ts.step()
+            except PETSc.Error:  # raised when the step is rejected (ts_max_reject = 0)
+                pass
+            reason = ts.getConvergedReason()
+            if reason >= 0:
+                t = ts.getTime()
+                continue
+            stats.rejected_steps += 1
+            failed = True
+            ts.setConvergedReason(PETSc.TS.ConvergedReason.CONVERGED_ITERATING)
+            # a retried step would start from the failed attempt's acceleration (alpha2
+            # copies A1 into A0): restart, i.e. re-estimate A0 from the restored state
+            ts.restartStep()
+            if level == max_cuts:
+                U2, V2 = ts.getSolution2()  # the last converged state (step rolled back)
+                copy_in(U2, model.u)
+                copy_in(V2, model.v)
+                raise DynamicsError(
+                    f"time integration stopped at t = {t:.6g} s (step {step + 1}): Newton "
+                    f"failed with dt = {dt:.3g} s and with {max_cuts} cuts down to "
+                    f"{dt / 4**max_cuts:.3g} s ({_TS_REASONS.get(reason, reason)}); last "
+                    f"Newton history: {history.text()}", t)
+            level += 1
+            log.info("t = %.6g: Newton failed with dt = %.3g, sub-stepping with dt = %.3g",
+                     t, 4 * sub, sub)
+        calm = 0 if failed else calm + 1
+        t = t_next
         step += 1
         stats.steps = step
         stats.newton_iterations = ts.getSNESIterations()
@@ -159,8 +188,6 @@ def integrate(model, t_end: float, dt: float, rho_inf: float = 0.9, output_every
         if not (np.all(np.isfinite(U2.array_r)) and np.all(np.isfinite(V2.array_r))):
             raise DynamicsError(f"non-finite state at t = {t:.6g} s; the last finite output "
                                 "is kept", t)
-        if ts.getTimeStep() < dt:  # grow back after a cut
-            ts.setTimeStep(min(dt, 2.0 * ts.getTimeStep()))
         if step % output_every == 0 or t >= t_end - eps_t:
             copy_in(U2, model.u)
             copy_in(V2, model.v)

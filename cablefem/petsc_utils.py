@@ -5,11 +5,14 @@ from __future__ import annotations
 
 from collections import deque
 
+import numpy as np
+
 from dolfinx import fem
 from dolfinx.fem import petsc as fpetsc
 from petsc4py import PETSc
 
 __all__ = ["default_options", "case_options", "assemble_residual", "assemble_jacobian",
+           "assemble_residual_rows", "assemble_jacobian_rows",
            "SNESHistory",
            "lu_options", "copy_in"]
 
@@ -98,6 +101,26 @@ def assemble_residual(b: PETSc.Vec, F: fem.FormMetaClass, J: fem.FormMetaClass, 
     fpetsc.set_bc(b, bcs, x, -1.0)
 
 
+def assemble_residual_rows(b: PETSc.Vec, F: fem.FormMetaClass, bcs, x: PETSc.Vec) -> None:
+    """Residual without lifting; Dirichlet rows hold ``x - g``. Pairs with
+    :func:`assemble_jacobian_rows`: Newton is then exact whatever the state of the
+    constrained dofs, with no dependence on the Jacobian's parameters (e.g. TS shifts)."""
+    with b.localForm() as loc:
+        loc.set(0.0)
+    fpetsc.assemble_vector(b, F)
+    b.ghostUpdate(addv=ADD, mode=REVERSE)
+    fpetsc.set_bc(b, bcs, x, -1.0)
+
+
+def assemble_jacobian_rows(A: PETSc.Mat, J: fem.FormMetaClass, rows: np.ndarray) -> None:
+    """Jacobian assembled without boundary conditions, then the constrained *rows* (local
+    unrolled indices of owned dofs) replaced by identity rows; their columns are kept."""
+    A.zeroEntries()
+    fpetsc.assemble_matrix(A, J)
+    A.assemble()
+    A.zeroRowsLocal(rows, diag=1.0)
+
+
 def assemble_jacobian(A: PETSc.Mat, J: fem.FormMetaClass, bcs) -> None:
     A.zeroEntries()
     fpetsc.assemble_matrix(A, J, bcs)
@@ -107,7 +130,7 @@ def assemble_jacobian(A: PETSc.Mat, J: fem.FormMetaClass, bcs) -> None:
 class SNESHistory:
     """Keeps the last Newton residual norms, for a failure message that says what happened."""
 
-    def __init__(self, maxlen: int = 40) -> None:
+    def __init__(self, maxlen: int = 12) -> None:
         self.norms: deque[tuple[int, float]] = deque(maxlen=maxlen)
 
     def __call__(self, snes: PETSc.SNES, its: int, norm: float) -> None:

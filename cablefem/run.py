@@ -96,6 +96,7 @@ class _Emitter:
         self.columns: dict[str, dict[str, list]] = {
             a.name: {k: [] for k in MOMENT_COLUMNS} for a in self.clamped}
         self._pending = 0
+        self.last_fields_time = None
         self.moments = None
         self.stations = None
 
@@ -148,6 +149,7 @@ class _Emitter:
         """Write the string fields and the composite moment field at ``t`` (collective)."""
         m = self.model
         self.string.write(t)
+        self.last_fields_time = t
         if not self.clamped:
             return
         idx = {a.name: i for i, a in enumerate(m.anchors)}
@@ -274,6 +276,15 @@ def run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *,
         summary["status"] = "failed"
         summary["error"] = str(err)
         log.error("%s", err)
+        if isinstance(err, DynamicsError) and emitter.times:
+            # the last converged state (left in the model by integrate) goes to string.xdmf
+            last = np.array([emitter.forces[a.name][-1] for a in model.anchors])
+            try:
+                if err.time != emitter.last_fields_time:  # else it is already in the file
+                    emitter.fields(err.time, last)
+                summary["failure_state_time"] = err.time
+            except (FloatingPointError, RuntimeError) as err2:
+                log.error("could not write the state at failure: %s", err2)
     finally:
         emitter.close()
 

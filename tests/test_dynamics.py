@@ -121,8 +121,8 @@ def test_reactions_balance_momentum(make_case):
 
 
 def test_failure_is_reported_and_output_kept(mpi_tmp_path):
-    """A Newton solve that cannot converge (1 iteration allowed, no step rejection allowed)
-    stops the run with a message naming the time and the Newton history; anchors.csv keeps
+    """A Newton solve that cannot converge (1 iteration allowed and an unreachable
+    tolerance, at every cut of the step) stops the run with a message naming the time and the Newton history; anchors.csv keeps
     the rows computed so far and summary.json says 'failed'."""
     d = level_case(motion={"type": "harmonic", "amplitude": [2e-4, 0, 0], "omega": 32.814},
                    dynamics={"t_end": 1.0, "dt": 0.005},
@@ -135,5 +135,29 @@ def test_failure_is_reported_and_output_kept(mpi_tmp_path):
 
     summary = json.loads((out / "summary.json").read_text())
     assert summary["status"] == "failed"
+    assert summary["failure_state_time"] == 0.0  # the last converged state is saved
     rows = (out / "anchors.csv").read_text().strip().splitlines()
     assert len(rows) == 1 + 2  # header + the t = 0 rows of both anchors
+
+
+def test_step_cut_and_retry(mpi_tmp_path):
+    """With at most 2 Newton iterations a step of 0.05 (and of 0.0125) fails on case A; the
+    failed step is rolled back and sub-stepped in 4, then 16 equal steps, and the run goes on
+    at dt/16 (the cool-down outlasts this 6-step run). It must then be the uniform run at
+    dt/16 exactly (the failed attempts leave no trace: the acceleration is re-estimated from
+    the restored state), to 1e-9 of the tension (Newton tolerances), and its outputs stay on
+    the nominal grid."""
+    motion = {"type": "harmonic", "amplitude": [2e-4, 0, 0], "omega": 32.814}
+    cut = level_case(motion=motion, dynamics={"t_end": 0.3, "dt": 0.05},
+                     solver={"petsc_options": {"snes_max_it": 2}})
+    ref = level_case(motion=motion, dynamics={"t_end": 0.3, "dt": 0.05 / 16},
+                     solver={"petsc_options": {"snes_max_it": 2}})
+    r_cut = run_case(parse_case(cut), mpi_tmp_path / "cut", figures=False, progress=False)
+    r_ref = run_case(parse_case(ref), mpi_tmp_path / "ref", figures=False, progress=False)
+    assert r_cut.summary["status"] == "completed"
+    assert r_cut.summary["dynamics"]["rejected_steps"] == 2
+    assert r_ref.summary["dynamics"]["rejected_steps"] == 0
+    np.testing.assert_allclose(r_cut.times, np.linspace(0, 0.3, 7), atol=1e-12)
+    for name in ("p", "q"):
+        np.testing.assert_allclose(r_cut.forces[name], r_ref.forces[name][::16], rtol=0,
+                                   atol=1e-9 * 25.0)
