@@ -191,6 +191,9 @@ CASE_KEYS: dict[str, KeyDoc | TableDoc] = {
                                "Anchor rows (anchors.csv) every n-th step, >= 1."),
         "fields_every": KeyDoc("integer", 20, "-",
                                "Fields (string.xdmf, moments.xdmf) every n-th step, >= 1."),
+        "checkpoint_every": KeyDoc("integer", 500, "-",
+                                   "Checkpoint for 'cablefem run --restart' every n-th step, "
+                                   ">= 0 (0: none)."),
     }),
     "modal": TableDoc("table", None, "", "Modal analysis about the static equilibrium.", {
         "modes": KeyDoc("integer", 6, "-", "Number of modes, >= 1."),
@@ -349,6 +352,7 @@ class DynamicsSpec:
     rho_inf: float
     output_every: int
     fields_every: int = 20
+    checkpoint_every: int = 500
 
 
 @dataclass
@@ -783,7 +787,7 @@ def _parse_dynamics(r: _Reader | None) -> DynamicsSpec | None:
         r.add("dt", f"must be <= t_end = {t_end!r} (s), got {dt!r}")
         return None
     parts = (t_end, dt, r.number("rho_inf", ge=0, le=1), r.integer("output_every"),
-             r.integer("fields_every"))
+             r.integer("fields_every"), r.integer("checkpoint_every", ge=0))
     return None if _missing(*parts) else DynamicsSpec(*parts)
 
 
@@ -944,8 +948,10 @@ def load_case(path: str | os.PathLike) -> Case:
     try:
         data = tomllib.loads(path.read_text(encoding="utf-8"))
     except OSError as exc:
-        raise CaseError([("", f"cannot read the case file: {exc.strerror or exc}")],
+        raise CaseError([("file", f"cannot read the case file: {exc.strerror or exc}")],
                         str(path)) from None
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
-        raise CaseError([("", f"not a valid TOML file: {exc}")], str(path)) from None
+        where = re.search(r"line (\d+), column (\d+)", str(exc))
+        key = f"line {where.group(1)}, column {where.group(2)}" if where else "TOML syntax"
+        raise CaseError([(key, f"not a valid TOML file: {exc}")], str(path)) from None
     return parse_case(data, base_dir=path.parent, source=str(path))

@@ -2,7 +2,9 @@
 
 Exit codes: 0 success; 1 a solve failed (the files written so far are valid and
 ``summary.json`` says why); 2 bad input (case file, options, CSV), reported one line per
-problem before any expensive work, without a traceback.
+problem before any expensive work, without a traceback; 128 + the signal's number (130 for
+Ctrl-C, 143 for SIGTERM) when a run was stopped by a signal: every file is valid and
+``cablefem run --restart DIR`` continues it from its last checkpoint.
 
 PETSc options go after the other arguments, e.g. ``cablefem run case.toml --output out
 -cable_ts_type alpha2 -cable_snes_monitor``; every solver has the ``cable_`` prefix
@@ -39,9 +41,17 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("--version", action="store_true", help="print the version and exit")
     sub = p.add_subparsers(dest="command", parser_class=_Parser)
 
-    def common(sp):
-        sp.add_argument("case", type=Path, help="case file (TOML)")
-        sp.add_argument("--output", "-o", type=Path, required=True, help="output folder")
+    def common(sp, restartable=False):
+        if restartable:
+            sp.add_argument("case", type=Path, nargs="?", help="case file (TOML); not "
+                            "needed with --restart")
+            sp.add_argument("--output", "-o", type=Path, help="output folder")
+            sp.add_argument("--restart", type=Path, metavar="DIR",
+                            help="continue the run in DIR from its last checkpoint (after "
+                                 "Ctrl-C, SIGTERM, a kill or a crash)")
+        else:
+            sp.add_argument("case", type=Path, help="case file (TOML)")
+            sp.add_argument("--output", "-o", type=Path, required=True, help="output folder")
         sp.add_argument("--quiet", "-q", action="store_true", help="warnings and errors only")
 
     run = sub.add_parser("run", formatter_class=argparse.RawDescriptionHelpFormatter,
@@ -51,7 +61,7 @@ def _parser() -> argparse.ArgumentParser:
                          "Writes summary.json, anchors.csv, string.xdmf, modes.xdmf, "
                          "moments.xdmf, figures.",
                          epilog="Case file keys:\n\n" + keys)
-    common(run)
+    common(run, restartable=True)
     run.add_argument("--t-end", type=float, help="override dynamics.t_end (s)")
     run.add_argument("--model", choices=["string"], default="string",
                      help="outer model (only 'string' in this version)")
@@ -119,6 +129,23 @@ def _input_error(msg: str) -> int:
 
 
 def main(argv: list[str] | None = None) -> int:
+    """Entry point; an unexpected exception becomes one line (``CABLEFEM_DEBUG=1``: the
+    traceback) and exit code 1."""
+    try:
+        return _main(argv)
+    except (KeyboardInterrupt, SystemExit):
+        raise
+    except Exception as err:  # noqa: BLE001 - the last guard of the command line
+        import os
+
+        if os.environ.get("CABLEFEM_DEBUG"):
+            raise
+        sys.stderr.write(f"cablefem: internal error: {type(err).__name__}: {err} (set "
+                         "CABLEFEM_DEBUG=1 for the traceback, and please report it)\n")
+        return EXIT_FAILED
+
+
+def _main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else argv
     parser = _parser()
     args, extra = parser.parse_known_args(argv)
@@ -140,6 +167,20 @@ def main(argv: list[str] | None = None) -> int:
 
     from .case import CaseError, load_case
 
+    if args.command == "run":
+        if args.restart is not None:
+            from .checkpoint import read_checkpoint
+
+            try:
+                ck = read_checkpoint(args.restart)
+            except ValueError as err:
+                return _input_error(str(err))
+            if args.output is not None and args.output.resolve() != args.restart.resolve():
+                return _input_error("--output must be the --restart folder (or omitted)")
+            args.output = args.restart
+            args.case = args.case or Path(str(ck["case"]))
+        if args.case is None or args.output is None:
+            return _input_error("give a case file and --output DIR, or --restart DIR")
     case_path = args.case
     try:
         case = load_case(case_path)
@@ -164,14 +205,14 @@ def main(argv: list[str] | None = None) -> int:
         return EXIT_OK
 
     _petsc_options(extra)
-    from .run import RunError, run_case
+    from .run import RunError, RunInterrupted, run_case
     from .statics import StaticError
 
     try:
         if args.command == "run":
             run_case(case, args.output, t_end=args.t_end, form=args.moment_form,
                      dynamics=not args.static_only, figures=not args.no_figures,
-                     progress=not args.quiet)
+                     progress=not args.quiet, restart=args.restart is not None)
         else:
             run_case(case, args.output, modes=args.n, dynamics=False, figures=False,
                      progress=not args.quiet)
@@ -181,6 +222,9 @@ def main(argv: list[str] | None = None) -> int:
     except (RunError, StaticError) as err:
         sys.stderr.write(f"cablefem: run failed: {err}\n")
         return EXIT_FAILED
+    except RunInterrupted as err:
+        sys.stderr.write(f"cablefem: {err}\n")
+        return 128 + (err.signal or 2)
     return EXIT_OK
 
 

@@ -31,15 +31,34 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from dolfinx.fem import petsc as fpetsc
+from mpi4py import MPI
 from petsc4py import PETSc
 
 from .anchors import AnchorForces
 from .petsc_utils import (SNESHistory, assemble_jacobian_rows, assemble_residual_rows,
                           case_options, copy_in, default_options, lu_options)
 
-__all__ = ["DynamicsError", "DynamicsStats", "integrate"]
+__all__ = ["Checkpoint", "DynamicsError", "DynamicsStats", "Interrupted", "integrate"]
 
 log = logging.getLogger(__name__)
+
+
+@dataclass
+class Checkpoint:
+    """What a resumed run needs beyond ``model.u`` and ``model.v``."""
+
+    time: float
+    step: int
+    level: int = 0
+    calm: int = 0
+
+
+class Interrupted(RuntimeError):
+    """The run was asked to stop (a signal); ``.time`` is the last completed time."""
+
+    def __init__(self, message: str, time: float) -> None:
+        super().__init__(message)
+        self.time = time
 
 
 class DynamicsError(RuntimeError):
@@ -107,42 +126,54 @@ def _make_ts(model, dt: float, rho_inf: float, history: SNESHistory):
 
 
 def integrate(model, t_end: float, dt: float, rho_inf: float = 0.9, output_every: int = 1,
-              stats: DynamicsStats | None = None, max_cuts: int = 6, cooldown: int = 8
-              ) -> Iterator[tuple[float, np.ndarray]]:
-    """Integrate from the current state (``model.u``, normally the static equilibrium, at rest)
-    to ``t_end``; yields ``(t, anchor_forces)`` at ``t = 0`` and every ``output_every`` steps
-    and at ``t_end``, with ``model.u``, ``model.v`` and ``model.a`` at that time.
+              stats: DynamicsStats | None = None, max_cuts: int = 6, cooldown: int = 8,
+              start: Checkpoint | None = None, checkpoint_every: int = 0,
+              on_checkpoint=None, should_stop=None) -> Iterator[tuple[float, np.ndarray]]:
+    """Integrate from the current state to ``t_end``; yields ``(t, anchor_forces)`` at the
+    start (not when resuming from ``start``), every ``output_every`` steps and at ``t_end``,
+    with ``model.u``, ``model.v`` and ``model.a`` at that time.
 
     ``anchor_forces`` is ``(n_anchors, 3)``, the force of the span at each anchor (N).
+
+    Without ``start`` the run begins at ``t = 0`` from ``model.u`` (normally the static
+    equilibrium) at rest, the anchors with their prescribed velocity. With ``start`` it
+    resumes from a checkpoint (``model.u``, ``model.v`` must hold its state). Every
+    ``checkpoint_every`` steps ``on_checkpoint(Checkpoint)`` is called; at that step the
+    integrator re-estimates its acceleration from ``(u, v)`` as a resumed run does, so that a
+    resumed run repeats the uninterrupted one to round-off. ``should_stop()`` is polled after
+    every step (collectively); when it returns True on any rank, :class:`Interrupted` is
+    raised on all ranks, after the last output.
     """
     stats = stats if stats is not None else DynamicsStats()
     wall0 = time.perf_counter()
     history = SNESHistory()
     ts, _work = _make_ts(model, dt, rho_inf, history)  # _work: F and J live as long as ts
     forces = AnchorForces(model)
-    model.set_time(0.0)
+    t = 0.0 if start is None else start.time
+    step = 0 if start is None else start.step
+    model.set_time(t)
     U = model.u.vector.copy()
     V = model.v.vector.copy()
-    V.set(0.0)
-    n_owned = model.V.dofmap.index_map.size_local
-    for anc in model.anchors:  # the anchors start with their prescribed velocity
-        vel = anc.velocity(0.0)
-        for d in anc.dofs[anc.dofs < n_owned]:
-            V.array[3 * d: 3 * d + 3] = vel
-    copy_in(V, model.v)
-    ts.setTime(0.0)
+    if start is None:
+        V.set(0.0)
+        n_owned = model.V.dofmap.index_map.size_local
+        for anc in model.anchors:  # the anchors start with their prescribed velocity
+            vel = anc.velocity(0.0)
+            for d in anc.dofs[anc.dofs < n_owned]:
+                V.array[3 * d: 3 * d + 3] = vel
+        copy_in(V, model.v)
+    ts.setTime(t)
     ts.setMaxTime(t_end)
-    ts.setStepNumber(0)
+    ts.setStepNumber(step)
     ts.setSolution2(U, V)
     ts.setUp()
-    stats.output_times.append(0.0)
-    yield 0.0, forces.compute(0.0)
+    if start is None:
+        stats.output_times.append(t)
+        yield t, forces.compute(t)
 
-    t = 0.0
-    step = 0
     eps_t = 1e-9 * dt
-    level = 0  # every nominal step is split into 4**level equal sub-steps
-    calm = 0  # nominal steps done without a failure at the current level
+    level = 0 if start is None else start.level  # nominal steps split in 4**level
+    calm = 0 if start is None else start.calm  # nominal steps without failure at level
     while t < t_end - eps_t:
         t_start, t_next = t, min(t + dt, t_end)  # one step of the nominal grid
         history.clear()
@@ -180,6 +211,7 @@ def integrate(model, t_end: float, dt: float, rho_inf: float = 0.9, output_every
                      t, 4 * sub, sub)
         calm = 0 if failed else calm + 1
         t = t_next
+        ts.setTime(t)  # the TS clock on the grid exactly, as a resumed run sets it
         step += 1
         stats.steps = step
         stats.newton_iterations = ts.getSNESIterations()
@@ -188,12 +220,24 @@ def integrate(model, t_end: float, dt: float, rho_inf: float = 0.9, output_every
         if not (np.all(np.isfinite(U2.array_r)) and np.all(np.isfinite(V2.array_r))):
             raise DynamicsError(f"non-finite state at t = {t:.6g} s; the last finite output "
                                 "is kept", t)
-        if step % output_every == 0 or t >= t_end - eps_t:
+        last = t >= t_end - eps_t
+        if step % output_every == 0 or last:
             copy_in(U2, model.u)
             copy_in(V2, model.v)
             model.set_time(t)
             stats.output_times.append(t)
             stats.wall_time = time.perf_counter() - wall0
             yield t, forces.compute(t)
+        if checkpoint_every and step % checkpoint_every == 0 and not last:
+            ts.restartStep()  # the next step re-estimates A from (u, v), as a resumed run
+            copy_in(U2, model.u)
+            copy_in(V2, model.v)
+            if on_checkpoint is not None:
+                on_checkpoint(Checkpoint(t, step, level, calm))
+        stop = bool(should_stop()) if should_stop is not None else False
+        if model.comm.allreduce(stop, op=MPI.LOR) and not last:
+            copy_in(U2, model.u)
+            copy_in(V2, model.v)
+            raise Interrupted(f"stopped on request at t = {t:.6g} s (step {step})", t)
     stats.wall_time = time.perf_counter() - wall0
     ts.destroy()

@@ -61,15 +61,23 @@ def write_json(path: Path, data: dict, comm: MPI.Comm = MPI.COMM_WORLD) -> None:
 class StringWriter:
     """``string.xdmf``: the string's fields over time (collective)."""
 
-    def __init__(self, model, path: Path) -> None:
+    def __init__(self, model, path: Path, append_after: float | None = None) -> None:
+        """``append_after``: resume an existing file, skipping times up to that one (they
+        are in the file already)."""
         self.model = model
-        self.file = XDMFFile(model.comm, str(path), "w")
-        self.file.write_mesh(model.mesh)
+        self.skip_until = append_after
+        if append_after is not None and Path(path).is_file():
+            self.file = XDMFFile(model.comm, str(path), "a")
+        else:
+            self.file = XDMFFile(model.comm, str(path), "w")
+            self.file.write_mesh(model.mesh)
         self.tension = fem.Function(model.W, name="tension")
         self.strain = fem.Function(model.W, name="strain")
 
     def write(self, t: float) -> None:
         m = self.model
+        if self.skip_until is not None and t <= self.skip_until * (1 + 1e-12) + 1e-300:
+            return
         self.tension.interpolate(m.tension_expr)
         self.strain.interpolate(m.strain_expr)
         for f in (m.u, m.v, self.tension, self.strain):
@@ -91,12 +99,15 @@ class StringWriter:
 class AnchorCSV:
     """``anchors.csv``, one row per output time and anchor (rank 0 writes; others no-op)."""
 
-    def __init__(self, path: Path, columns: list[str], comm: MPI.Comm = MPI.COMM_WORLD):
+    def __init__(self, path: Path, columns: list[str], comm: MPI.Comm = MPI.COMM_WORLD,
+                 append: bool = False):
         self.columns = columns
         self.fh = None
         if comm.rank == 0:
-            self.fh = open(path, "w", newline="")
-            self.fh.write(",".join(columns) + "\n")
+            resume = append and Path(path).is_file()
+            self.fh = open(path, "a" if resume else "w", newline="")
+            if not resume:
+                self.fh.write(",".join(columns) + "\n")
             self.fh.flush()
 
     def write(self, rows: list[dict]) -> None:
@@ -133,9 +144,13 @@ def _cell(v) -> str:
 class MomentsWriter:
     """``moments.xdmf``: composite curvature and moment on a line mesh of its own (rank 0)."""
 
-    def __init__(self, path: Path, points: np.ndarray, comm: MPI.Comm = MPI.COMM_WORLD):
+    def __init__(self, path: Path, points: np.ndarray, comm: MPI.Comm = MPI.COMM_WORLD,
+                 keep_until: float | None = None):
+        """``keep_until``: resume, keeping the frames of an existing file up to that time."""
         self.points0 = np.asarray(points, float)
         self.writer = None
+        old = _read_frames(path, keep_until) if comm.rank == 0 and keep_until is not None \
+            else []
         if comm.rank == 0:
             import meshio
 
@@ -150,6 +165,8 @@ class MomentsWriter:
             n = len(points)
             cells = [("line", np.column_stack([np.arange(n - 1), np.arange(1, n)]))]
             self.writer.write_points_cells(self.points0, cells)
+            for t, data in old:
+                self.writer.write_data(t, point_data=data)
 
     def write(self, t: float, positions: np.ndarray, curvature: np.ndarray,
               moment: np.ndarray, stations: np.ndarray) -> None:
@@ -163,10 +180,41 @@ class MomentsWriter:
                 raise FloatingPointError(f"non-finite composite {k} at t = {t:g}")
         self.writer.write_data(t, point_data=data)
 
+    def dump(self) -> None:
+        """Make the file readable as it is now (XML written, HDF5 flushed): checkpoints."""
+        if self.writer is not None:
+            import meshio
+
+            self.writer.h5_file.flush()
+            meshio.xdmf.time_series.write_xml(self.writer.filename, self.writer.xdmf_file)
+
     def close(self) -> None:
         if self.writer is not None:
             self.writer.__exit__(None, None, None)
             self.writer = None
+
+
+def _read_frames(path: Path, t_max: float) -> list[tuple[float, dict]]:
+    """The frames of a meshio XDMF time series up to ``t_max`` (unreadable file: none)."""
+    import meshio
+
+    frames = []
+    if not Path(path).is_file():
+        return frames
+    cwd = os.getcwd()
+    try:
+        os.chdir(Path(path).resolve().parent)
+        with meshio.xdmf.TimeSeriesReader(Path(path).name) as reader:
+            reader.read_points_cells()
+            for k in range(reader.num_steps):
+                t, data, _ = reader.read_data(k)
+                if t <= t_max * (1 + 1e-12) + 1e-300:
+                    frames.append((t, {key: np.array(v) for key, v in data.items()}))
+    except Exception:  # noqa: BLE001 - a file cut off by a kill: start it again
+        frames = []
+    finally:
+        os.chdir(cwd)
+    return frames
 
 
 def write_modes(model, modal, path: Path) -> None:

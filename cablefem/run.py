@@ -6,6 +6,8 @@ from __future__ import annotations
 
 import logging
 import math
+import signal
+import threading
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -15,7 +17,10 @@ from mpi4py import MPI
 
 from . import __version__, asymptotics
 from .case import Case
-from .dynamics import DynamicsError, DynamicsStats, integrate
+from .case import CaseError
+from .checkpoint import (case_digest, read_checkpoint, truncate_csv, write_checkpoint,
+                         xdmf_times)
+from .dynamics import DynamicsError, DynamicsStats, Interrupted, integrate
 from .io import AnchorCSV, MomentsWriter, StringWriter, write_json, write_modes
 from .log import Progress
 from .modal import solve_modes
@@ -23,13 +28,21 @@ from .model import CableModel
 from .post import ANCHOR_COLUMNS, MOMENT_COLUMNS, anchor_moments, composite_field
 from .statics import solve_static
 
-__all__ = ["RunResult", "RunError", "run_case", "steady_state_stats", "static_sag_ratio"]
+__all__ = ["RunResult", "RunError", "RunInterrupted", "run_case", "steady_state_stats", "static_sag_ratio"]
 
 log = logging.getLogger(__name__)
 
 
 class RunError(RuntimeError):
     """A run stopped before the end; the files written so far are valid."""
+
+
+class RunInterrupted(RuntimeError):
+    """A run stopped on a signal; ``.signal`` is its number. Resume with ``--restart``."""
+
+    def __init__(self, message: str, signum: int | None) -> None:
+        super().__init__(message)
+        self.signal = signum
 
 
 @dataclass
@@ -80,25 +93,69 @@ class _Emitter:
 
     FLUSH_ROWS = 256
 
-    def __init__(self, model: CableModel, outdir: Path, form: str, omega: float | None):
+    def __init__(self, model: CableModel, outdir: Path, form: str, omega: float | None,
+                 static_forces: np.ndarray, resume_after: float | None = None):
+        """``resume_after``: continue the files of an earlier run after that time
+        (``anchors.csv`` already truncated to it)."""
         self.model = model
         self.outdir = outdir
         self.form = form
         self.omega = omega
+        self.resume_after = resume_after
         self.clamped = [a for a in model.anchors if a.kind == "clamped"]
         sec = model.case.section
         self.EI, self.EA, self.m = sec.EI, sec.EA, sec.mass
         cols = ANCHOR_COLUMNS + (MOMENT_COLUMNS if self.clamped else [])
-        self.string = StringWriter(model, outdir / "string.xdmf")
-        self.csv = AnchorCSV(outdir / "anchors.csv", cols, model.comm)
         self.times: list[float] = []
         self.forces: dict[str, list[np.ndarray]] = {a.name: [] for a in model.anchors}
         self.columns: dict[str, dict[str, list]] = {
             a.name: {k: [] for k in MOMENT_COLUMNS} for a in self.clamped}
+        if resume_after is not None:
+            self._load_history(outdir / "anchors.csv")
+        skip = None
+        if resume_after is not None:  # frames after the checkpoint may be there already
+            skip = max([resume_after] + xdmf_times(outdir / "string.xdmf"))
+        self.string = StringWriter(model, outdir / "string.xdmf", append_after=skip)
+        self.csv = AnchorCSV(outdir / "anchors.csv", cols, model.comm,
+                             append=resume_after is not None)
         self._pending = 0
         self.last_fields_time = None
         self.moments = None
+        # the composite field's stations, from the static layers (resolve half the static
+        # layer length: tension can rise in dynamics); fixed for the run and its restarts
         self.stations = None
+        if self.clamped:
+            idx = {a.name: i for i, a in enumerate(model.anchors)}
+            ells = [0.5 * self._moments(c, np.zeros(1), static_forces[idx[c.name]][None, :]
+                                        )["layer_length"][0] for c in self.clamped]
+            s_a = [model.geometry.stations[c.node] for c in self.clamped]
+            self.stations = asymptotics.graded_stations(
+                model.length, s_a, [e if np.isfinite(e) else np.nan for e in ells])
+            r = self._nodal_positions()  # model.u is the static state here
+            pts = None
+            if model.comm.rank == 0:
+                pts = np.column_stack([np.interp(self.stations, model.geometry.stations,
+                                                 r[:, k]) for k in range(3)])
+            self.points0 = model.comm.bcast(pts, root=0)
+
+    def _load_history(self, path: Path) -> None:
+        """Histories written before a restart (rank 0 reads, all ranks get them)."""
+        rows = None
+        if self.model.comm.rank == 0:
+            import csv
+
+            with open(path, newline="") as fh:
+                rows = list(csv.DictReader(fh))
+        rows = self.model.comm.bcast(rows, root=0)
+        num = lambda x: float(x) if x != "" else np.nan  # noqa: E731
+        for row in rows:
+            name = row["anchor"]
+            if name == self.model.anchors[0].name:
+                self.times.append(float(row["time"]))
+            self.forces[name].append(np.array([num(row[k]) for k in ("Nx", "Ny", "Nz")]))
+            if name in self.columns:
+                for k in MOMENT_COLUMNS:
+                    self.columns[name][k].append(num(row[k]))
 
     def load_at(self, t: float) -> np.ndarray:
         f = self.m * self.model.g_vec
@@ -156,11 +213,6 @@ class _Emitter:
         layers = {c.name: self._moments(c, np.array([t]), forces[idx[c.name]][None, :])
                   for c in self.clamped}
         s_a = [m.geometry.stations[c.node] for c in self.clamped]
-        if self.moments is None:
-            # tension can rise in dynamics: resolve half the static layer length as well
-            ells0 = [0.5 * layers[c.name]["layer_length"][0] for c in self.clamped]
-            self.stations = asymptotics.graded_stations(
-                m.length, s_a, [e if np.isfinite(e) else np.nan for e in ells0])
         r = self._nodal_positions()
         a = m.gather_nodal(m.a)
         pos = kap = None
@@ -172,14 +224,21 @@ class _Emitter:
                                        get("layer_length"), np.nan_to_num(get("normal")),
                                        m.tension_only)
         if self.moments is None:
-            self.moments = MomentsWriter(self.outdir / "moments.xdmf",
-                                         m.comm.bcast(pos, root=0), m.comm)
+            self.moments = MomentsWriter(self.outdir / "moments.xdmf", self.points0, m.comm,
+                                         keep_until=self.resume_after)
+        if self.resume_after is not None and t <= self.resume_after * (1 + 1e-12):
+            return  # already in the file
         self.moments.write(t, pos, kap, None if kap is None else self.EI * kap,
                            self.stations)
 
     def _nodal_positions(self) -> np.ndarray | None:
         u = self.model.gather_nodal(self.model.u)
         return None if u is None else self.model.geometry.points + u
+
+    def dump(self) -> None:
+        """Make every output readable as it is now (at checkpoints)."""
+        if self.moments is not None:
+            self.moments.dump()
 
     def close(self) -> None:
         try:
@@ -193,13 +252,15 @@ class _Emitter:
 
 def run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *,
              modes: int | None = None, dynamics: bool = True, t_end: float | None = None,
-             form: str = "exact", progress: bool = True, figures: bool = True) -> RunResult:
+             form: str = "exact", progress: bool = True, figures: bool = True,
+             restart: bool = False) -> RunResult:
     """Run a case: statics, modes, and dynamics when the case has a ``[dynamics]`` table.
 
     Writes ``summary.json``, ``anchors.csv``, ``string.xdmf``, ``modes.xdmf`` and, with a
     clamped anchor, ``moments.xdmf`` and figures under ``outdir``. On a failure the files
     written so far stay valid, ``summary.json`` says what happened, and :class:`RunError` is
-    raised.
+    raised. SIGINT/SIGTERM stop the dynamics cleanly (:class:`RunInterrupted`);
+    ``restart=True`` continues a run in ``outdir`` from its last checkpoint.
     """
     wall0 = time.perf_counter()
     outdir = Path(outdir)
@@ -244,16 +305,53 @@ def run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *,
         model.u.x.array[:] = model.u_static.x.array
 
     omega = _max_excitation(case)
-    emitter = _Emitter(model, outdir, form, omega)
+    resume = None
+    if restart:
+        resume = read_checkpoint(outdir, comm)
+        if str(resume["digest"]) != case_digest(case):
+            raise CaseError([("case", f"{case.source} has changed since the checkpoint in "
+                                      f"{outdir}: restart with the same case file")],
+                            case.source)
+        if t_end is None and "t_stop" in resume:
+            t_end = float(resume["t_stop"])
+        ck = resume["checkpoint"]
+        truncate_csv(outdir / "anchors.csv", ck.time, comm)
+        summary["restarted_from"] = ck.time
+        log.info("restarting from the checkpoint at t = %.6g (step %d)", ck.time, ck.step)
+    emitter = _Emitter(model, outdir, form, omega, static.anchor_forces,
+                       None if resume is None else resume["checkpoint"].time)
+    if resume is not None:  # after the emitter, which takes its reference from the statics
+        model.scatter_nodal(resume["u"], model.u)
+        model.scatter_nodal(resume["v"], model.v)
     stats = DynamicsStats()
     error = None
+    stop = {"signal": None}
+
+    def on_signal(signum, frame):  # noqa: ARG001 - signal API
+        stop["signal"] = signum
+
+    handlers = {}
     try:
         if case.dynamics is not None and dynamics:
             dyn = case.dynamics
             t_stop = dyn.t_end if t_end is None else t_end
+            digest = case_digest(case)
+            if threading.current_thread() is threading.main_thread():
+                handlers = {sig: signal.signal(sig, on_signal)
+                            for sig in (signal.SIGINT, signal.SIGTERM)}
+
+            def checkpoint(ck):
+                emitter.flush()
+                emitter.dump()
+                write_checkpoint(model, outdir, ck, digest, {"t_stop": t_stop})
+
             bar = Progress(t_stop, "dynamics", comm, enabled=progress)
             stride = math.gcd(dyn.output_every, dyn.fields_every)
-            for t, forces in integrate(model, t_stop, dyn.dt, dyn.rho_inf, stride, stats):
+            start = None if resume is None else resume["checkpoint"]
+            for t, forces in integrate(model, t_stop, dyn.dt, dyn.rho_inf, stride, stats,
+                                       start=start, checkpoint_every=dyn.checkpoint_every,
+                                       on_checkpoint=checkpoint,
+                                       should_stop=lambda: stop["signal"] is not None):
                 step, last = stats.steps, t >= t_stop - 1e-9 * dyn.dt
                 if step % dyn.output_every == 0 or last:
                     emitter.add(t, forces)
@@ -271,6 +369,17 @@ def run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *,
         else:
             emitter.add(0.0, static.anchor_forces)
             emitter.fields(0.0, static.anchor_forces)
+    except Interrupted as err:
+        error = err
+        sig = stop["signal"]
+        summary["status"] = "interrupted"
+        summary["signal"] = int(sig) if sig is not None else None
+        ck_time = _checkpoint_time(outdir, comm)
+        summary["error"] = (f"{err}; resume with: cablefem run --restart {outdir}"
+                            + (f" (continues from the checkpoint at t = {ck_time:g})"
+                               if ck_time is not None else " (no checkpoint yet: it will "
+                               "start again)"))
+        log.warning("%s", summary["error"])
     except (DynamicsError, FloatingPointError) as err:
         error = err
         summary["status"] = "failed"
@@ -286,6 +395,8 @@ def run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *,
             except (FloatingPointError, RuntimeError) as err2:
                 log.error("could not write the state at failure: %s", err2)
     finally:
+        for sig, old in handlers.items():
+            signal.signal(sig, old)
         emitter.close()
 
     times = np.array(emitter.times)
@@ -323,10 +434,19 @@ def run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *,
     write_json(outdir / "summary.json", summary, comm)
     log.info("results in %s (%.2f s)", outdir, summary["wall_time"]["total"])
     result = RunResult(summary, times, forces, moments, model)
+    if isinstance(error, Interrupted):
+        raise RunInterrupted(summary["error"], stop["signal"]) from error
     if error is not None:
         raise RunError(f"{error} -- results up to t = {times[-1] if times.size else 0:g} "
                        f"are in {outdir}") from error
     return result
+
+
+def _checkpoint_time(outdir: Path, comm: MPI.Comm) -> float | None:
+    try:
+        return read_checkpoint(outdir, comm)["checkpoint"].time
+    except ValueError:
+        return None
 
 
 def _max_excitation(case: Case) -> float | None:

@@ -577,7 +577,7 @@ def test_toml_syntax_error_and_missing_file(tmp_path):
     path.write_text("[section]\nEA = \n")
     with pytest.raises(CaseError) as info:
         load_case(path)
-    assert str(info.value).startswith(f"{path}: not a valid TOML file") and "line 2" in str(
+    assert str(info.value).startswith(f"{path}: line 2, column") and "not a valid TOML" in str(
         info.value)
     with pytest.raises(CaseError, match="cannot read the case file"):
         load_case(tmp_path / "absent.toml")

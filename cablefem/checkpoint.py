@@ -1,0 +1,97 @@
+"""Checkpoints and restarts: a long run never loses what it computed.
+
+Every ``dynamics.checkpoint_every`` steps the state (nodal displacement and velocity in
+station order, time, step, the step-cutting state) goes to ``checkpoint.npz``, written by
+rank 0 to a temporary file and renamed (never half written), after ``anchors.csv`` has been
+flushed. ``cablefem run --restart DIR`` rebuilds the model from the same case file (its
+SHA-256 must match), truncates ``anchors.csv`` to the checkpoint's time, appends to
+``string.xdmf``, rewrites ``moments.xdmf`` up to the checkpoint, and continues; the result
+equals an uninterrupted run to round-off (see :func:`cablefem.dynamics.integrate`).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import numpy as np
+from mpi4py import MPI
+
+from .dynamics import Checkpoint
+
+__all__ = ["CHECKPOINT", "case_digest", "write_checkpoint", "read_checkpoint",
+           "truncate_csv", "xdmf_times"]
+
+CHECKPOINT = "checkpoint.npz"
+
+
+def case_digest(case) -> str:
+    """SHA-256 of the case file's text (or of its echo for a case built in Python)."""
+    src = Path(case.source)
+    data = src.read_bytes() if src.is_file() else repr(case.to_dict()).encode()
+    return hashlib.sha256(data).hexdigest()
+
+
+def write_checkpoint(model, outdir: Path, ck: Checkpoint, digest: str, extra: dict) -> None:
+    """Collective: gather the state and write ``checkpoint.npz`` atomically on rank 0."""
+    u = model.gather_nodal(model.u)
+    v = model.gather_nodal(model.v)
+    if model.comm.rank == 0:
+        tmp = Path(outdir) / (CHECKPOINT + ".tmp.npz")
+        np.savez(tmp, u=u, v=v, time=ck.time, step=ck.step, level=ck.level, calm=ck.calm,
+                 digest=digest, case=str(model.case.source), **extra)
+        os.replace(tmp, Path(outdir) / CHECKPOINT)
+    model.comm.Barrier()
+
+
+def read_checkpoint(outdir: Path, comm: MPI.Comm = MPI.COMM_WORLD) -> dict:
+    """The checkpoint's content on every rank; ValueError if there is none."""
+    path = Path(outdir) / CHECKPOINT
+    data = None
+    if comm.rank == 0 and path.is_file():
+        with np.load(path) as z:
+            data = {k: z[k] for k in z.files}
+    data = comm.bcast(data, root=0)
+    if data is None:
+        raise ValueError(f"{path}: no checkpoint to restart from (a run writes one every "
+                         "dynamics.checkpoint_every steps)")
+    data["checkpoint"] = Checkpoint(float(data["time"]), int(data["step"]),
+                                    int(data["level"]), int(data["calm"]))
+    return data
+
+
+def truncate_csv(path: Path, t_max: float, comm: MPI.Comm = MPI.COMM_WORLD) -> None:
+    """Keep the header and the complete rows with ``time <= t_max`` (rank 0)."""
+    if comm.rank == 0 and Path(path).is_file():
+        lines = Path(path).read_text().split("\n")
+        keep = [lines[0]]
+        tol = 1e-9 * max(1.0, abs(t_max))
+        for line in lines[1:]:
+            cells = line.split(",")
+            if len(cells) != len(lines[0].split(",")):
+                continue  # a partial last line
+            try:
+                if float(cells[0]) <= t_max + tol:
+                    keep.append(line)
+            except ValueError:
+                continue
+        tmp = Path(path).with_suffix(".csv.tmp")
+        tmp.write_text("\n".join(keep) + "\n")
+        os.replace(tmp, path)
+    comm.Barrier()
+
+
+def xdmf_times(path: Path) -> list[float]:
+    """Time values of the first temporal collection of an XDMF file ([] if none)."""
+    if not Path(path).is_file():
+        return []
+    try:
+        root = ET.parse(path).getroot()
+    except ET.ParseError:
+        return []
+    for grid in root.iter("Grid"):
+        if grid.get("CollectionType") == "Temporal":
+            return [float(t.get("Value")) for t in grid.iter("Time")]
+    return []
