@@ -195,6 +195,27 @@ CASE_KEYS: dict[str, KeyDoc | TableDoc] = {
                                    "Checkpoint for 'cablefem run --restart' every n-th step, "
                                    ">= 0 (0: none)."),
     }),
+    "fatigue": TableDoc("table", None, "", "Fatigue at the clamped anchors (EN 1993-1-9 style "
+                        "S-N curve); present: 'cablefem run' also writes the fatigue report.", {
+        "detail_category": KeyDoc("number", REQUIRED, "Pa",
+                                  "Stress range at N_C cycles (detail category), > 0; in the "
+                                  "unit of the run's stresses (N/m^2 for SI cases)."),
+        "m1": KeyDoc("number", 3.0, "-", "S-N slope above the knee, >= 1."),
+        "m2": KeyDoc("number", 5.0, "-", "S-N slope between knee and cut-off, >= 1."),
+        "knee": KeyDoc("boolean", True, "", "Knee at N_knee and cut-off at N_cutoff; false: one "
+                       "slope m1, no cut-off."),
+        "N_C": KeyDoc("number", 2.0e6, "cycles", "Reference number of cycles, > 0."),
+        "N_knee": KeyDoc("number", 5.0e6, "cycles", "Knee (constant-amplitude limit), > N_C."),
+        "N_cutoff": KeyDoc("number", 1.0e8, "cycles", "Cut-off, > N_knee."),
+        "area": KeyDoc("number", None, "m^2", "Effective area for the axial stress T/A, > 0 "
+                       "(strands, ropes); default: solid circle of section.diameter."),
+        "modulus": KeyDoc("number", None, "m^3", "Effective section modulus for the bending "
+                          "stress M/W, > 0; give with area."),
+        "window": KeyDoc("string", "all", "", "'all' the whole run | 'steady' its last third."),
+        "fibres": KeyDoc("integer", 36, "-", "Fibres around the section where stresses are "
+                         "evaluated, >= 4."),
+        "units": KeyDoc("string", "Pa", "", "Name of the stress unit in the reports."),
+    }),
     "modal": TableDoc("table", None, "", "Modal analysis about the static equilibrium.", {
         "modes": KeyDoc("integer", 6, "-", "Number of modes, >= 1."),
     }),
@@ -356,6 +377,24 @@ class DynamicsSpec:
 
 
 @dataclass
+class FatigueSpec:
+    """S-N curve, section for stresses and window of the fatigue assessment."""
+
+    detail_category: float
+    m1: float
+    m2: float
+    knee: bool
+    N_C: float
+    N_knee: float
+    N_cutoff: float
+    area: float | None
+    modulus: float | None
+    window: str
+    fibres: int
+    units: str
+
+
+@dataclass
 class ModalSpec:
     """Number of modes of the modal analysis."""
 
@@ -388,6 +427,7 @@ class Case:
     modal: ModalSpec
     solver: SolverSpec
     source: str
+    fatigue: FatigueSpec | None = None
 
     def to_dict(self) -> dict:
         """JSON-serialisable echo of the inputs (motions and time functions via describe())."""
@@ -921,6 +961,7 @@ def parse_case(data: dict, base_dir: str | os.PathLike = Path("."),
     damping = _parse_damping(top.table("damping"))
     dynamics = _parse_dynamics(top.table("dynamics"))
     modal = ModalSpec(table("modal").integer("modes"))
+    fatigue = _parse_fatigue(top.table("fatigue"), section)
     solver_r = table("solver")
     solver = SolverSpec(solver_r.boolean("tension_only"), _parse_petsc_options(solver_r))
     if problems:
@@ -933,7 +974,35 @@ def parse_case(data: dict, base_dir: str | os.PathLike = Path("."),
     if _missing(*parts):  # every None above must have come with a reported problem
         raise RuntimeError("cablefem internal error: a case value failed without a message")
     return Case(title, section, gravity, geometry, mesh, anchors, loads, masses, point_loads,
-                damping, dynamics, modal, solver, source)
+                damping, dynamics, modal, solver, source, fatigue)
+
+
+def _parse_fatigue(r: _Reader | None, section: Section | None) -> FatigueSpec | None:
+    if r is None:
+        return None
+    vals = dict(detail_category=r.number("detail_category", gt=0), m1=r.number("m1", ge=1),
+                m2=r.number("m2", ge=1), knee=r.boolean("knee"), N_C=r.number("N_C", gt=0),
+                N_knee=r.number("N_knee", gt=0), N_cutoff=r.number("N_cutoff", gt=0),
+                area=r.number("area", gt=0), modulus=r.number("modulus", gt=0),
+                window=r.string("window", ("all", "steady")),
+                fibres=r.integer("fibres", ge=4), units=r.string("units"))
+    if None not in (vals["N_C"], vals["N_knee"], vals["N_cutoff"]) and vals["knee"] and not (
+            vals["N_C"] < vals["N_knee"] < vals["N_cutoff"]):
+        r.add("N_knee", "must satisfy N_C < N_knee < N_cutoff, got "
+                        f"{vals['N_C']:g}, {vals['N_knee']:g}, {vals['N_cutoff']:g}")
+        return None
+    if (vals["area"] is None) != (vals["modulus"] is None):
+        r.add("modulus" if vals["modulus"] is None else "area",
+              "give both area and modulus (an effective section), or neither")
+        return None
+    if vals["area"] is None and section is not None and section.diameter is None:
+        r.add("area", "stresses need a section: give section.diameter (solid circle) or "
+                      "fatigue.area and fatigue.modulus")
+        return None
+    required = [k for k in vals if k not in ("area", "modulus")]
+    if _missing(*(vals[k] for k in required)):
+        return None
+    return FatigueSpec(**vals)
 
 
 def load_case(path: str | os.PathLike) -> Case:

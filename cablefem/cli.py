@@ -90,6 +90,21 @@ def _parser() -> argparse.ArgumentParser:
     post.add_argument("--moment-form", choices=["exact", "explicit"], default="exact")
     post.add_argument("--quiet", "-q", action="store_true")
 
+    fat = sub.add_parser("fatigue", help="fatigue damage at the clamped anchors of a run",
+                         description="Axial + bending stress at the clamped anchors from DIR/"
+                         "anchors.csv, rainflow counting, Miner's damage with the S-N curve of "
+                         "the case's [fatigue] table; writes fatigue.json, fatigue.md and "
+                         "fatigue_histogram.png.")
+    fat.add_argument("rundir", type=Path, help="folder of a run (with anchors.csv)")
+    fat.add_argument("--case", type=Path, required=True, help="case file (TOML) with [fatigue]")
+    fat.add_argument("--output", "-o", type=Path, help="output folder (default: rundir)")
+    fat.add_argument("--window", choices=["all", "steady"],
+                     help="whole run or its last third (default: fatigue.window)")
+    fat.add_argument("--invalid", choices=["raise", "drop"], default="raise",
+                     help="samples without a valid moment (slack anchor): stop (default) or "
+                          "leave them out")
+    fat.add_argument("--quiet", "-q", action="store_true")
+
     sub.add_parser("keys", help="print every case-file key with its unit and range")
     return p
 
@@ -162,7 +177,7 @@ def _main(argv: list[str] | None = None) -> int:
 
         print(format_case_reference())
         return EXIT_OK
-    if extra and args.command == "post":
+    if extra and args.command in ("post", "fatigue"):
         return _input_error(f"unexpected arguments {extra}")
 
     from .case import CaseError, load_case
@@ -195,6 +210,18 @@ def _main(argv: list[str] | None = None) -> int:
     from .log import setup_logging
 
     setup_logging(logging.WARNING if args.quiet else logging.INFO)
+    if args.command == "fatigue":
+        from .fatiguecmd import run_fatigue
+
+        try:
+            run_fatigue(case, args.rundir, args.output, window=args.window,
+                        invalid=args.invalid)
+        except CaseError as err:
+            sys.stderr.write(str(err) + "\n")
+            return EXIT_INPUT
+        except ValueError as err:
+            return _input_error(str(err))
+        return EXIT_OK
     if args.command == "post":
         from .postcmd import run_post
 

@@ -259,16 +259,19 @@ class CableModel:
         self.F_inertia = F_inertia
 
         damp = case.damping
+        # Constants, not floats: one compiled form serves every value (FFCx caches by code)
+        self.alpha = fem.Constant(self.mesh, PETSc.ScalarType(damp.alpha))
+        self.beta = fem.Constant(self.mesh, PETSc.ScalarType(damp.beta))
         F_damp = None
         if damp.model == "rayleigh" and (damp.alpha > 0 or damp.beta > 0):
-            F_damp = damp.alpha * ufl.replace(F_inertia, {a: v})
+            F_damp = self.alpha * ufl.replace(F_inertia, {a: v})
             if damp.beta > 0:
                 K0 = ufl.derivative(
                     string.internal_work(self.u_static, du, t0, self.EA, self.tension_only),
                     self.u_static, dw)
-                F_damp = F_damp + damp.beta * ufl.action(K0, v)
+                F_damp = F_damp + self.beta * ufl.action(K0, v)
         elif damp.model == "axial" and damp.beta > 0:
-            F_damp = string.axial_damping_work(u, v, du, t0, self.EA, damp.beta)
+            F_damp = string.axial_damping_work(u, v, du, t0, self.EA, self.beta)
         self.F_damping = F_damp
 
         self.F_static = self.F_internal - self.F_external
@@ -287,7 +290,17 @@ class CableModel:
         self.M_form = ufl.derivative(F_inertia, a, dw)
 
     def compile(self) -> None:
-        """JIT-compile the forms (FFCx caches them: later runs take milliseconds)."""
+        """JIT-compile the forms (FFCx caches them: later runs take milliseconds).
+
+        The C compiler's INFO messages (setuptools turns the root logger to INFO while it
+        builds) are silenced meanwhile."""
+        logging.disable(logging.INFO)
+        try:
+            self._compile()
+        finally:
+            logging.disable(logging.NOTSET)
+
+    def _compile(self) -> None:
         self.f_static = fem.form(self.F_static)
         self.j_static = fem.form(self.J_static)
         self.f_static_bilateral = fem.form(self.F_static_bilateral)

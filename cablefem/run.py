@@ -430,6 +430,17 @@ def run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *,
         from .plots import anchor_figures
 
         summary["figures"] = anchor_figures(outdir, times, moments, comm)
+    if case.fatigue is not None and len(times) > 1 and moments:
+        from .fatiguecmd import run_fatigue
+
+        try:  # samples without a moment (slack anchor) are left out and counted
+            reps = run_fatigue(case, outdir, invalid="drop", comm=comm)
+            summary["fatigue"] = {n: {k: r.get(k) for k in (
+                "damage", "time_to_failure", "equivalent_range_N_C", "max_range",
+                "dropped_invalid_samples")} for n, r in reps.items()}
+        except ValueError as err:
+            log.error("fatigue: %s", err)
+            summary["fatigue"] = {"error": str(err)}
     summary["wall_time"]["total"] = time.perf_counter() - wall0
     write_json(outdir / "summary.json", summary, comm)
     log.info("results in %s (%.2f s)", outdir, summary["wall_time"]["total"])

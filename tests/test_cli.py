@@ -148,3 +148,26 @@ def test_modes_command_and_keys(tmp_path):
     assert len(s["modes"]) == 3 and s["modes"][0]["omega"] > 0
     res = cablefem("keys")
     assert res.returncode == 0 and "sag_ratio" in res.stdout and "fields_every" in res.stdout
+
+
+def test_fatigue_after_run_and_command(tmp_path):
+    """A case with [fatigue] gets fatigue.json/md/png from 'cablefem run'; 'cablefem
+    fatigue' on the same folder reproduces its damage (same data, same computation: 1e-12);
+    without a [fatigue] table the command exits 2 naming it."""
+    case = write_case(tmp_path)
+    text = case.read_text().replace("mass = 1.0", "mass = 1.0\ndiameter = 0.05")
+    case.write_text(text + '\n[fatigue]\ndetail_category = 1.0e3\nm1 = 4.0\nknee = false\n')
+    out = tmp_path / "out"
+    res = cablefem("run", case, "--output", out, "--no-figures")
+    assert res.returncode == 0, res.stderr
+    for name in ("fatigue.json", "fatigue.md", "fatigue_histogram.png"):
+        assert (out / name).is_file(), name
+    d_run = json.loads((out / "summary.json").read_text())["fatigue"]["p"]["damage"]
+    assert d_run > 0
+    res = cablefem("fatigue", out, "--case", case, "--output", tmp_path / "f")
+    assert res.returncode == 0, res.stderr
+    d_cmd = json.loads((tmp_path / "f" / "fatigue.json").read_text())["anchors"]["p"]["damage"]
+    assert d_cmd == pytest.approx(d_run, rel=1e-12)
+    plain = write_case(tmp_path / "..")
+    res = cablefem("fatigue", out, "--case", plain)
+    assert res.returncode == 2 and "fatigue" in res.stderr and "Traceback" not in res.stderr

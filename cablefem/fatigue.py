@@ -1,0 +1,476 @@
+"""Fatigue at clamped anchors: stresses, rainflow counting, S-N curve, Miner's sum.
+
+Pure NumPy post-processing of ``anchors.csv`` (``../shared/docs/physics.md`` section 5):
+``sigma = T/A + M/W``, rainflow counting (ASTM E1049-85, by the ``rainflow`` package), an
+EN 1993-1-9 style S-N curve, Miner's sum ``D = sum n_i / N_i``. Units are the user's,
+consistently (N and m: stresses in Pa); times are in the series' time unit.
+
+The ``moment`` column is ``|M|``: a plane bending that changes sign folds it (range halved,
+frequency doubled), a turning bending plane hides the reversal at every fibre: ``|M|``
+underestimates the damage. Pass the vector ``(Mx, My, Mz)``: the stress is then taken at
+``fibres`` fibres around the section (``M . w / W``, ``w`` unit vectors in the plane of the
+moment vectors) and the most damaged fibre is reported. Invalid samples (``valid = 0``,
+empty/NaN moment: slack) are NaN, never zero stress; the fatigue functions refuse them
+unless dropped (``invalid="drop"``: the remaining samples are joined across the gaps).
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+import os
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import BinaryIO, Callable
+
+import numpy as np
+import rainflow
+from numpy.typing import ArrayLike
+
+__all__ = ["StressSection", "SNCurve", "axial_stress", "bending_stress", "fibre_directions",
+           "anchor_stress", "rainflow_cycles", "miner_damage", "equivalent_stress_range",
+           "time_to_failure", "fatigue_report", "write_report", "read_anchor_csv"]
+
+
+def _number(name: str, value: object, low: float = 0.0, inclusive: bool = False) -> float:
+    """``value`` as a finite float ``> low`` (``>= low`` if inclusive), else ValueError."""
+    try:
+        x = float(value)
+    except (TypeError, ValueError):
+        x = math.nan
+    if not (math.isfinite(x) and (x >= low if inclusive else x > low)):
+        rel = ">=" if inclusive else ">"
+        raise ValueError(f"{name} must be a finite number {rel} {low:g} (got {value!r})")
+    return x
+
+
+def _finite(name: str, a: np.ndarray) -> None:
+    bad = np.flatnonzero(~np.isfinite(a))
+    if bad.size:
+        raise ValueError(f"{name}: {bad.size} non-finite (NaN/inf) values, first at index "
+                         f"{bad[0]}: invalid samples (e.g. a slack anchor) must be dropped "
+                         f"explicitly (fatigue_report(..., invalid='drop'))")
+
+
+@dataclass(frozen=True)
+class StressSection:
+    """Section for ``sigma = T/A + M/W``: ``area`` A [m^2] and (effective) elastic section
+    modulus ``modulus`` W = I/c_o [m^3], both finite and > 0."""
+
+    area: float
+    modulus: float
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "area", _number("area", self.area))
+        object.__setattr__(self, "modulus", _number("modulus", self.modulus))
+
+    @classmethod
+    def solid_circle(cls, diameter: float) -> StressSection:
+        """Solid circle: ``A = pi d^2/4``, ``W = I/c_o = (pi d^4/64)/(d/2) = pi d^3/32``."""
+        d = _number("diameter", diameter)
+        return cls(math.pi * d**2 / 4, math.pi * d**3 / 32)
+
+    @classmethod
+    def effective(cls, area: float, modulus: float) -> StressSection:
+        """Strands and ropes: user-given metallic area and effective section modulus."""
+        return cls(area, modulus)
+
+
+@dataclass(frozen=True)
+class SNCurve:
+    """S-N curve in the style of EN 1993-1-9 (Figure 7.1; detail categories in its tables,
+    e.g. Table 8.1 for plain members and mechanically fastened joints).
+
+    ``N = N_C (ds_C/ds)^m1`` for ``ds >= ds_D``; ``N = N_knee (ds_D/ds)^m2`` for
+    ``ds_L <= ds < ds_D``; ``N = inf`` below the cut-off ``ds_L``. Defaults: ``N_C = 2e6``,
+    ``m1 = 3``, knee (constant-amplitude fatigue limit) at ``N_knee = 5e6`` so
+    ``ds_D = (2/5)^(1/3) ds_C = 0.737 ds_C``, ``m2 = 5`` to the cut-off at
+    ``N_cutoff = 1e8`` so ``ds_L = (5/100)^(1/5) ds_D = 0.549 ds_D``.
+    ``knee=False``: a single slope ``m1`` with no fatigue limit and no cut-off (``m2``,
+    ``N_knee``, ``N_cutoff`` unused). Stay cables: EN 1993-1-11 gives its own categories for
+    tension components; a value often quoted for wires and strands is ``ds_C = 160 MPa``
+    with ``m = 4`` (e.g. ``SNCurve(160e6, m1=4, knee=False)``) - check the category against
+    the standard and the cable's approval tests. Partial factors (``gamma_Ff``,
+    ``gamma_Mf``) are not applied, and the curve is mean-stress insensitive.
+
+    Fields: ``detail_category`` ds_C [stress unit] > 0; slopes ``m1, m2`` >= 1; ``knee``
+    bool; cycles ``N_C, N_knee, N_cutoff`` > 0 with ``N_knee < N_cutoff``.
+    """
+
+    detail_category: float
+    m1: float = 3.0
+    m2: float = 5.0
+    knee: bool = True
+    N_C: float = 2e6
+    N_knee: float = 5e6
+    N_cutoff: float = 1e8
+
+    def __post_init__(self) -> None:
+        for f in ("detail_category", "N_C", "N_knee", "N_cutoff"):
+            object.__setattr__(self, f, _number(f, getattr(self, f)))
+        for f in ("m1", "m2"):
+            object.__setattr__(self, f, _number(f, getattr(self, f), 1.0, inclusive=True))
+        if not isinstance(self.knee, (bool, np.bool_)):
+            raise ValueError(f"knee must be True or False (got {self.knee!r})")
+        if self.N_knee >= self.N_cutoff:
+            raise ValueError(f"N_knee must be < N_cutoff (got {self.N_knee:g} >= "
+                             f"{self.N_cutoff:g})")
+
+    @property
+    def delta_sigma_D(self) -> float | None:
+        """Knee (constant-amplitude fatigue limit) ``ds_C (N_C/N_knee)^(1/m1)``, or None."""
+        ds = self.detail_category * (self.N_C / self.N_knee) ** (1 / self.m1)
+        return ds if self.knee else None
+
+    @property
+    def delta_sigma_L(self) -> float | None:
+        """Cut-off limit ``ds_D (N_knee/N_cutoff)^(1/m2)``, or None without a knee."""
+        return self.delta_sigma_D * (self.N_knee / self.N_cutoff) ** (1 / self.m2) \
+            if self.knee else None
+
+    def cycles_to_failure(self, delta_sigma: ArrayLike) -> np.ndarray | float:
+        """Cycles to failure ``N`` at the stress ranges ``delta_sigma`` (>= 0, vectorised;
+        inf below the cut-off and at a zero range)."""
+        s = np.asarray(delta_sigma, float)
+        _finite("delta_sigma", s)
+        if np.any(s < 0):
+            raise ValueError("delta_sigma: stress ranges must be >= 0")
+        with np.errstate(divide="ignore"):
+            N = self.N_C * (self.detail_category / s) ** self.m1
+            if self.knee:
+                sd, sl = self.delta_sigma_D, self.delta_sigma_L
+                N = np.where(s < sd, self.N_knee * (sd / s) ** self.m2, N)
+                N = np.where(s < sl, np.inf, N)
+        return float(N) if N.ndim == 0 else N
+
+    def as_dict(self) -> dict:
+        return {**asdict(self), "knee": bool(self.knee), "delta_sigma_D": self.delta_sigma_D,
+                "delta_sigma_L": self.delta_sigma_L}
+
+
+def axial_stress(T: ArrayLike, section: StressSection) -> np.ndarray:
+    """Axial stress ``T/A`` [Pa] from the tension ``T`` [N]."""
+    return np.asarray(T, float) / section.area
+
+
+def bending_stress(M: ArrayLike, section: StressSection) -> np.ndarray:
+    """Bending stress ``M/W`` [Pa] at the outer fibre from a signed moment ``M`` [N m]."""
+    return np.asarray(M, float) / section.modulus
+
+
+def fibre_directions(M: ArrayLike, valid: ArrayLike | None = None, fibres: int = 36
+                     ) -> np.ndarray:
+    """``fibres`` unit vectors ``w_k = cos(a_k) e1 + sin(a_k) e2``, ``a_k = 2 pi k/fibres``,
+    in the plane of the moment vectors ``M`` (n, 3) (``e1``, ``e2``: the two leading
+    eigenvectors of ``sum M M^T`` over the valid samples; for a plane bending ``e1`` is the
+    moment's direction). The bending stress at fibre ``k`` is ``M . w_k / W``; the spacing
+    ``2 pi/fibres`` misses a fibre by at most ``pi/fibres`` (36: cos 5 deg = 0.9962)."""
+    M = np.asarray(M, float).reshape(-1, 3)
+    if int(fibres) != fibres or fibres < 1:
+        raise ValueError(f"fibres must be an integer >= 1 (got {fibres!r})")
+    ok = np.all(np.isfinite(M), axis=1)
+    if valid is not None:
+        ok &= np.asarray(valid, float) > 0
+    _, vec = np.linalg.eigh(M[ok].T @ M[ok] if ok.any() else np.eye(3))
+    e1, e2 = vec[:, 2], vec[:, 1]
+    e1 = e1 if e1[np.argmax(np.abs(e1))] > 0 else -e1  # a reproducible sign
+    a = 2 * np.pi * np.arange(int(fibres)) / int(fibres)
+    return np.cos(a)[:, None] * e1 + np.sin(a)[:, None] * e2
+
+
+def anchor_stress(T: ArrayLike, M: ArrayLike, valid: ArrayLike | None, section: StressSection,
+                  *, fibres: int = 36) -> tuple[np.ndarray, np.ndarray]:
+    """Stress ``T/A + M/W`` [Pa] at a clamped anchor and the mask of the valid samples.
+
+    ``T`` (n,) tension [N]; ``M`` (n,) signed moment or (n, 3) moment vector [N m];
+    ``valid`` (n,) 0/1 or None. Returns ``sigma``: (n,), or (n, fibres) at the fibres of
+    :func:`fibre_directions` for a moment vector, NaN (never zero) at invalid samples; and
+    ``ok`` (n,) bool: ``T`` and ``M`` finite and ``valid`` nonzero.
+    """
+    T, M = np.asarray(T, float), np.asarray(M, float)
+    ok = np.isfinite(T) & (np.all(np.isfinite(M), axis=1) if M.ndim == 2 else np.isfinite(M))
+    if valid is not None:
+        ok &= np.nan_to_num(np.asarray(valid, float)) != 0  # NaN: invalid
+    if M.ndim == 2:
+        bend = bending_stress(M @ fibre_directions(M, ok, fibres).T, section)
+        sigma = axial_stress(T, section)[:, None] + bend
+        return np.where(ok[:, None], sigma, np.nan), ok
+    return np.where(ok, axial_stress(T, section) + bending_stress(M, section), np.nan), ok
+
+
+def rainflow_cycles(series: ArrayLike) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Rainflow cycles (ASTM E1049-85 5.4.4, ``rainflow.extract_cycles``): ``ranges``,
+    ``means`` [stress unit], ``counts`` (1.0 full cycle, 0.5 half cycle: the residue's ranges
+    are kept as half cycles). Zero ranges (constant series) are left out; a 2-sample series
+    (for which rainflow 3.2.0 counts nothing) is one half cycle. NaN raises ValueError."""
+    x = np.asarray(series, float)
+    if x.ndim != 1:
+        raise ValueError(f"series must be 1-D (got shape {x.shape})")
+    _finite("series", x)
+    if x.size == 2:
+        cyc = [(abs(x[1] - x[0]), 0.5 * (x[0] + x[1]), 0.5)]
+    else:
+        cyc = [c[:3] for c in rainflow.extract_cycles(x.tolist())]
+    a = np.array([c for c in cyc if c[0] > 0], float).reshape(-1, 3)
+    return a[:, 0], a[:, 1], a[:, 2]
+
+
+def _cycles(ranges: ArrayLike, counts: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
+    r, n = np.asarray(ranges, float).ravel(), np.asarray(counts, float).ravel()
+    if r.shape != n.shape:
+        raise ValueError(f"ranges and counts differ in length ({r.size} vs {n.size})")
+    _finite("ranges", r)
+    _finite("counts", n)
+    if np.any(r < 0) or np.any(n < 0):
+        raise ValueError("ranges and counts must be >= 0")
+    return r, n
+
+
+def miner_damage(ranges: ArrayLike, counts: ArrayLike, curve: SNCurve) -> float:
+    """Miner's sum ``D = sum n_i / N(ds_i)`` (ranges below the cut-off do no damage)."""
+    r, n = _cycles(ranges, counts)
+    return float(np.sum(n / curve.cycles_to_failure(r)))
+
+
+def equivalent_stress_range(ranges: ArrayLike, counts: ArrayLike, m: float,
+                            n_ref: float | None = None) -> float:
+    """Damage-equivalent constant range ``(sum n_i ds_i^m / n_ref)^(1/m)`` [stress unit].
+    ``n_ref=None``: the total number of cycles (same damage in as many cycles); ``n_ref=2e6``
+    (``N_C``): the range to compare with the detail category (single slope: ``D =
+    (ds_E/ds_C)^m``). All ranges count, even below a cut-off. 0 without cycles."""
+    r, n = _cycles(ranges, counts)
+    m, total = _number("m", m), float(np.sum(n))
+    nref = total if n_ref is None else _number("n_ref", n_ref)
+    return float((np.sum(n * r**m) / nref) ** (1 / m)) if total > 0 else 0.0
+
+
+def time_to_failure(D: float, duration: float) -> float:
+    """``duration / D``: the simulated loading repeated until ``D = 1`` (inf if D = 0)."""
+    D, duration = _number("D", D, 0.0, inclusive=True), _number("duration", duration)
+    return math.inf if D == 0 else duration / D
+
+
+def _window(t: np.ndarray, window: str | tuple[float, float] | None) -> np.ndarray:
+    if window is None:
+        return np.ones(t.size, bool)
+    if isinstance(window, str):
+        if window != "steady":
+            raise ValueError(f"window must be None, 'steady' or (t0, t1) (got {window!r})")
+        sel = t >= t[-1] - (t[-1] - t[0]) / 3
+    else:
+        t0, t1 = (float(w) for w in window)
+        sel = (t >= t0) & (t <= t1)
+    if np.count_nonzero(sel) < 2:
+        raise ValueError(f"window {window!r} holds fewer than 2 samples of "
+                         f"[{t[0]:g}, {t[-1]:g}]")
+    return sel
+
+
+def _stats(x: np.ndarray) -> dict:
+    return {"min": float(x.min()), "max": float(x.max()), "mean": float(x.mean()),
+            "range": float(np.ptp(x))}
+
+
+def fatigue_report(times: ArrayLike, T: ArrayLike, M: ArrayLike, valid: ArrayLike | None,
+                   section: StressSection, curve: SNCurve, *, invalid: str = "raise",
+                   window: str | tuple[float, float] | None = None, fibres: int = 36,
+                   bins: int = 20, anchor: str = "anchor") -> dict:
+    """Fatigue of one anchor: stresses, rainflow, Miner's damage, time to failure.
+
+    ``times`` (n,) strictly increasing [time unit]; ``T`` (n,) [N]; ``M`` (n,) signed or
+    (n, 3) vector [N m] (prefer the vector, see the module docstring: the most damaged of
+    ``fibres`` fibres is reported); ``valid`` (n,) 0/1 or None; ``invalid``: "raise" or
+    "drop"; ``window``: None (all), "steady" (last third of the time span) or (t0, t1);
+    ``bins``: of the range histogram; ``anchor``: name for the messages.
+    Returns a JSON-ready dict: ``damage`` over the window, ``time_to_failure`` = duration /
+    damage [time unit] (None and ``time_to_failure_infinite`` if D = 0), cycle counts,
+    stress statistics, the axial and bending parts alone, equivalent ranges (slope ``m1``,
+    over the number of cycles and over ``N_C``), histogram, ``dropped_invalid_samples``.
+    """
+    t, T, M = (np.asarray(a, float) for a in (times, T, M))
+    n = t.size
+    v = np.ones(n) if valid is None else np.asarray(valid, float)
+    if t.ndim != 1 or T.shape != (n,) or M.shape[:1] != (n,) or v.shape != (n,) \
+            or M.ndim > 2 or (M.ndim == 2 and M.shape[1] != 3):
+        raise ValueError(f"anchor {anchor!r}: times, T, valid (n,) and M (n,) or (n, 3) "
+                         f"must agree (got {t.shape}, {T.shape}, {v.shape}, {M.shape})")
+    _finite(f"anchor {anchor!r}: times", t)
+    if n < 2 or np.any(np.diff(t) <= 0):
+        raise ValueError(f"anchor {anchor!r}: times must be >= 2 strictly increasing values")
+    if invalid not in ("raise", "drop"):
+        raise ValueError(f"invalid must be 'raise' or 'drop' (got {invalid!r})")
+    sel = _window(t, window)
+    t, T, M, v = t[sel], T[sel], M[sel], v[sel]
+    sigma, ok = anchor_stress(T, M, v, section, fibres=fibres)
+    n_bad = int(np.count_nonzero(~ok))
+    if n_bad and invalid == "raise":
+        raise ValueError(f"anchor {anchor!r}: {n_bad} of {ok.size} samples invalid (valid = 0 "
+                         f"or empty/NaN tension or moment, e.g. slack), first at t = "
+                         f"{t[~ok][0]:g}; pass invalid='drop' to drop them")
+    if not ok.any():
+        raise ValueError(f"anchor {anchor!r}: no valid sample in the window")
+    sig = sigma[ok].reshape(np.count_nonzero(ok), -1)
+    cyc = [rainflow_cycles(sig[:, k]) for k in range(sig.shape[1])]
+    dam = [miner_damage(r, c, curve) for r, _, c in cyc]
+    k = int(np.argmax(dam))
+    r, _, c = cyc[k]
+    axial = axial_stress(T[ok], section)
+    bend = sig[:, k] - axial
+    duration = float(t[-1] - t[0])
+    ttf = time_to_failure(dam[k], duration)
+    hist, edges = np.histogram(r, bins=bins, range=(0.0, float(r.max()) if r.size else 1.0),
+                               weights=c)
+    rep = {"anchor": anchor, "window": [float(t[0]), float(t[-1])], "duration": duration,
+           "samples": int(ok.size), "dropped_invalid_samples": n_bad,
+           "stress": _stats(sig[:, k]), "axial_stress": _stats(axial),
+           "bending_stress": _stats(bend), "damage": dam[k],
+           "damage_axial_only": miner_damage(*rainflow_cycles(axial)[::2], curve),
+           "damage_bending_only": miner_damage(*rainflow_cycles(bend)[::2], curve),
+           "cycles": float(c.sum()), "full_cycles": int(np.count_nonzero(c == 1.0)),
+           "half_cycles": int(np.count_nonzero(c == 0.5)),
+           "max_range": float(r.max()) if r.size else 0.0,
+           "equivalent_range": equivalent_stress_range(r, c, curve.m1),
+           "equivalent_range_N_C": equivalent_stress_range(r, c, curve.m1, curve.N_C),
+           "time_to_failure": None if math.isinf(ttf) else ttf,
+           "time_to_failure_infinite": math.isinf(ttf),
+           "histogram": {"edges": edges.tolist(), "counts": hist.tolist()}, "fibre": None}
+    if M.ndim == 2:
+        w = fibre_directions(M, ok, fibres)[k]
+        rep["fibre"] = {"index": k, "fibres": int(fibres), "angle_deg": 360.0 * k / fibres,
+                        "direction": w.tolist(), "damage_min_over_fibres": float(min(dam))}
+    return rep
+
+
+def _atomic(path: Path, write: Callable[[BinaryIO], object]) -> None:
+    """Write through ``write(binary file)`` to a temporary name beside ``path``, then rename."""
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    try:
+        with open(tmp, "wb") as fh:
+            write(fh)
+        os.replace(tmp, path)
+    finally:
+        tmp.unlink(missing_ok=True)
+
+
+def _g(*xs: float | None) -> str:
+    return " / ".join("inf" if x is None else f"{x:.4g}" for x in xs)
+
+
+def _sn_text(curve: SNCurve, u: str) -> str:
+    knee = (f"knee ds_D = {curve.delta_sigma_D:.4g} {u} at {curve.N_knee:.3g}, m2 = "
+            f"{curve.m2:g}, cut-off ds_L = {curve.delta_sigma_L:.4g} {u} at "
+            f"{curve.N_cutoff:.3g}" if curve.knee else "single slope, no cut-off")
+    return (f"S-N curve: ds_C = {curve.detail_category:.4g} {u} at N_C = {curve.N_C:.3g}, "
+            f"m1 = {curve.m1:g}, {knee}.")
+
+
+def write_report(outdir: str | Path, reports: dict[str, dict], curve: SNCurve,
+                 section: StressSection, units: str = "Pa", time_unit: str = "s") -> list[str]:
+    """Write ``fatigue.json``, ``fatigue.md`` and ``fatigue_histogram.png`` into ``outdir``
+    (atomically); ``reports``: anchor name -> :func:`fatigue_report`. Returns file names."""
+    out = Path(outdir)
+    out.mkdir(parents=True, exist_ok=True)
+    data = {"units": {"stress": units, "time": time_unit},
+            "section": {"area": section.area, "modulus": section.modulus},
+            "sn_curve": curve.as_dict(), "anchors": reports}
+    text = json.dumps(data, indent=2, allow_nan=False) + "\n"
+    _atomic(out / "fatigue.json", lambda fh: fh.write(text.encode()))
+    lines = ["# Fatigue at the clamped anchors", "", _sn_text(curve, units),
+             f"Section: A = {section.area:.4g}, W = {section.modulus:.4g}. Stresses in "
+             f"{units}, times in {time_unit}; rainflow + Miner over the window.", ""]
+    for name, r in reports.items():
+        fib = f" (worst of {r['fibre']['fibres']} fibres: {r['fibre']['angle_deg']:g} deg)" \
+            if r.get("fibre") else ""
+        rows = [("window t0 / t1", _g(*r["window"])), ("damage D", _g(r["damage"]) + fib),
+                ("time to failure", _g(r["time_to_failure"])),
+                ("cycles (full + half)", _g(r["cycles"])),
+                ("max range / equivalent range / at N_C",
+                 _g(r["max_range"], r["equivalent_range"], r["equivalent_range_N_C"])),
+                ("stress min / max", _g(r["stress"]["min"], r["stress"]["max"])),
+                ("range axial / bending",
+                 _g(r["axial_stress"]["range"], r["bending_stress"]["range"])),
+                ("D axial only / bending only",
+                 _g(r["damage_axial_only"], r["damage_bending_only"])),
+                ("dropped invalid samples", _g(r["dropped_invalid_samples"]))]
+        lines += [f"## Anchor {name}", "", "| quantity | value |", "|---|---|"]
+        lines += [f"| {k} | {x} |" for k, x in rows] + [""]
+    _atomic(out / "fatigue.md", lambda fh: fh.write("\n".join(lines).encode()))
+    _histogram_png(out / "fatigue_histogram.png", reports, curve, units)
+    return ["fatigue.json", "fatigue.md", "fatigue_histogram.png"]
+
+
+def _histogram_png(path: Path, reports: dict[str, dict], curve: SNCurve, units: str) -> None:
+    from matplotlib.figure import Figure  # no pyplot: savefig(format="png") uses Agg
+
+    fig = Figure(figsize=(8, 2.8 * max(len(reports), 1)))
+    axes = fig.subplots(max(len(reports), 1), 1, squeeze=False)[:, 0]
+    marks = [("ds_C", curve.detail_category, "k")] + ([
+        ("knee ds_D", curve.delta_sigma_D, "tab:orange"),
+        ("cut-off ds_L", curve.delta_sigma_L, "tab:red")] if curve.knee else [])
+    for ax, (name, rep) in zip(axes, reports.items()):
+        e, h = np.array(rep["histogram"]["edges"]), np.array(rep["histogram"]["counts"])
+        ax.bar(e[:-1], h, width=np.diff(e), align="edge", color="tab:blue", label="cycles")
+        ax.set_yscale("log" if np.any(h > 0) else "linear")
+        for label, x, col in marks:
+            on = bool(x <= 1.5 * e[-1])  # marks far beyond the ranges: in the legend only
+            ax.plot([x, x] * on, [0, 1] * on, ls="--", color=col,
+                    transform=ax.get_xaxis_transform(),
+                    label=f"{label} = {x:.3g}" + ("" if on else " (off axis)"))
+        ax.set(ylabel="cycles", title=f"anchor {name}: D = {rep['damage']:.3g}")
+        ax.grid(True, lw=0.3)
+        ax.legend(fontsize=7)
+    axes[-1].set_xlabel(f"stress range [{units}]")
+    fig.tight_layout()
+    _atomic(path, lambda fh: fig.savefig(fh, format="png", dpi=110))
+
+
+def read_anchor_csv(path: str | Path) -> dict[str, dict[str, np.ndarray]]:
+    """Read cablefem's ``anchors.csv``: anchor -> ``time, tension, moment, valid`` arrays
+    (empty fields -> NaN; an empty or missing ``valid`` -> 0 / finite moment) and, when the
+    columns exist, ``moment_vector`` (n, 3) from ``Mx, My, Mz``. ValueError names the file,
+    line and column of malformed input."""
+    path = Path(path)
+    data: dict[str, list[list[float]]] = {}
+    with path.open(newline="") as fh:
+        reader = csv.reader(fh)
+        head = [h.strip() for h in next(reader, [])]
+        missing = [c for c in ("time", "anchor", "tension", "moment") if c not in head]
+        if missing:
+            raise ValueError(f"{path}:1: header lacks column(s) {', '.join(missing)}")
+        cols = ["time", "tension", "moment"] + [c for c in ("valid", "Mx", "My", "Mz")
+                                                  if c in head]
+        for row in reader:
+            line, vals = reader.line_num, []
+            if not any(f.strip() for f in row):
+                continue
+            if len(row) != len(head):
+                raise ValueError(f"{path}:{line}: {len(row)} fields, the header has {len(head)}")
+            for c in cols:
+                s = row[head.index(c)].strip()
+                try:
+                    vals.append(float(s) if s else math.nan)
+                except ValueError:
+                    raise ValueError(f"{path}:{line}: column '{c}': not a number: {s!r}") from None
+            if not math.isfinite(vals[0]):
+                raise ValueError(f"{path}:{line}: column 'time': empty or not finite")
+            if "valid" in cols and not (math.isnan(vals[3]) or vals[3] in (0.0, 1.0)):
+                raise ValueError(f"{path}:{line}: column 'valid': must be 0, 1 or empty")
+            name = row[head.index("anchor")].strip()
+            if not name:
+                raise ValueError(f"{path}:{line}: column 'anchor': empty")
+            data.setdefault(name, []).append(vals)
+    if not data:
+        raise ValueError(f"{path}: no data rows")
+    result = {}
+    for name, rows in data.items():
+        a = np.array(rows)
+        if np.any(np.diff(a[:, 0]) <= 0):
+            raise ValueError(f"{path}: times of anchor '{name}' are not strictly increasing")
+        d = {"time": a[:, 0], "tension": a[:, 1], "moment": a[:, 2]}
+        d["valid"] = (np.nan_to_num(a[:, 3]) if "valid" in cols
+                      else np.isfinite(a[:, 2]).astype(float))
+        if {"Mx", "My", "Mz"} <= set(cols):
+            d["moment_vector"] = a[:, [cols.index(c) for c in ("Mx", "My", "Mz")]]
+        result[name] = d
+    return result

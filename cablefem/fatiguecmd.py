@@ -1,0 +1,72 @@
+"""``cablefem fatigue DIR --case CASE.toml``: fatigue at the clamped anchors of a run.
+
+Reads ``DIR/anchors.csv`` (written by ``cablefem run`` or ``cablefem post``), takes the S-N
+curve and the section from the case's ``[fatigue]`` table (and ``section.diameter``), and
+writes ``fatigue.json``, ``fatigue.md`` and ``fatigue_histogram.png``. Stresses use the
+moment *vector* (``Mx, My, Mz``) at fibres around the section: the magnitude alone would fold
+a moment that changes sign or turns, and underestimate the damage. No dolfinx.
+"""
+
+from __future__ import annotations
+
+import logging
+from pathlib import Path
+
+import numpy as np
+from mpi4py import MPI
+
+from .case import Case, CaseError
+from .fatigue import SNCurve, StressSection, fatigue_report, read_anchor_csv, write_report
+
+__all__ = ["run_fatigue"]
+
+log = logging.getLogger(__name__)
+
+
+def run_fatigue(case: Case, rundir: Path, outdir: Path | None = None, *,
+                window: str | None = None, invalid: str = "raise",
+                comm: MPI.Comm = MPI.COMM_WORLD) -> dict:
+    """Fatigue reports of every clamped anchor in ``rundir/anchors.csv``; rank 0 computes
+    and writes, the reports are returned on every rank. Raises CaseError without a
+    ``[fatigue]`` table and ValueError on bad data (invalid samples with
+    ``invalid="raise"``: the message names the anchor and the first bad time)."""
+    spec = case.fatigue
+    if spec is None:
+        raise CaseError([("fatigue", "the case has no [fatigue] table (detail_category, ...): "
+                                     "see 'cablefem keys'")], case.source)
+    outdir = Path(outdir or rundir)
+    reports, error = None, None
+    if comm.rank == 0:
+        try:
+            if spec.area is not None:
+                section = StressSection.effective(spec.area, spec.modulus)
+            else:
+                section = StressSection.solid_circle(case.section.diameter)
+            curve = SNCurve(spec.detail_category, spec.m1, spec.m2, spec.knee, spec.N_C,
+                            spec.N_knee, spec.N_cutoff)
+            data = read_anchor_csv(Path(rundir) / "anchors.csv")
+            clamped = [a.name for a in case.anchors if a.kind == "clamped"]
+            missing = [n for n in clamped if n not in data]
+            if missing:
+                raise ValueError(f"{rundir}/anchors.csv has no rows for the clamped anchors "
+                                 f"{missing}")
+            reports = {}
+            for name in clamped:
+                d = data[name]
+                M = d.get("moment_vector", d["moment"])
+                reports[name] = fatigue_report(
+                    d["time"], d["tension"], M, d["valid"], section, curve,
+                    invalid=invalid, window=None if (window or spec.window) == "all" else
+                    "steady", fibres=spec.fibres, anchor=name)
+            outdir.mkdir(parents=True, exist_ok=True)
+            write_report(outdir, reports, curve, section, spec.units)
+            for name, rep in reports.items():
+                log.info("fatigue at %s: damage %.4g over %.4g time units, time to failure "
+                         "%s", name, rep.get("damage", np.nan), rep.get("duration", np.nan),
+                         rep.get("time_to_failure"))
+        except (ValueError, OSError) as err:
+            error = str(err)
+    error = comm.bcast(error, root=0)
+    if error is not None:
+        raise ValueError(error)
+    return comm.bcast(reports, root=0)
