@@ -240,8 +240,55 @@ def _default_text(default: Any) -> str:
     return repr(default) if isinstance(default, str) else str(default)
 
 
-def format_case_reference(markdown: bool = False) -> str:
-    """Render :data:`CASE_KEYS` as plain text (for ``--help``) or as a Markdown table."""
+def _network_keys() -> dict:
+    """The keys of a network case: CASE_KEYS without [section], [geometry] and [mesh]
+    (the mesh file gives the geometry), with [network], [[sections]] and [[cables]]; anchors
+    and point masses/loads name 0D groups of the mesh."""
+    c = CASE_KEYS
+    section_keys = c["section"].keys
+    anchors = c["anchors"]
+    keys = {"title": c["title"],
+            "network": TableDoc("table", REQUIRED, "", "A cable network from a mesh file.", {
+                "mesh": KeyDoc("string", REQUIRED, "", "gmsh file (.msh) relative to the case "
+                               "file: 1D physical groups for the cables, 0D groups for anchors "
+                               "and point masses (meshes/README.md); its geometry is the "
+                               "pretensioned reference.")}),
+            "sections": TableDoc("array of tables", REQUIRED, "", "Named cross-sections.", {
+                "name": KeyDoc("string", REQUIRED, "", "Section name, used by [[cables]]."),
+                **section_keys}),
+            "cables": TableDoc("array of tables", REQUIRED, "", "One per 1D group of the mesh.", {
+                "group": KeyDoc("string", REQUIRED, "", "1D physical group name in the mesh."),
+                "section": KeyDoc("string", REQUIRED, "", "Name of a [[sections]] entry."),
+                "pretension": KeyDoc("number", 0.0, "N", "Tension in the mesh geometry before "
+                                     "gravity and loads, >= 0: the stress-free length is the "
+                                     "mesh length / (1 + pretension/EA).")}),
+            "gravity": c["gravity"],
+            "anchors": TableDoc("array of tables", REQUIRED, "", "One per 0D group of the mesh; "
+                                "every vertex of the group is an anchor named group:k.", {
+                "name": KeyDoc("string", REQUIRED, "", "0D physical group name in the mesh."),
+                "type": anchors.keys["type"],
+                "direction": KeyDoc("3-vector", None, "-", "Clamp direction into the cable "
+                                    "(clamped only); default: along the anchor's cell."),
+                "motion": anchors.keys["motion"]}),
+            "loads": c["loads"],
+            "point_masses": TableDoc("array of tables", None, "", "Lumped masses on 0D groups.", {
+                "group": KeyDoc("string", REQUIRED, "", "0D physical group name in the mesh."),
+                "mass": KeyDoc("number", REQUIRED, "kg", "Mass at each vertex, > 0.")}),
+            "point_loads": TableDoc("array of tables", None, "", "Point loads on 0D groups.", {
+                "group": KeyDoc("string", REQUIRED, "", "0D physical group name in the mesh."),
+                "value": c["point_loads"].keys["value"],
+                "time": c["point_loads"].keys["time"]})}
+    for name in ("damping", "dynamics", "fatigue", "modal", "solver"):
+        keys[name] = c[name]
+    return keys
+
+
+NETWORK_KEYS: dict[str, KeyDoc | TableDoc] = _network_keys()
+
+
+def format_case_reference(markdown: bool = False, network: bool = False) -> str:
+    """Render :data:`CASE_KEYS` (or, with ``network``, :data:`NETWORK_KEYS`) as plain text
+    (for ``--help``) or as a Markdown table."""
     lines = (["| key | type | default | unit | meaning |", "|---|---|---|---|---|"]
              if markdown else [])
 
@@ -267,7 +314,7 @@ def format_case_reference(markdown: bool = False) -> str:
             if is_table:
                 walk(doc.keys, path, depth + 1)
 
-    walk(CASE_KEYS, "", 0)
+    walk(NETWORK_KEYS if network else CASE_KEYS, "", 0)
     return "\n".join(lines)
 
 
@@ -377,6 +424,24 @@ class DynamicsSpec:
 
 
 @dataclass
+class CableSpec:
+    """A family of cables: a 1D group of the mesh, its section and pretension."""
+
+    group: str
+    section: str
+    pretension: float
+
+
+@dataclass
+class NetworkSpec:
+    """A cable network: the mesh file, the named sections and the cable families."""
+
+    mesh: Path
+    sections: dict[str, Section]
+    cables: list[CableSpec]
+
+
+@dataclass
 class FatigueSpec:
     """S-N curve, section for stresses and window of the fatigue assessment."""
 
@@ -428,6 +493,7 @@ class Case:
     solver: SolverSpec
     source: str
     fatigue: FatigueSpec | None = None
+    network: NetworkSpec | None = None
 
     def to_dict(self) -> dict:
         """JSON-serialisable echo of the inputs (motions and time functions via describe())."""
@@ -918,6 +984,8 @@ def parse_case(data: dict, base_dir: str | os.PathLike = Path("."),
     """
     if not isinstance(data, dict):
         raise CaseError([("", f"expected a table of keys, got {_show(data)}")], source)
+    if "network" in data:
+        return _parse_network_case(data, Path(base_dir), source)
     base_dir, problems = Path(base_dir), []
     top = _Reader(data, "", CASE_KEYS, problems)
 
@@ -975,6 +1043,78 @@ def parse_case(data: dict, base_dir: str | os.PathLike = Path("."),
         raise RuntimeError("cablefem internal error: a case value failed without a message")
     return Case(title, section, gravity, geometry, mesh, anchors, loads, masses, point_loads,
                 damping, dynamics, modal, solver, source, fatigue)
+
+
+def _parse_network_case(data: dict, base_dir: Path, source: str) -> Case:
+    """A network case (see :data:`NETWORK_KEYS`); the mesh itself is read and checked when
+    the model is built (:func:`cablefem.network.read_network_mesh`)."""
+    problems: list = []
+    top = _Reader(data, "", NETWORK_KEYS, problems)
+
+    def table(name: str) -> _Reader:
+        return top.table(name) or _Reader({}, name, NETWORK_KEYS[name].keys, problems)
+
+    title = top.string("title")
+    net_r = top.table("network")
+    mesh_path = None
+    if net_r is not None:
+        name = net_r.string("mesh")
+        if name is not None:
+            mesh_path = base_dir / name
+            if not mesh_path.is_file():
+                net_r.add("mesh", f"no such file: {mesh_path}")
+                mesh_path = None
+    sections = {}
+    for r in top.tables("sections"):
+        name, sec = r.string("name"), _parse_section(r)
+        if name in sections:
+            r.add("name", f"duplicate section name {name!r}")
+        elif name is not None and sec is not None:
+            sections[name] = sec
+    cables = []
+    for r in top.tables("cables"):
+        group, sec_name = r.string("group"), r.string("section")
+        pre = r.number("pretension", ge=0)
+        if sec_name is not None and sec_name not in sections and not problems:
+            r.add("section", f"unknown section {sec_name!r}; known: {sorted(sections)}")
+        if None not in (group, sec_name, pre):
+            cables.append(CableSpec(group, sec_name, pre))
+    gravity_r = table("gravity")
+    g, direction = gravity_r.number("g", ge=0), gravity_r.vector("direction", unit_vector=True)
+    gravity = None if g is None or direction is None else Gravity(g, direction)
+    anchors = []
+    names = set()
+    for r in top.tables("anchors"):
+        name = r.string("name")
+        if name in names:
+            r.add("name", f"duplicate anchor group {name!r}")
+        names.add(name)
+        kind = r.string("type", ("clamped", "pinned"))
+        if kind == "pinned" and r.has("direction"):
+            r.add("direction", "direction only applies to clamped anchors")
+        anchors.append(Anchor(name, None, kind, r.vector("direction", unit_vector=True),
+                              _parse_motion(r.table("motion"), base_dir)))
+    loads = [DistributedLoad(r.vector("value"), _parse_time(r.table("time"), base_dir))
+             for r in top.tables("loads")]
+    masses = [PointMass(r.string("group"), r.number("mass", gt=0))
+              for r in top.tables("point_masses")]
+    point_loads = [PointLoad(r.string("group"), r.vector("value"),
+                             _parse_time(r.table("time"), base_dir))
+                   for r in top.tables("point_loads")]
+    damping = _parse_damping(top.table("damping"))
+    dynamics = _parse_dynamics(top.table("dynamics"))
+    modal = ModalSpec(table("modal").integer("modes"))
+    solver_r = table("solver")
+    solver = SolverSpec(solver_r.boolean("tension_only"), _parse_petsc_options(solver_r))
+    first = sections.get(cables[0].section) if cables else None
+    fatigue = _parse_fatigue(top.table("fatigue"), first)
+    if problems:
+        raise CaseError(problems, source)
+    if _missing(title, gravity, mesh_path, first, damping, modal.modes, solver.tension_only):
+        raise RuntimeError("cablefem internal error: a case value failed without a message")
+    return Case(title, first, gravity, None, MeshSpec(1, 1.0), anchors, loads, masses,
+                point_loads, damping, dynamics, modal, solver, source, fatigue,
+                NetworkSpec(mesh_path, sections, cables))
 
 
 def _parse_fatigue(r: _Reader | None, section: Section | None) -> FatigueSpec | None:

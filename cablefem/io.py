@@ -145,7 +145,7 @@ class MomentsWriter:
     """``moments.xdmf``: composite curvature and moment on a line mesh of its own (rank 0)."""
 
     def __init__(self, path: Path, points: np.ndarray, comm: MPI.Comm = MPI.COMM_WORLD,
-                 keep_until: float | None = None):
+                 keep_until: float | None = None, cells: np.ndarray | None = None):
         """``keep_until``: resume, keeping the frames of an existing file up to that time."""
         self.points0 = np.asarray(points, float)
         self.writer = None
@@ -163,8 +163,9 @@ class MomentsWriter:
             finally:
                 os.chdir(cwd)
             n = len(points)
-            cells = [("line", np.column_stack([np.arange(n - 1), np.arange(1, n)]))]
-            self.writer.write_points_cells(self.points0, cells)
+            if cells is None:  # one polyline through all points
+                cells = np.column_stack([np.arange(n - 1), np.arange(1, n)])
+            self.writer.write_points_cells(self.points0, [("line", np.asarray(cells))])
             for t, data in old:
                 self.writer.write_data(t, point_data=data)
 

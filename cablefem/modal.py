@@ -111,21 +111,26 @@ def solve_modes(model, n: int = 6) -> ModalResult:
     if np.any(np.array(vals)[order] < 0):
         log.warning("modal: negative eigenvalue(s): the static state is not stable")
     shapes = [shapes[i] for i in order]
-    a0, a1 = model.anchors
-    chord = a1.position - a0.position
-    g = model.case.gravity
-    gdir = np.asarray(g.direction, float) if g.g > 0 else None
-    # mirror symmetry about mid-span: a level cable, or any straight weightless one
-    level = gdir is None or abs(chord @ gdir) < 1e-9 * np.linalg.norm(chord)
-    st = model.geometry.stations
-    level = level and np.allclose(st, st[-1] - st[::-1], atol=1e-12 * st[-1])
+    if len(model.anchors) == 2 and not getattr(model, "is_network", False):
+        a0, a1 = model.anchors
+        chord = a1.position - a0.position
+        g = model.case.gravity
+        gdir = np.asarray(g.direction, float) if g.g > 0 else None
+        # mirror symmetry about mid-span: a level cable, or any straight weightless one
+        level = gdir is None or abs(chord @ gdir) < 1e-9 * np.linalg.norm(chord)
+        st = model.geometry.stations
+        level = level and np.allclose(st, st[-1] - st[::-1], atol=1e-12 * st[-1])
+        classify = True
+    else:  # a network: no single plane or mid-span to classify against
+        classify = False
     labels = []
     for i, f in enumerate(shapes):
         nodal = model.gather_nodal(f)
         lab = None
         if model.comm.rank == 0:
             amax = np.max(np.abs(nodal))
-            lab = classify_mode(st, nodal / amax, chord, gdir, level)
+            lab = (classify_mode(st, nodal / amax, chord, gdir, level) if classify
+                   else {"plane": "n/a", "symmetry": "n/a"})
             sign = np.sign(nodal.flat[np.argmax(np.abs(nodal))])
             lab["scale"] = float(sign / amax)
         lab = model.comm.bcast(lab, root=0)

@@ -42,6 +42,7 @@ class AnchorBC:
     motion: Motion | None
     dofs: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int32))
     owned: bool = False  #: True on the one rank that owns the anchor's dofs
+    section: object = None  #: the Section of the cable at the anchor
 
     @property
     def flat_dofs(self) -> np.ndarray:
@@ -110,8 +111,7 @@ class CableModel:
         self.t0 = string.reference_tangent(self.mesh)
 
         m = self.mesh
-        self.EA = fem.Constant(m, PETSc.ScalarType(sec.EA))
-        self.m = fem.Constant(m, PETSc.ScalarType(sec.mass))
+        self._coefficients()
         self.gravity = fem.Constant(m, np.asarray(self.g_vec, dtype=PETSc.ScalarType))
         self.load_factor = fem.Constant(m, PETSc.ScalarType(1.0))
         self.shift_v = fem.Constant(m, PETSc.ScalarType(0.0))
@@ -207,7 +207,8 @@ class CableModel:
                 direction = np.asarray(direction, dtype=float)
                 direction = direction / np.linalg.norm(direction)
             out.append(AnchorBC(spec.name, k, self.geometry.points[k].copy(), pos.copy(),
-                                spec.kind, direction, spec.motion, dofs, owned))
+                                spec.kind, direction, spec.motion, dofs, owned,
+                                self.case.section))
         nowners = [self.comm.allreduce(int(a.owned)) for a in out]
         if any(n != 1 for n in nowners):
             raise RuntimeError(f"anchor ownership is not unique across ranks: {nowners}")
@@ -215,8 +216,8 @@ class CableModel:
 
     def _point_tags(self) -> None:
         """Vertex tags for point masses and point loads (one tag per loaded node)."""
-        nodes = sorted({self.geometry.node_at(pm.s) for pm in self.case.point_masses}
-                       | {self.geometry.node_at(pl.s) for pl in self.case.point_loads})
+        nodes = sorted({k for item in list(self.case.point_masses) + list(self.case.point_loads)
+                        for k in self._item_nodes(item)})
         self._node_tag = {k: i + 1 for i, k in enumerate(nodes)}
         ents, vals = [], []
         for k, tag in self._node_tag.items():
@@ -229,33 +230,55 @@ class CableModel:
         tags = dmesh.meshtags(self.mesh, 0, ents_a[order], vals_a[order])
         self.dS = ufl.Measure("dS", domain=self.mesh, subdomain_data=tags)
 
+    ramp_weight = False  #: statics ramps the weight with the extra loads (networks)
+
+    def _coefficients(self) -> None:
+        """Section coefficients of the forms: EA, m and c (stress-free length per mesh
+        length, 1 for a single cable whose mesh is stress-free)."""
+        sec = self.case.section
+        self.EA = fem.Constant(self.mesh, PETSc.ScalarType(sec.EA))
+        self.m = fem.Constant(self.mesh, PETSc.ScalarType(sec.mass))
+        self.c = fem.Constant(self.mesh, PETSc.ScalarType(1.0))
+
+    def _item_nodes(self, item) -> list[int]:
+        """Nodes of a point mass or point load (a single cable: the node at ``item.s``)."""
+        return [self.geometry.node_at(item.s)]
+
+    def _item_tags(self, item) -> list[int]:
+        return sorted({self._node_tag[k] for k in self._item_nodes(item)})
+
     # ------------------------------------------------------------------ forms
     def build_forms(self) -> None:
         """Build the UFL residuals and Jacobians (override or extend, then :meth:`compile`)."""
         u, v, a, du, dw, t0 = self.u, self.v, self.a, self.du, self.dw, self.t0
         case = self.case
-        self.F_internal = string.internal_work(u, du, t0, self.EA, self.tension_only)
+        cc = self.c
+        self.F_internal = string.internal_work(u, du, t0, self.EA, self.tension_only, c=cc)
         # the cable's own weight, then "extra" loads that statics may ramp (load_factor)
-        F_ext = string.load_work(self.m * self.gravity, du)
+        F_ext = string.load_work(self.m * self.gravity, du, c=cc)
         extra = None
-        for c, _ in self.loads:
-            extra = string.load_work(c, du) if extra is None else extra + string.load_work(c, du)
+        for q, _ in self.loads:
+            term = string.load_work(q, du, c=cc)
+            extra = term if extra is None else extra + term
         for pm in case.point_masses:
-            tag = self._node_tag[self.geometry.node_at(pm.s)]
-            term = pm.mass * ufl.inner(self.gravity, du("+")) * self.dS(tag)
-            extra = term if extra is None else extra + term
-        for c, pl in self.point_loads:
-            tag = self._node_tag[self.geometry.node_at(pl.s)]
-            term = ufl.inner(c, du("+")) * self.dS(tag)
-            extra = term if extra is None else extra + term
-        if extra is not None:
+            for tag in self._item_tags(pm):
+                term = pm.mass * ufl.inner(self.gravity, du("+")) * self.dS(tag)
+                extra = term if extra is None else extra + term
+        for q, pl in self.point_loads:
+            for tag in self._item_tags(pl):
+                term = ufl.inner(q, du("+")) * self.dS(tag)
+                extra = term if extra is None else extra + term
+        if self.ramp_weight:  # networks: statics ramps the weight too (from the pretension)
+            extra = F_ext if extra is None else F_ext + extra
+            F_ext = self.load_factor * extra
+        elif extra is not None:
             F_ext = F_ext + self.load_factor * extra
         self.F_external = F_ext
 
-        F_inertia = string.inertia_work(self.m, a, du)
+        F_inertia = string.inertia_work(self.m, a, du, c=cc)
         for pm in case.point_masses:
-            tag = self._node_tag[self.geometry.node_at(pm.s)]
-            F_inertia = F_inertia + pm.mass * ufl.inner(a("+"), du("+")) * self.dS(tag)
+            for tag in self._item_tags(pm):
+                F_inertia = F_inertia + pm.mass * ufl.inner(a("+"), du("+")) * self.dS(tag)
         self.F_inertia = F_inertia
 
         damp = case.damping
@@ -267,17 +290,19 @@ class CableModel:
             F_damp = self.alpha * ufl.replace(F_inertia, {a: v})
             if damp.beta > 0:
                 K0 = ufl.derivative(
-                    string.internal_work(self.u_static, du, t0, self.EA, self.tension_only),
+                    string.internal_work(self.u_static, du, t0, self.EA, self.tension_only,
+                                         c=cc),
                     self.u_static, dw)
                 F_damp = F_damp + self.beta * ufl.action(K0, v)
         elif damp.model == "axial" and damp.beta > 0:
-            F_damp = string.axial_damping_work(u, v, du, t0, self.EA, self.beta)
+            F_damp = string.axial_damping_work(u, v, du, t0, self.EA, self.beta, c=cc)
         self.F_damping = F_damp
 
         self.F_static = self.F_internal - self.F_external
         # the same with compression allowed: statics uses it to get off a guess on which
         # every element is slack (zero tangent stiffness under the tension-only law)
-        self.F_static_bilateral = string.internal_work(u, du, t0, self.EA, False) - F_ext
+        self.F_static_bilateral = string.internal_work(u, du, t0, self.EA, False,
+                                                       c=cc) - F_ext
         self.F_dynamic = F_inertia + self.F_internal - self.F_external
         if F_damp is not None:
             self.F_dynamic = self.F_dynamic + F_damp
@@ -310,15 +335,16 @@ class CableModel:
         self.j_dynamic = fem.form(self.J_dynamic)
         self.m_form = fem.form(self.M_form)
         self.tension_expr = fem.Expression(
-            string.tension(self.u, self.t0, self.EA, self.tension_only),
+            string.tension(self.u, self.t0, self.EA, self.tension_only, self.c),
             self.W.element.interpolation_points())
-        self.strain_expr = fem.Expression(string.axial_strain(self.u, self.t0),
+        self.strain_expr = fem.Expression(string.axial_strain(self.u, self.t0, self.c),
                                           self.W.element.interpolation_points())
         self.energy_forms = (
-            fem.form(0.5 * ufl.inner(self.v, self.v) * self.m * ufl.dx),
-            fem.form(string.strain_energy_density(self.u, self.t0, self.EA, self.tension_only)
+            fem.form(0.5 * ufl.inner(self.v, self.v) * self.c * self.m * ufl.dx),
+            fem.form(string.strain_energy_density(self.u, self.t0, self.EA, self.tension_only,
+                                                  self.c)
                      * ufl.dx),
-            fem.form(-ufl.inner(self.m * self.gravity, self.u) * ufl.dx))
+            fem.form(-ufl.inner(self.c * self.m * self.gravity, self.u) * ufl.dx))
 
     # ------------------------------------------------------------------ time
     def set_time(self, t: float) -> None:

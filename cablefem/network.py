@@ -123,3 +123,128 @@ def create_line_mesh(comm: MPI.Comm, points: np.ndarray, cells: np.ndarray) -> d
         x = np.zeros((0, 3), dtype=np.float64)
         c = np.zeros((0, 2), dtype=np.int64)
     return dmesh.create_mesh(comm, c, x, domain)
+
+
+# ---------------------------------------------------------------------------- networks
+@dataclass
+class NetworkMesh:
+    """A cable network read from a mesh file (identical on every rank).
+
+    Tag convention (gmsh physical groups, ``meshes/README.md``): every line cell belongs to
+    a 1D physical group naming its cable family (mapped to a section by the case's
+    ``[[cables]]``); anchors and point masses are 0D physical groups (one or more vertices
+    each). Nodes shared by cells of a cable or of several cables are junctions.
+    """
+
+    points: np.ndarray  #: (n, 3) node positions, m (the reference: pretensioned geometry)
+    cells: np.ndarray  #: (c, 2) node indices of the line cells
+    cell_group: np.ndarray  #: (c,) index into ``groups``
+    groups: list[str]  #: names of the 1D groups
+    vertex_groups: dict[str, np.ndarray]  #: 0D group name -> node indices
+    source: str = ""
+
+    @property
+    def junctions(self) -> np.ndarray:
+        """Nodes where three or more cells meet, or two cells of different groups."""
+        deg = np.bincount(self.cells.ravel(), minlength=len(self.points))
+        out = set(np.nonzero(deg >= 3)[0].tolist())
+        first = {}
+        for c, g in zip(self.cells, self.cell_group):
+            for k in c:
+                if first.setdefault(int(k), g) != g:
+                    out.add(int(k))
+        return np.array(sorted(out), dtype=np.int64)
+
+
+class MeshError(ValueError):
+    """A mesh file that cannot be used; ``.problems`` as for a case file: (key, message)."""
+
+    def __init__(self, problems: list[tuple[str, str]], source: str):
+        self.problems = problems
+        self.source = source
+        super().__init__("\n".join(f"{source}: {k}: {m}" for k, m in problems))
+
+
+def read_network_mesh(path) -> NetworkMesh:
+    """Read a gmsh file (``.msh``, via meshio) and check it: every line cell in a named 1D
+    group, no zero-length cell, no duplicate node, no 0D group without a vertex. Raises
+    :class:`MeshError` with every problem found."""
+    import meshio
+
+    path = str(path)
+    try:
+        mesh = meshio.read(path)
+    except Exception as err:  # noqa: BLE001 - any reader failure is a bad file
+        raise MeshError([("network.mesh", f"cannot read the mesh: {err}")], path) from None
+    problems: list[tuple[str, str]] = []
+    pts = np.asarray(mesh.points, dtype=float)
+    if pts.shape[1] == 2:
+        pts = np.column_stack([pts, np.zeros(len(pts))])
+    names_by_tag = {(int(v[1]), int(v[0])): str(k) for k, v in mesh.field_data.items()}
+    phys = mesh.cell_data.get("gmsh:physical")
+    if phys is None:
+        raise MeshError([("network.mesh", "no gmsh physical groups: tag the cables (1D) and "
+                                          "anchors (0D), see meshes/README.md")], path)
+    lines, line_tags, vgroups = [], [], {}
+    for block, tags in zip(mesh.cells, phys):
+        if block.type == "line":
+            lines.append(block.data)
+            line_tags.append(tags)
+        elif block.type == "vertex":
+            for node, tag in zip(block.data[:, 0], tags):
+                name = names_by_tag.get((0, int(tag)), f"point_{int(tag)}")
+                vgroups.setdefault(name, []).append(int(node))
+        else:
+            problems.append(("network.mesh", f"cell type {block.type!r} is not a cable "
+                                             "(only line and vertex cells)"))
+    if not lines:
+        raise MeshError([("network.mesh", "no line cells")], path)
+    cells = np.concatenate(lines).astype(np.int64)
+    tags = np.concatenate(line_tags)
+    groups = sorted({names_by_tag.get((1, int(t)), f"line_{int(t)}") for t in tags})
+    gidx = {g: i for i, g in enumerate(groups)}
+    cell_group = np.array([gidx[names_by_tag.get((1, int(t)), f"line_{int(t)}")]
+                           for t in tags])
+    unnamed = [g for g in groups if g.startswith("line_")]
+    if unnamed:
+        problems.append(("network.mesh", f"1D physical groups without a name: {unnamed}"))
+    scale = max(1.0, float(np.max(np.abs(pts))))
+    lengths = np.linalg.norm(pts[cells[:, 1]] - pts[cells[:, 0]], axis=1)
+    bad = np.nonzero(lengths <= 1e-12 * scale)[0]
+    if bad.size:
+        problems.append(("network.mesh", f"{bad.size} zero-length cell(s), e.g. cell "
+                                         f"{int(bad[0])} between nodes {cells[bad[0]].tolist()}"))
+    used = np.unique(cells)
+    from scipy.spatial import cKDTree
+
+    pairs = cKDTree(pts[used]).query_pairs(1e-9 * scale)
+    if pairs:
+        i, j = next(iter(pairs))
+        problems.append(("network.mesh", f"{len(pairs)} duplicate node(s), e.g. nodes "
+                                         f"{int(used[i])} and {int(used[j])} at "
+                                         f"{pts[used[i]].tolist()}: merge them (junctions "
+                                         "must share one node)"))
+    vg = {}
+    for name, nodes in vgroups.items():
+        nodes = np.unique(nodes)
+        off = np.setdiff1d(nodes, used)
+        if off.size:
+            problems.append((f"network.mesh[{name}]", f"{off.size} vertex(es) on no cable, "
+                                                      f"e.g. node {int(off[0])}"))
+        vg[name] = nodes
+    if problems:
+        raise MeshError(problems, path)
+    # keep only the nodes that cables use, renumbered
+    renum = -np.ones(len(pts), dtype=np.int64)
+    renum[used] = np.arange(used.size)
+    return NetworkMesh(pts[used], renum[cells], cell_group, groups,
+                       {k: renum[v] for k, v in vg.items()}, path)
+
+
+def connected_components(n_nodes: int, cells: np.ndarray) -> np.ndarray:
+    """Component label of every node (scipy's graph routines)."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components as cc
+
+    a = coo_matrix((np.ones(len(cells)), (cells[:, 0], cells[:, 1])), shape=(n_nodes, n_nodes))
+    return cc(a, directed=False)[1]

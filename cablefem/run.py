@@ -25,6 +25,7 @@ from .io import AnchorCSV, MomentsWriter, StringWriter, write_json, write_modes
 from .log import Progress
 from .modal import solve_modes
 from .model import CableModel
+from .netmodel import NetworkModel
 from .post import ANCHOR_COLUMNS, MOMENT_COLUMNS, anchor_moments, composite_field
 from .statics import solve_static
 
@@ -103,7 +104,8 @@ class _Emitter:
         self.omega = omega
         self.resume_after = resume_after
         self.clamped = [a for a in model.anchors if a.kind == "clamped"]
-        sec = model.case.section
+        self.network = getattr(model, "is_network", False)
+        sec = model.case.section  # the single cable's (a network: per anchor, below)
         self.EI, self.EA, self.m = sec.EI, sec.EA, sec.mass
         cols = ANCHOR_COLUMNS + (MOMENT_COLUMNS if self.clamped else [])
         self.times: list[float] = []
@@ -124,7 +126,9 @@ class _Emitter:
         # the composite field's stations, from the static layers (resolve half the static
         # layer length: tension can rise in dynamics); fixed for the run and its restarts
         self.stations = None
-        if self.clamped:
+        if self.clamped and self.network:
+            self._segments_setup(static_forces)
+        elif self.clamped:
             idx = {a.name: i for i, a in enumerate(model.anchors)}
             ells = [0.5 * self._moments(c, np.zeros(1), static_forces[idx[c.name]][None, :]
                                         )["layer_length"][0] for c in self.clamped]
@@ -157,17 +161,56 @@ class _Emitter:
                 for k in MOMENT_COLUMNS:
                     self.columns[name][k].append(num(row[k]))
 
-    def load_at(self, t: float) -> np.ndarray:
-        f = self.m * self.model.g_vec
+    def load_at(self, t: float, mass: float | None = None) -> np.ndarray:
+        """Distributed load per stress-free length at ``t``, weight included."""
+        f = (self.m if mass is None else mass) * self.model.g_vec
         for _, ld in self.model.loads:
             f = f + np.asarray(ld.value) * ld.time.value(t)
         return f
 
     def _moments(self, anc, times: np.ndarray, N: np.ndarray) -> dict:
+        sec = anc.section
         acc = np.array([anc.acceleration(t) for t in times])
-        load = np.array([self.load_at(t) for t in times])
-        return anchor_moments(N, anc.direction, self.EI, self.EA, self.m, acc, load,
+        load = np.array([self.load_at(t, sec.mass) for t in times])
+        return anchor_moments(N, anc.direction, sec.EI, sec.EA, sec.mass, acc, load,
                               self.model.length, self.omega, self.form)
+
+    # a network: one short line per clamped anchor in moments.xdmf -----------------------
+    def _segments_setup(self, static_forces: np.ndarray) -> None:
+        idx = {a.name: i for i, a in enumerate(self.model.anchors)}
+        self.sigmas = []
+        for c in self.clamped:
+            ell = self._moments(c, np.zeros(1), static_forces[idx[c.name]][None, :]
+                                )["layer_length"][0]
+            ell = ell if np.isfinite(ell) else 1e-3 * self.model.length
+            self.sigmas.append(asymptotics.graded_stations(10 * ell, [0.0], [0.5 * ell],
+                                                           n_span=5))
+        self.points0 = self._segments(0.0, static_forces, None)[0]
+        self.stations = np.concatenate(self.sigmas)
+
+    def _segments(self, t: float, forces: np.ndarray, layers: dict | None):
+        """Points, curvature and moment along each clamped anchor's layer at ``t``."""
+        idx = {a.name: i for i, a in enumerate(self.model.anchors)}
+        pts, kap, mom = [], [], []
+        for c, sig in zip(self.clamped, self.sigmas):
+            N = forces[idx[c.name]]
+            tang = N / np.linalg.norm(N) if np.linalg.norm(N) > 0 else c.direction
+            r0 = c.position + (c.motion.displacement(t) if c.motion is not None else 0.0)
+            pts.append(r0 + sig[:, None] * tang[None, :])
+            if layers is None:
+                continue
+            lay = layers[c.name]
+            if lay["slack"][0]:
+                k = np.zeros((sig.size, 3))
+            else:
+                k = asymptotics.curvature_profile(sig, lay["delta"][0], lay["layer_length"][0]
+                                                  )[:, None] * np.nan_to_num(lay["normal"][0])
+            kap.append(k)
+            mom.append(c.section.EI * k)
+        out = [np.concatenate(pts)]
+        if layers is not None:
+            out += [np.concatenate(kap), np.concatenate(mom)]
+        return out
 
     def add(self, t: float, forces: np.ndarray) -> None:
         """Record the anchor forces at ``t`` (written in batches)."""
@@ -212,6 +255,20 @@ class _Emitter:
         idx = {a.name: i for i, a in enumerate(m.anchors)}
         layers = {c.name: self._moments(c, np.array([t]), forces[idx[c.name]][None, :])
                   for c in self.clamped}
+        if self.network:
+            if self.moments is None:
+                cells = np.concatenate([np.column_stack([np.arange(s.size - 1),
+                                                         np.arange(1, s.size)]) + off
+                                        for s, off in zip(self.sigmas, np.cumsum(
+                                            [0] + [s.size for s in self.sigmas[:-1]]))])
+                self.moments = MomentsWriter(self.outdir / "moments.xdmf", self.points0,
+                                             m.comm, keep_until=self.resume_after,
+                                             cells=cells)
+            if self.resume_after is not None and t <= self.resume_after * (1 + 1e-12):
+                return
+            pos, kap, mom = self._segments(t, forces, layers)
+            self.moments.write(t, pos, kap, mom, self.stations)
+            return
         s_a = [m.geometry.stations[c.node] for c in self.clamped]
         r = self._nodal_positions()
         a = m.gather_nodal(m.a)
@@ -267,7 +324,7 @@ def run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *,
     if comm.rank == 0:
         outdir.mkdir(parents=True, exist_ok=True)
     comm.Barrier()
-    model = CableModel(case, comm)
+    model = NetworkModel(case, comm) if case.network is not None else CableModel(case, comm)
     t_build = time.perf_counter() - wall0
     groups = model.dimensionless_groups()
     log.info("%s: l = %.6g m, %d elements, eps = %s, eps_b = %s", case.title, model.length,
@@ -281,7 +338,7 @@ def run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *,
     static = solve_static(model)
     r = model.gather_nodal(model.u)
     sag = None
-    if comm.rank == 0 and case.gravity.g > 0:
+    if comm.rank == 0 and case.gravity.g > 0 and case.network is None:
         a0, a1 = model.anchors
         sag = static_sag_ratio(model.geometry.points + r, a0.position, a1.position,
                                np.asarray(case.gravity.direction, float))
@@ -406,14 +463,15 @@ def run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *,
     summary["anchors"] = {}
     for a in model.anchors:
         entry = {"kind": a.kind, "position": a.position,
+                 "section": _section_name(case, a.section),
                  "direction": a.direction if a.direction is not None else None,
                  "static_tension": float(np.linalg.norm(static.anchor_forces[
                      model.anchors.index(a)]))}
         if a.kind == "clamped":
             st = anchor_moments(static.anchor_forces[model.anchors.index(a)][None, :],
-                                a.direction, case.section.EI, case.section.EA,
-                                case.section.mass, np.zeros((1, 3)), emitter.load_at(0.0),
-                                model.length, None, form)
+                                a.direction, a.section.EI, a.section.EA,
+                                a.section.mass, np.zeros((1, 3)),
+                                emitter.load_at(0.0, a.section.mass), model.length, None, form)
             entry["static_moment"] = float(st["moment"][0])
             entry["static_moment_layer"] = float(st["moment_layer"][0])
             entry["static_delta"] = float(st["delta"][0])
@@ -458,6 +516,12 @@ def _checkpoint_time(outdir: Path, comm: MPI.Comm) -> float | None:
         return read_checkpoint(outdir, comm)["checkpoint"].time
     except ValueError:
         return None
+
+
+def _section_name(case: Case, section) -> str | None:
+    if case.network is None:
+        return None
+    return next((n for n, s in case.network.sections.items() if s is section), None)
 
 
 def _max_excitation(case: Case) -> float | None:

@@ -1,0 +1,179 @@
+"""Cable networks: closed forms on small networks, parallel = serial, XDMF read back, and
+bad meshes rejected with the key named (runs serially and under mpirun -n 2)."""
+
+from __future__ import annotations
+
+import json
+
+import meshio
+import numpy as np
+import pytest
+from mpi4py import MPI
+
+from cablefem.case import CaseError, parse_case
+from cablefem.dynamics import integrate
+from cablefem.modal import solve_modes
+from cablefem.netmodel import NetworkModel
+from cablefem.run import run_case
+from cablefem.statics import solve_static
+
+comm = MPI.COMM_WORLD
+
+
+def write_mesh(path, points, cells, cell_groups, vertex_groups):
+    """A gmsh file with named groups (rank 0 writes, everyone waits)."""
+    if comm.rank == 0:
+        names1 = sorted(set(cell_groups))
+        tag1 = {n: i + 1 for i, n in enumerate(names1)}
+        names0 = list(vertex_groups)
+        tag0 = {n: 100 + i for i, n in enumerate(names0)}
+        verts = [k for n in names0 for k in vertex_groups[n]]
+        vtags = [tag0[n] for n in names0 for _ in vertex_groups[n]]
+        field = {n: np.array([tag1[n], 1]) for n in names1}
+        field.update({n: np.array([tag0[n], 0]) for n in names0})
+        tags = [np.array([tag1[g] for g in cell_groups]), np.array(vtags)]
+        m = meshio.Mesh(np.asarray(points, float),
+                        [("line", np.asarray(cells)), ("vertex", np.array(verts)[:, None])],
+                        cell_data={"gmsh:physical": tags, "gmsh:geometrical": tags},
+                        field_data=field)
+        meshio.write(path, m, file_format="gmsh22", binary=False)
+    comm.Barrier()
+    return path
+
+
+def case_dict(mesh, cables, anchors, sections=None, g=0.0, **extra):
+    d = {"title": "net", "network": {"mesh": str(mesh)},
+         "sections": sections or [{"name": "s", "EA": 1.0e6, "EI": 1.0, "mass": 2.0}],
+         "cables": cables, "gravity": {"g": g},
+         "anchors": [{"name": a} for a in anchors]}
+    d.update(extra)
+    return d
+
+
+def test_cables_in_series_closed_form(mpi_tmp_path):
+    """Two cable families in series on a straight line (L = 10 m, 12 + 8 elements), EA1 =
+    1e6 N and EA2 = 4e6 N, pretensions 1e4 and 3e4 N (so the mesh is not in equilibrium at
+    the junction): with no gravity the tension is uniform and equals
+    T = (L - l1 - l2) / (l1/EA1 + l2/EA2) with l_i = L_i / (1 + T0_i/EA_i), exactly for
+    P1 elements (uniform strain per family); to Newton's tolerance 1e-10."""
+    x = np.linspace(0, 10.0, 21)
+    pts = np.column_stack([x, np.zeros_like(x), np.zeros_like(x)])
+    cells = np.column_stack([np.arange(20), np.arange(1, 21)])
+    groups = ["a"] * 12 + ["b"] * 8
+    mesh = write_mesh(str(mpi_tmp_path / "series.msh"), pts, cells, groups,
+                      {"ends": [0, 20]})
+    d = case_dict(mesh, [{"group": "a", "section": "s1", "pretension": 1e4},
+                         {"group": "b", "section": "s2", "pretension": 3e4}], ["ends"],
+                  sections=[{"name": "s1", "EA": 1e6, "EI": 1.0, "mass": 2.0},
+                            {"name": "s2", "EA": 4e6, "EI": 1.0, "mass": 2.0}])
+    model = NetworkModel(parse_case(d), comm)
+    st = solve_static(model)
+    l1, l2 = 6.0 / (1 + 1e4 / 1e6), 4.0 / (1 + 3e4 / 4e6)
+    T = (10.0 - l1 - l2) / (l1 / 1e6 + l2 / 4e6)
+    assert st.max_tension == pytest.approx(T, rel=1e-10)
+    assert st.min_tension == pytest.approx(T, rel=1e-10)
+    np.testing.assert_allclose(st.anchor_forces[0], [T, 0, 0], rtol=1e-10)
+    assert st.anchor_forces[1] == pytest.approx([-T, 0, 0], rel=1e-10)
+
+
+def fan_mesh(path, k=10):
+    """Three straight stays from a pylon head (x = 0) to the deck, different lengths."""
+    pts, cells, groups, top, bottom = [], [], [], [], []
+    for i, (xd, zt) in enumerate([(15.0, 60.0), (30.0, 58.5), (45.0, 57.0)]):
+        start = len(pts)
+        for t in np.linspace(0, 1, k + 1):
+            pts.append([0.5 + t * (xd - 0.5), 0.0, zt * (1 - t)])
+        cells += [[start + j, start + j + 1] for j in range(k)]
+        groups += [f"stay{i}"] * k
+        top.append(start)
+        bottom.append(start + k)
+    return write_mesh(path, pts, cells, groups, {"pylon": top, "deck": bottom})
+
+
+def fan_case(mesh, **extra):
+    return case_dict(mesh, [{"group": f"stay{i}", "section": "s", "pretension": 2e6}
+                            for i in range(3)], ["pylon", "deck"],
+                     sections=[{"name": "s", "EA": 9e8, "EI": 2e4, "mass": 37.0}], **extra)
+
+
+def test_weightless_fan_frequencies(mpi_tmp_path):
+    """Without gravity each stay is a taut string between fixed anchors with T = T0 exactly
+    (its mesh is its equilibrium): the lowest frequencies are the stays' first transverse
+    modes pi sqrt(T/m_c)/L (m_c = m/lambda per current length), each twice (two planes),
+    up to the consistent-mass error (pi/k)^2/24 = 4.1e-3 for k = 10 elements."""
+    mesh = fan_mesh(str(mpi_tmp_path / "fan.msh"))
+    model = NetworkModel(parse_case(fan_case(mesh)), comm)
+    solve_static(model)
+    om = solve_modes(model, 6).omegas
+    lam = 1 + 2e6 / 9e8
+    expected = []
+    for xd, zt in [(15.0, 60.0), (30.0, 58.5), (45.0, 57.0)]:
+        L = np.hypot(xd - 0.5, zt)
+        expected += [np.pi * np.sqrt(2e6 / (37.0 / lam)) / L] * 2
+    expected = np.sort(expected)
+    np.testing.assert_allclose(om, expected * (1 + (np.pi / 10) ** 2 / 24), rtol=3e-4)
+
+
+def test_network_parallel_equals_serial_and_xdmf(mpi_tmp_path):
+    """A fan with gravity and an elliptic pylon motion: anchor forces and moments of the
+    partitioned run equal the serial ones to 1e-9 relative (same equations, direct solvers,
+    Newton tolerance); string.xdmf holds the nodes and the field steps written."""
+    mesh = fan_mesh(str(mpi_tmp_path / "fan.msh"))
+    d = fan_case(mesh, g=9.81, dynamics={"t_end": 0.2, "dt": 0.005, "fields_every": 10})
+    d["anchors"][0]["motion"] = {"type": "ellipse", "omega": 6.0,
+                                 "axis_sin": [0.02, 0, 0], "axis_cos": [0, 0.01, 0]}
+    case = parse_case(d)
+    hist = []
+    for c in (comm, MPI.COMM_SELF):
+        model = NetworkModel(case, c)
+        st = solve_static(model)
+        hist.append([st.anchor_forces] + [f.copy() for _, f in integrate(model, 0.2, 0.005,
+                                                                            0.9, 10)])
+    np.testing.assert_allclose(np.array(hist[0]), np.array(hist[1]), rtol=0,
+                               atol=1e-9 * 2e6)
+    out = mpi_tmp_path / "fanrun"
+    res = run_case(case, out, comm, figures=False, progress=False)
+    assert res.summary["status"] == "completed"
+    assert len(res.forces) == 6 and all(n.split(":")[0] in ("pylon", "deck")
+                                        for n in res.forces)
+    if comm.rank == 0:
+        import h5py
+
+        with h5py.File(out / "string.h5") as h5:
+            steps = h5["Function/displacement"]
+            assert len(steps) == 1 + 40 // 10  # t = 0 and every 10 steps of 40
+            first = steps[sorted(steps)[0]][()]
+            assert first.shape == (33, 3)  # 3 stays x 11 nodes
+        s = json.loads((out / "summary.json").read_text())
+        assert s["anchors"]["pylon:0"]["section"] == "s"
+        assert np.isfinite(s["anchors"]["pylon:0"]["static_moment"])
+
+
+@pytest.mark.parametrize("defect,key", [
+    ("duplicate", "duplicate node"), ("zero", "zero-length"), ("floating", "held by no anchor"),
+    ("offcable", "on no cable"), ("nogroup", "no [[cables]] entry")])
+def test_bad_meshes_rejected(mpi_tmp_path, defect, key):
+    """Bad meshes end in a CaseError naming network.mesh (or the table) and the defect."""
+    pts = [[0, 0, 0], [1, 0, 0], [2, 0, 0], [3, 0, 0]]
+    cells = [[0, 1], [1, 2], [2, 3]]
+    groups = ["a", "a", "a"]
+    vg = {"ends": [0, 3]}
+    if defect == "duplicate":
+        pts.append([1, 0, 0])
+        cells[1] = [4, 2]
+    elif defect == "zero":
+        pts[2] = [1, 0, 0]
+    elif defect == "floating":
+        pts += [[0, 1, 0], [1, 1, 0]]
+        cells.append([4, 5])
+        groups.append("a")
+    elif defect == "offcable":
+        pts.append([5, 5, 5])
+        vg["stray"] = [4]
+    elif defect == "nogroup":
+        groups[2] = "b"
+    mesh = write_mesh(str(mpi_tmp_path / f"{defect}.msh"), pts, cells, groups, vg)
+    d = case_dict(mesh, [{"group": "a", "section": "s", "pretension": 1e3}], ["ends"])
+    with pytest.raises(CaseError) as err:
+        NetworkModel(parse_case(d), comm)
+    assert key in str(err.value)
