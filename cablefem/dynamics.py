@@ -36,7 +36,8 @@ from petsc4py import PETSc
 
 from .anchors import AnchorForces
 from .petsc_utils import (SNESHistory, assemble_jacobian_rows, assemble_residual_rows,
-                          case_options, copy_in, default_options, lu_options)
+                          case_options, copy_in, default_options,
+                          linear_solver_options)
 
 __all__ = ["Checkpoint", "DynamicsError", "DynamicsStats", "Interrupted", "integrate"]
 
@@ -90,8 +91,13 @@ def _make_ts(model, dt: float, rho_inf: float, history: SNESHistory):
     defaults = {"ts_type": "alpha2", "ts_alpha_radius": rho_inf, "ts_max_reject": 0,
                 "ts_max_snes_failures": -1, "snes_type": "newtonls",
                 "snes_linesearch_type": "basic", "snes_rtol": 1e-9,
-                "snes_atol": 1e-11 * scale, "snes_stol": 0.0, "snes_max_it": 25,
-                **lu_options(model.comm.size)}
+                "snes_atol": 1e-11 * scale, "snes_max_it": 25,
+                # large networks: the residual's round-off floor (stiffness x position
+                # round-off, summed over the dofs) can exceed atol; a relative update of
+                # 1e-13 is converged
+                "snes_stol": 1e-13,
+                **linear_solver_options(3 * model.V.dofmap.index_map.size_global,
+                                        model.comm.size)}
 
     n_owned = model.V.dofmap.index_map.size_local
     bc_rows = np.concatenate([a.flat_dofs for a in model.anchors]).astype(np.int32)
@@ -116,6 +122,9 @@ def _make_ts(model, dt: float, rho_inf: float, history: SNESHistory):
     ts.setOptionsPrefix(prefix)
     ts.setType(PETSc.TS.Type.ALPHA2)
     ts.setI2Function(I2Function, F_vec)
+    # zeroing the anchor rows must keep the sparsity pattern: otherwise every assembly
+    # changes it and every factorisation redoes its symbolic phase (and allocates)
+    J_mat.setOption(PETSc.Mat.Option.KEEP_NONZERO_PATTERN, True)
     ts.setI2Jacobian(I2Jacobian, J_mat)
     ts.setTimeStep(dt)
     ts.setExactFinalTime(PETSc.TS.ExactFinalTime.MATCHSTEP)
