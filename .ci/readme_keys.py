@@ -9,8 +9,10 @@ from cablefem.case import format_case_reference
 
 readme = Path(__file__).resolve().parents[1] / "README.md"
 text = readme.read_text()
-head, rest = text.split("<!-- case-keys:start -->")
-_, tail = rest.split("<!-- case-keys:end -->")
-table = format_case_reference(markdown=True).strip()
-readme.write_text(f"{head}<!-- case-keys:start -->\n{table}\n<!-- case-keys:end -->{tail}")
+for marker, network in (("case-keys", False), ("network-keys", True)):
+    head, rest = text.split(f"<!-- {marker}:start -->")
+    _, tail = rest.split(f"<!-- {marker}:end -->")
+    table = format_case_reference(markdown=True, network=network).strip()
+    text = f"{head}<!-- {marker}:start -->\n{table}\n<!-- {marker}:end -->{tail}"
+readme.write_text(text)
 print(f"updated {readme}")

@@ -23,6 +23,32 @@ __all__ = ["run_fatigue"]
 log = logging.getLogger(__name__)
 
 
+def _stress_section(spec, section) -> StressSection:
+    if spec.area is not None:
+        return StressSection.effective(spec.area, spec.modulus)
+    if section.diameter is None:
+        raise ValueError("stresses need section.diameter (or fatigue.area and "
+                         "fatigue.modulus)")
+    return StressSection.solid_circle(section.diameter)
+
+
+def _anchor_sections(case: Case, rundir: Path, names: list[str]) -> dict:
+    """The Section of every anchor: the case's for a single cable; for a network the one
+    that the run's summary.json names for the anchor."""
+    if case.network is None:
+        return {n: case.section for n in names}
+    import json
+
+    summary = json.loads((rundir / "summary.json").read_text())
+    out = {}
+    for n in names:
+        sec = summary.get("anchors", {}).get(n, {}).get("section")
+        if sec not in case.network.sections:
+            raise ValueError(f"{rundir}/summary.json names no known section for anchor {n}")
+        out[n] = case.network.sections[sec]
+    return out
+
+
 def run_fatigue(case: Case, rundir: Path, outdir: Path | None = None, *,
                 window: str | None = None, invalid: str = "raise",
                 comm: MPI.Comm = MPI.COMM_WORLD) -> dict:
@@ -38,28 +64,31 @@ def run_fatigue(case: Case, rundir: Path, outdir: Path | None = None, *,
     reports, error = None, None
     if comm.rank == 0:
         try:
-            if spec.area is not None:
-                section = StressSection.effective(spec.area, spec.modulus)
-            else:
-                section = StressSection.solid_circle(case.section.diameter)
             curve = SNCurve(spec.detail_category, spec.m1, spec.m2, spec.knee, spec.N_C,
                             spec.N_knee, spec.N_cutoff)
             data = read_anchor_csv(Path(rundir) / "anchors.csv")
-            clamped = [a.name for a in case.anchors if a.kind == "clamped"]
-            missing = [n for n in clamped if n not in data]
-            if missing:
-                raise ValueError(f"{rundir}/anchors.csv has no rows for the clamped anchors "
-                                 f"{missing}")
+            groups = {a.name for a in case.anchors if a.kind == "clamped"}
+            if case.network is None:
+                clamped = sorted(groups)
+                missing = [n for n in clamped if n not in data]
+                if missing:
+                    raise ValueError(f"{rundir}/anchors.csv has no rows for the clamped "
+                                     f"anchors {missing}")
+            else:  # network anchors are "group:k"
+                clamped = [n for n in data if n.split(":")[0] in groups]
+            sections = _anchor_sections(case, Path(rundir), clamped)
             reports = {}
             for name in clamped:
                 d = data[name]
                 M = d.get("moment_vector", d["moment"])
                 reports[name] = fatigue_report(
-                    d["time"], d["tension"], M, d["valid"], section, curve,
-                    invalid=invalid, window=None if (window or spec.window) == "all" else
-                    "steady", fibres=spec.fibres, anchor=name)
+                    d["time"], d["tension"], M, d["valid"], _stress_section(spec,
+                                                                            sections[name]),
+                    curve, invalid=invalid, window=None if (window or spec.window) == "all"
+                    else "steady", fibres=spec.fibres, anchor=name)
             outdir.mkdir(parents=True, exist_ok=True)
-            write_report(outdir, reports, curve, section, spec.units)
+            first = _stress_section(spec, sections[clamped[0]]) if clamped else None
+            write_report(outdir, reports, curve, first, spec.units)
             for name, rep in reports.items():
                 log.info("fatigue at %s: damage %.4g over %.4g time units, time to failure "
                          "%s", name, rep.get("damage", np.nan), rep.get("duration", np.nan),

@@ -11,6 +11,9 @@ from mpi4py import MPI
 
 __all__ = ["anchor_figures", "is_spatial"]
 
+#: at most this many anchors in a figure: those with the largest moment
+MAX_PANELS = 8
+
 
 def is_spatial(psi0: np.ndarray, valid: np.ndarray) -> bool:
     """True when the bending plane turns: its azimuth ψ0, taken modulo π (a plane is a line:
@@ -26,8 +29,14 @@ def is_spatial(psi0: np.ndarray, valid: np.ndarray) -> bool:
 
 def anchor_figures(outdir: Path, times: np.ndarray, moments: dict[str, dict[str, np.ndarray]],
                    comm: MPI.Comm = MPI.COMM_WORLD, fraction: float = 1 / 3) -> list[str]:
-    """Draw the figures; returns their file names (on every rank)."""
+    """Draw the figures (at most :data:`MAX_PANELS` anchors: the most loaded); returns their
+    file names (on every rank)."""
     names: list[str] = []
+    if len(moments) > MAX_PANELS:  # a network: the most loaded anchors
+        peak = {n: np.nanmax(np.where(mo["valid"] > 0, mo["moment"], np.nan), initial=0.0)
+                for n, mo in moments.items()}
+        keep = sorted(peak, key=peak.get, reverse=True)[:MAX_PANELS]
+        moments = {n: moments[n] for n in keep}
     if comm.rank == 0:
         import matplotlib
 
@@ -56,7 +65,7 @@ def anchor_figures(outdir: Path, times: np.ndarray, moments: dict[str, dict[str,
             ax.legend(loc="upper left", fontsize=7)
         axes[-1, 0].set_xlabel("time t")
         fig.suptitle("Bending moment at the clamped anchors: inner solution + string curvature")
-        fig.tight_layout()
+        fig.tight_layout(rect=(0, 0, 1, 1 - 0.35 / fig.get_figheight()))
         fig.savefig(outdir / "anchor_moments.png", dpi=130)
         plt.close(fig)
         names.append("anchor_moments.png")

@@ -47,6 +47,9 @@ def run_post(case: Case, forces_csv: Path, outdir: Path, form: str = "exact",
              comm: MPI.Comm = MPI.COMM_WORLD) -> dict:
     """Post-process ``forces_csv`` with ``case``; raises ValueError on bad input."""
     t0 = time.perf_counter()
+    if case.network is not None:
+        raise ValueError(f"{case.source}: 'cablefem post' takes single-cable cases; for a "
+                         "network, its anchor forces come from 'cablefem run'")
     hist = read_anchor_forces(forces_csv)
     names = [a.name for a in case.anchors]
     unknown = sorted(set(hist.forces) - set(names))
