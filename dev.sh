@@ -11,6 +11,11 @@ case "${1:-}" in
   demo-spatial)
     bash .ci/setup
     exec "$PY" demos/demo_paper_spatial.py --output "${OUT:-output}/paper_spatial" ;;
+  demo-large)  # a 108 360-dof cable-net roof on ${NP:-2} MPI ranks -> output/roof_large
+    bash .ci/setup
+    [ -f meshes/roof_large.msh ] || "$PY" meshes/make_roof.py --n 42 --k 10 --out meshes/roof_large.msh
+    export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
+    exec mpirun -n "${NP:-2}" .venv/bin/cablefem run demos/roof_large.toml --output "${OUT:-output}/roof_large" ;;
   test)      # serial suite, then the same suite on 2 MPI ranks
     bash .ci/setup
     "$PY" -m pytest -q -p no:cacheprovider tests
@@ -24,6 +29,6 @@ case "${1:-}" in
     bash .ci/setup
     exec "$PY" benchmarks/bench_string.py ;;
   *)
-    echo "usage: ./dev.sh demo|demo-spatial|test|test-slow|bench" >&2
+    echo "usage: ./dev.sh demo|demo-spatial|demo-large|test|test-slow|bench" >&2
     exit 2 ;;
 esac

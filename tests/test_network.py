@@ -177,3 +177,34 @@ def test_bad_meshes_rejected(mpi_tmp_path, defect, key):
     with pytest.raises(CaseError) as err:
         NetworkModel(parse_case(d), comm)
     assert key in str(err.value)
+
+
+def test_point_load_on_vertex_group(mpi_tmp_path):
+    """A weightless cable (L = 10 m, 10 elements, EA = 1e6 N, pretension 1e4 N) with a point
+    load P = 2e3 N down at its middle vertex (a 0D group): both halves stay straight, so the
+    P1 solution is exact: with half-chord s = sqrt((L/2)^2 + d^2), T = EA (s / (c L/2) - 1)
+    and 2 T d / s = P (c = 1/(1 + T0/EA)); d from a scalar root, to Newton's tolerance."""
+    from scipy.optimize import brentq
+
+    x = np.linspace(0, 10.0, 11)
+    pts = np.column_stack([x, np.zeros_like(x), np.zeros_like(x)])
+    cells = np.column_stack([np.arange(10), np.arange(1, 11)])
+    mesh = write_mesh(str(mpi_tmp_path / "load.msh"), pts, cells, ["a"] * 10,
+                      {"ends": [0, 10], "mid": [5]})
+    d = case_dict(mesh, [{"group": "a", "section": "s", "pretension": 1e4}], ["ends"],
+                  point_loads=[{"group": "mid", "value": [0, 0, -2e3]}])
+    model = NetworkModel(parse_case(d), comm)
+    st = solve_static(model)
+    c, P, EA = 1 / (1 + 1e4 / 1e6), 2e3, 1e6
+
+    def residual(dd):
+        s = np.hypot(5.0, dd)
+        return 2 * EA * (s / (c * 5.0) - 1) * dd / s - P
+
+    dd = brentq(residual, 1e-9, 5.0, xtol=1e-15)
+    s = np.hypot(5.0, dd)
+    T = EA * (s / (c * 5.0) - 1)
+    np.testing.assert_allclose(st.anchor_forces[0], [T * 5.0 / s, 0, -T * dd / s], rtol=1e-9)
+    u = model.gather_nodal(model.u)
+    if comm.rank == 0:
+        assert u[5, 2] == pytest.approx(-dd, rel=1e-9)
