@@ -1,8 +1,10 @@
 """Output: XDMF for ParaView, CSV histories and the JSON summary, MPI-correct.
 
 * ``string.xdmf`` (+ ``.h5``): displacement, velocity (P1, point data), tension and strain
-  (DG0, cell data) over time, written collectively by dolfinx. The mesh is the stress-free
-  reference; in ParaView apply *Warp By Vector* with ``displacement`` to see the cable.
+  (DG0, cell data) over time, written collectively by dolfinx (each function a grid of its
+  own, which ParaView shows as separate blocks), and the same fields as one dataset per
+  time in ``string.pvd`` (+ ``.vtu``/``.pvtu``), the file to open in ParaView. The mesh is
+  the reference; apply *Warp By Vector* with ``displacement`` to see the cable move.
 * ``moments.xdmf`` (+ ``.h5``): the composite curvature and bending moment on a line mesh of
   its own, graded towards the clamped anchors, written by rank 0 with meshio from gathered
   data. Points are the static deformed positions; ``displacement`` moves them to the
@@ -17,11 +19,12 @@ from __future__ import annotations
 import json
 import math
 import os
+import re
 from pathlib import Path
 
 import numpy as np
 from dolfinx import fem
-from dolfinx.io import XDMFFile
+from dolfinx.io import VTKFile, XDMFFile
 from mpi4py import MPI
 
 __all__ = ["StringWriter", "AnchorCSV", "MomentsWriter", "write_json", "write_modes",
@@ -73,6 +76,14 @@ class StringWriter:
             self.file.write_mesh(model.mesh)
         self.tension = fem.Function(model.W, name="tension")
         self.strain = fem.Function(model.W, name="strain")
+        # the same fields as one dataset per time (ParaView shows the XDMF's functions as
+        # separate blocks): string.pvd, or string_restart.pvd when a run is resumed
+        pvd = Path(path).with_suffix(".pvd")
+        if append_after is not None:
+            pvd = pvd.with_name(pvd.stem + "_restart.pvd")
+        self.vtk = VTKFile(model.comm, str(pvd), "w")
+        self._pvd = pvd
+        self._vtk_count = 0
 
     def write(self, t: float) -> None:
         m = self.model
@@ -85,9 +96,17 @@ class StringWriter:
                 raise FloatingPointError(f"non-finite {f.name} at t = {t:g}: not written")
         for f in (m.u, m.v, self.tension, self.strain):
             self.file.write_function(f, t)
+        self.vtk.write_function([m.u, m.v, self.tension, self.strain], t)
+        # dolfinx 0.5.2 lists each rank's .vtu once per function in the .pvtu: ParaView
+        # would load as many overlapping copies; keep one entry per piece
+        m.comm.Barrier()
+        if m.comm.rank == 0:
+            _dedupe_pieces(self._pvd.with_name(f"{self._pvd.stem}{self._vtk_count:06d}.pvtu"))
+        self._vtk_count += 1
 
     def close(self) -> None:
         self.file.close()
+        self.vtk.close()
 
     def __enter__(self):
         return self
@@ -188,11 +207,42 @@ class MomentsWriter:
 
             self.writer.h5_file.flush()
             meshio.xdmf.time_series.write_xml(self.writer.filename, self.writer.xdmf_file)
+            _patch_polyline(self.writer.filename)
 
     def close(self) -> None:
         if self.writer is not None:
             self.writer.__exit__(None, None, None)
+            _patch_polyline(self.writer.filename)
             self.writer = None
+
+
+def _dedupe_pieces(path: Path) -> None:
+    """Remove repeated ``<Piece Source=...>`` lines of a .pvtu file (atomically)."""
+    if not path.is_file():
+        return
+    seen, out = set(), []
+    for line in path.read_text().splitlines(keepends=True):
+        if "<Piece " in line:
+            if line.strip() in seen:
+                continue
+            seen.add(line.strip())
+        out.append(line)
+    tmp = path.with_suffix(".pvtu.tmp")
+    tmp.write_text("".join(out))
+    os.replace(tmp, path)
+
+
+def _patch_polyline(path: Path) -> None:
+    """meshio writes line cells as a ``Polyline`` topology without ``NodesPerElement``;
+    ParaView's XDMF3 reader aborts on that: add ``NodesPerElement="2"``."""
+    path = Path(path)
+    text = path.read_text()
+    fixed = re.sub(r'TopologyType="Polyline"(?![^>]*NodesPerElement)',
+                   'TopologyType="Polyline" NodesPerElement="2"', text)
+    if fixed != text:
+        tmp = path.with_suffix(path.suffix + ".tmp")
+        tmp.write_text(fixed)
+        os.replace(tmp, path)
 
 
 def _read_frames(path: Path, t_max: float) -> list[tuple[float, dict]]:
