@@ -21,7 +21,6 @@ from dataclasses import dataclass
 import numpy as np
 from dolfinx import fem
 from dolfinx.fem import petsc as fpetsc
-from petsc4py import PETSc
 from slepc4py import SLEPc
 
 from .petsc_utils import case_options, default_options, lu_options

@@ -21,7 +21,7 @@ from petsc4py import PETSc
 from . import catenary, string
 from .case import Case, CaseError
 from .motion import Motion
-from .network import CableGeometry, create_line_mesh, polyline_cable, straight_cable, \
+from .network import create_line_mesh, polyline_cable, straight_cable, \
     graded_stations
 
 __all__ = ["CableModel", "AnchorBC"]
