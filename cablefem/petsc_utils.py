@@ -35,8 +35,11 @@ def linear_solver_options(n_dofs: int, comm_size: int = 1) -> dict[str, object]:
     (``benchmarks/bench_scaling.py``). Measured and rejected on these axially stiff,
     anisotropic systems: algebraic multigrid (GAMG, BoomerAMG: 10-25 times slower),
     block-Jacobi/ILU and additive Schwarz (hundreds of GMRES iterations on 2 ranks), a
-    lagged MUMPS (its solves cost 33 ms at 1e5 dofs). Override with ``-cable_ksp_type``,
-    ``-cable_pc_type``, ``-cable_snes_lag_preconditioner``.
+    lagged MUMPS (its solves cost 33 ms at 1e5 dofs). Open: MUMPS on 2 ranks (0.49 s per
+    step at 1e5 dofs) is slower than PETSc's serial LU (0.19 s) although two independent
+    serial runs on this 2-core machine take 0.20 s each: a parallel solver that scales here
+    is still to be found (a Schur complement on the partition interface is a candidate).
+    Override with ``-cable_ksp_type``, ``-cable_pc_type``, ``-cable_snes_lag_preconditioner``.
     """
     if n_dofs <= LARGE_ABOVE or comm_size > 1:
         return lu_options(comm_size)
