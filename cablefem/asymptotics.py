@@ -29,7 +29,7 @@ from numpy.typing import ArrayLike
 __all__ = [
     "AnchorLayer", "anchor_frame", "layer", "angle_profile", "curvature_profile",
     "moment_profile", "exact_angle_profile", "exact_curvature_profile", "string_curvature",
-    "composite_curvature", "graded_stations", "dimensionless_groups",
+    "composite_curvature", "graded_stations",
 ]
 
 #: ``|c x t|`` below this: the bending plane (step 4) is undefined.
@@ -388,21 +388,3 @@ def graded_stations(length: float, anchor_s: ArrayLike, ells: ArrayLike, *,
     k = np.ceil(np.diff(g) / h * (1 - 1e-12)).astype(int)     # gaps > h: equal parts <= h
     fill = [g[i] + (g[i + 1] - g[i]) * np.arange(1, k[i]) / k[i] for i in np.flatnonzero(k > 1)]
     return np.sort(np.concatenate([g, *fill]))
-
-
-def dimensionless_groups(EA: float, EI: float, GJ: float, w: float, length: float,
-                         g: float) -> dict[str, float]:
-    """The paper's dimensionless groups and units (section 2.3, physics.md section 1).
-
-    Returns "epsilon" = sqrt(EI/(w l^3)) (and "epsilon2" = its square), "epsilon_b" =
-    w l/EA (NOTES.md item 1: the paper's wl/EI is a slip), "gamma" = GJ/EI, "time_unit" =
-    sqrt(l/g) [s], "force_unit" = w l [N], "moment_unit" = w l^2 [N m]. SI inputs: EA [N],
-    EI, GJ [N m^2], w [N/m], length [m], g [m/s^2].
-    """
-    if not (EI > 0 and EA > 0 and w > 0 and length > 0 and g > 0):
-        raise ValueError("EA, EI, w, length and g must be positive")
-    eps2 = EI / (w * length**3)
-    return {"epsilon": float(np.sqrt(eps2)), "epsilon2": float(eps2),
-            "epsilon_b": float(w * length / EA), "gamma": float(GJ / EI),
-            "time_unit": float(np.sqrt(length / g)), "force_unit": float(w * length),
-            "moment_unit": float(w * length**2)}

@@ -434,19 +434,3 @@ def test_composite_ignores_slack_and_vectorises_over_time():
     for i in range(3):
         one = asy.composite_curvature(K[i], sig, D[i], lay.layer_length, lay.normal)
         np.testing.assert_allclose(full[i], one, rtol=1e-15, atol=0)
-
-
-# ------------------------------------------------------------- dimensionless groups
-
-def test_dimensionless_groups_case_A():
-    # physics.md section 7: EI = eps^2 = 4e-4 -> eps = 0.02; EA = 17857.14 -> eps_b =
-    # 5.6e-5 (printed to 2 digits: half a unit, 0.05e-5). NOTES.md item 1: eps_b = wl/EA.
-    g = asy.dimensionless_groups(EA=17857.14, EI=4e-4, GJ=3e-4, w=1.0, length=1.0, g=1.0)
-    assert g["epsilon"] == pytest.approx(0.02, rel=1e-14)
-    assert abs(g["epsilon_b"] - 5.6e-5) <= 0.05e-5
-    assert g["gamma"] == pytest.approx(0.75, rel=1e-15)
-    # SI: a 100 m cable of w = 50 N/m under g = 9.81: units w l, w l^2, sqrt(l/g)
-    si = asy.dimensionless_groups(EA=2e9, EI=5e4, GJ=4e4, w=50.0, length=100.0, g=9.81)
-    assert si["force_unit"] == 5e3 and si["moment_unit"] == 5e5
-    assert si["time_unit"] == pytest.approx(np.sqrt(100 / 9.81), rel=1e-15)
-    assert si["epsilon"] ** 2 == pytest.approx(5e4 / (50 * 100**3), rel=1e-14)
