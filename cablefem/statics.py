@@ -4,7 +4,8 @@ Start: the elastic catenary through the anchors (exact for the bare cable up to 
 discretisation, :mod:`cablefem.catenary`). If Newton fails from there, the *extra* loads
 (point masses' weight, point loads, distributed loads beyond the cable's own weight) are
 ramped by load continuation from the bare-cable catenary (where they are zero and the guess
-is an equilibrium) to their full value, with an adaptive load increment.
+is an equilibrium) to their full value, with an adaptive load increment. A network's guess
+is its pretensioned mesh, an equilibrium without gravity: there the weight is ramped too.
 
 PETSc options prefix: ``<model prefix>static_`` (default ``cable_static_``).
 """
@@ -112,7 +113,9 @@ def solve_static(model, max_continuation_steps: int = 200) -> StaticResult:
     if not ok:
         log.info("statics: Newton failed from the catenary (%s); load continuation",
                  history.text())
-        has_extra = bool(model.case.point_masses or model.case.point_loads or model.case.loads)
+        # what load_factor scales: the extra loads, and for a network the weight as well
+        has_extra = bool(model.case.point_masses or model.case.point_loads or model.case.loads
+                         or model.ramp_weight)
         if not has_extra:
             raise StaticError(
                 "static equilibrium not found: Newton failed from the elastic catenary and "
