@@ -38,7 +38,11 @@ def linear_solver_options(n_dofs: int, comm_size: int = 1) -> dict[str, object]:
     lagged MUMPS (its solves cost 33 ms at 1e5 dofs). Open: MUMPS on 2 ranks (0.49 s per
     step at 1e5 dofs) is slower than PETSc's serial LU (0.19 s) although two independent
     serial runs on this 2-core machine take 0.20 s each: a parallel solver that scales here
-    is still to be found (a Schur complement on the partition interface is a candidate).
+    is still to be found. Tried in an experiment (not in the code): PCFIELDSPLIT Schur on the
+    partition interface (dofs of cells shared between ranks: 270 at 1e5 dofs; the interior
+    block is block-diagonal across ranks, so bjacobi/LU solves it exactly), exact Schur
+    complement, preconditioner lagged 20: 0.21 s per step on 2 ranks against 0.18 s for the
+    serial default (0.018 s against 0.039 s with MUMPS at 9e3 dofs): the most promising.
     Override with ``-cable_ksp_type``, ``-cable_pc_type``, ``-cable_snes_lag_preconditioner``.
     """
     if n_dofs <= LARGE_ABOVE or comm_size > 1:
