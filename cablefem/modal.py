@@ -37,10 +37,6 @@ class ModalResult:
     labels: list[dict]  #: classification of each mode
     wall_time: float
 
-    @property
-    def frequencies_hz(self) -> np.ndarray:
-        return self.omegas / (2 * np.pi)
-
 
 def classify_mode(stations: np.ndarray, shape: np.ndarray, chord: np.ndarray,
                   gravity_dir: np.ndarray | None, level: bool) -> dict:
