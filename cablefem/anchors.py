@@ -60,7 +60,7 @@ class AnchorForces:
         m.a.x.array[:] = 0.0
         for anc in m.anchors:
             if anc.dofs.size:
-                m.a.x.array[anc.flat_dofs] = np.tile(anc.acceleration(t), anc.dofs.size)
+                m.a.x.array[anc.flat_dofs] = anc.prescribed("acceleration", t)
         self._assemble()
         self.R.scale(-1.0)
         self.R.copy(self.rhs)
@@ -74,7 +74,8 @@ class AnchorForces:
         m.a.vector.ghostUpdate(addv=INSERT, mode=FORWARD)
 
     def compute(self, t: float, dynamic: bool = True) -> np.ndarray:
-        """Anchor forces ``N_a`` (n_anchors, 3) in N, identical on every rank.
+        """Anchor forces ``N_a`` (n_anchors, 3) in N, identical on every rank; for a beam
+        (n_anchors, 6): force and moment (N m, the rod's internal moment at the anchor).
 
         With ``dynamic=False`` velocity and acceleration are taken as zero (statics).
         In dynamics the residual is linear in the acceleration, so the anchor rows of
@@ -91,9 +92,12 @@ class AnchorForces:
             self._assemble()
             arr = self.R.array_r
         n_owned = m.V.dofmap.index_map.size_local
-        local = np.zeros((len(m.anchors), 3))
+        bs = m.bs
+        local = np.zeros((len(m.anchors), bs))
         for i, anc in enumerate(m.anchors):
             own = anc.dofs[anc.dofs < n_owned]
             if own.size:
-                local[i] = -arr[3 * own[0]: 3 * own[0] + 3]
+                local[i] = -arr[bs * own[0]: bs * own[0] + bs]
+                if bs == 6:  # a rod: the rotation rows' reaction -> the moment (beam.py)
+                    local[i, 3:] = anc.moment_map @ local[i, 3:]
         return m.comm.allreduce(local, op=MPI.SUM)

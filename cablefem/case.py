@@ -19,7 +19,7 @@ import os
 import re
 import textwrap
 import tomllib
-from dataclasses import dataclass, fields, is_dataclass
+from dataclasses import dataclass, field, fields, is_dataclass
 from pathlib import Path
 from typing import Any, NamedTuple
 
@@ -34,7 +34,7 @@ __all__ = [
     "CaseError", "CASE_KEYS", "KeyDoc", "TableDoc", "REQUIRED", "format_case_reference",
     "load_case", "parse_case", "rayleigh_coefficients", "Gravity", "Geometry", "MeshSpec",
     "Anchor", "DistributedLoad", "PointMass", "PointLoad", "Damping", "DynamicsSpec",
-    "ModalSpec", "SolverSpec", "Case",
+    "ModalSpec", "SolverSpec", "BeamSpec", "Case",
 ]
 
 
@@ -218,6 +218,17 @@ CASE_KEYS: dict[str, KeyDoc | TableDoc] = {
     }),
     "modal": TableDoc("table", None, "", "Modal analysis about the static equilibrium.", {
         "modes": KeyDoc("integer", 6, "-", "Number of modes, >= 1."),
+    }),
+    "beam": TableDoc("table", None, "", "Mesh and section of the reference rod model "
+                     "('cablefem run --model beam'); the string ignores it.", {
+        "layer_elements": KeyDoc("number", 8.0, "-", "Elements per layer length l_a at a "
+                                 "clamped anchor (end element l_a/n), 0.5 to 1000."),
+        "growth": KeyDoc("number", 1.1, "-", "Size ratio of neighbouring elements away from "
+                         "a clamp, 1 < g <= 2."),
+        "span_elements": KeyDoc("integer", 100, "-", "Longest element: l/n, 1 to 1_000_000."),
+        "shear_stiffness": KeyDoc("number", None, "N", "GA, > 0; default 1e5 times the "
+                                  "largest catenary tension or EI/l^2 (unshearable in "
+                                  "effect)."),
     }),
     "solver": TableDoc("table", None, "", "Solver settings.", {
         "tension_only": KeyDoc("boolean", True, "", "No compression: T = EA max(v3, 0)."),
@@ -460,6 +471,16 @@ class FatigueSpec:
 
 
 @dataclass
+class BeamSpec:
+    """Mesh grading and shear stiffness of the reference rod (:mod:`cablefem.beam`)."""
+
+    layer_elements: float = 8.0
+    growth: float = 1.1
+    span_elements: int = 100
+    shear_stiffness: float | None = None
+
+
+@dataclass
 class ModalSpec:
     """Number of modes of the modal analysis."""
 
@@ -494,6 +515,7 @@ class Case:
     source: str
     fatigue: FatigueSpec | None = None
     network: NetworkSpec | None = None
+    beam: BeamSpec = field(default_factory=BeamSpec)
 
     def to_dict(self) -> dict:
         """JSON-serialisable echo of the inputs (motions and time functions via describe())."""
@@ -1030,6 +1052,11 @@ def parse_case(data: dict, base_dir: str | os.PathLike = Path("."),
     dynamics = _parse_dynamics(top.table("dynamics"))
     modal = ModalSpec(table("modal").integer("modes"))
     fatigue = _parse_fatigue(top.table("fatigue"), section)
+    beam_r = table("beam")
+    beam = BeamSpec(beam_r.number("layer_elements", ge=0.5, le=1000),
+                    beam_r.number("growth", gt=1, le=2), beam_r.integer("span_elements",
+                                                                       le=1_000_000),
+                    beam_r.number("shear_stiffness", gt=0))
     solver_r = table("solver")
     solver = SolverSpec(solver_r.boolean("tension_only"), _parse_petsc_options(solver_r))
     if problems:
@@ -1041,8 +1068,10 @@ def parse_case(data: dict, base_dir: str | os.PathLike = Path("."),
     parts += [x for item in masses for x in (item.s, item.mass)] + [p.s for p in point_loads]
     if _missing(*parts):  # every None above must have come with a reported problem
         raise RuntimeError("cablefem internal error: a case value failed without a message")
+    if _missing(beam.layer_elements, beam.growth, beam.span_elements):
+        raise RuntimeError("cablefem internal error: a case value failed without a message")
     return Case(title, section, gravity, geometry, mesh, anchors, loads, masses, point_loads,
-                damping, dynamics, modal, solver, source, fatigue)
+                damping, dynamics, modal, solver, source, fatigue, beam=beam)
 
 
 def _parse_network_case(data: dict, base_dir: Path, source: str) -> Case:

@@ -36,8 +36,8 @@ def case_digest(case) -> str:
 
 def write_checkpoint(model, outdir: Path, ck: Checkpoint, digest: str, extra: dict) -> None:
     """Collective: gather the state and write ``checkpoint.npz`` atomically on rank 0."""
-    u = model.gather_nodal(model.u)
-    v = model.gather_nodal(model.v)
+    u = model.gather_all(model.u)
+    v = model.gather_all(model.v)
     if model.comm.rank == 0:
         tmp = Path(outdir) / (CHECKPOINT + ".tmp.npz")
         np.savez(tmp, u=u, v=v, time=ck.time, step=ck.step, level=ck.level, calm=ck.calm,

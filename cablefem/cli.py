@@ -1,4 +1,4 @@
-"""Command line: ``cablefem run|modes|post|keys``.
+"""Command line: ``cablefem run|modes|post|fatigue|compare|keys``.
 
 Exit codes: 0 success; 1 a solve failed (the files written so far are valid and
 ``summary.json`` says why); 2 bad input (case file, options, CSV), reported one line per
@@ -63,8 +63,12 @@ def _parser() -> argparse.ArgumentParser:
                          epilog="Case file keys:\n\n" + keys)
     common(run, restartable=True)
     run.add_argument("--t-end", type=float, help="override dynamics.t_end (s)")
-    run.add_argument("--model", choices=["string"], default="string",
-                     help="outer model (only 'string' in this version)")
+    run.add_argument("--model", choices=["string", "beam"], default=None,
+                     help="'string' (default): the string + asymptotics; 'beam': the "
+                          "reference rod (geometrically exact, graded mesh, [beam] table)")
+    run.add_argument("--refine", type=float, default=None,
+                     help="beam: scale the mesh density ([beam] layer_elements and "
+                          "span_elements), > 0; default 1")
     run.add_argument("--moment-form", choices=["exact", "explicit"], default="exact",
                      help="anchor moment from the exact first integral (default) or the "
                           "paper's explicit form")
@@ -105,6 +109,20 @@ def _parser() -> argparse.ArgumentParser:
                           "leave them out")
     fat.add_argument("--quiet", "-q", action="store_true")
 
+    cmp_ = sub.add_parser("compare", help="compare two runs of a case (e.g. string and beam)",
+                          description="Compare two finished run folders, typically 'cablefem "
+                          "run CASE -o A' and 'cablefem run CASE --model beam -o B': static "
+                          "moment and tension, steady-state peak and RMS of |M| (last third "
+                          "of the common time range) at every clamped anchor, first natural "
+                          "frequency, wall times; relative differences (b-a)/a. Prints a "
+                          "table; writes compare.json, compare.md and compare_<anchor>.png.")
+    cmp_.add_argument("dir_a", type=Path, help="folder of run a (the reference of the "
+                      "relative differences)")
+    cmp_.add_argument("dir_b", type=Path, help="folder of run b")
+    cmp_.add_argument("--output", "-o", type=Path, help="output folder (default: dir_b)")
+    cmp_.add_argument("--quiet", "-q", action="store_true",
+                      help="no table on stdout; warnings and errors only")
+
     sub.add_parser("keys", help="print every case-file key with its unit and range")
     return p
 
@@ -143,6 +161,23 @@ def _input_error(msg: str) -> int:
     return EXIT_INPUT
 
 
+def _compare(args) -> int:
+    """``cablefem compare``: no case file; rank 0 prints the table."""
+    from mpi4py import MPI
+
+    from .comparecmd import compare_runs, format_table
+    from .log import setup_logging
+
+    setup_logging(logging.WARNING if args.quiet else logging.INFO)
+    try:
+        res = compare_runs(args.dir_a, args.dir_b, args.output)
+    except ValueError as err:
+        return _input_error(str(err))
+    if not args.quiet and MPI.COMM_WORLD.rank == 0:
+        print(format_table(res))
+    return EXIT_OK
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point; an unexpected exception becomes one line (``CABLEFEM_DEBUG=1``: the
     traceback) and exit code 1."""
@@ -177,8 +212,10 @@ def _main(argv: list[str] | None = None) -> int:
 
         print(format_case_reference())
         return EXIT_OK
-    if extra and args.command in ("post", "fatigue"):
+    if extra and args.command in ("post", "fatigue", "compare"):
         return _input_error(f"unexpected arguments {extra}")
+    if args.command == "compare":
+        return _compare(args)
 
     from .case import CaseError, load_case
 
@@ -194,6 +231,15 @@ def _main(argv: list[str] | None = None) -> int:
                 return _input_error("--output must be the --restart folder (or omitted)")
             args.output = args.restart
             args.case = args.case or Path(str(ck["case"]))
+            for key, default in (("model", "string"), ("refine", 1.0)):
+                stored = type(default)(ck[key]) if key in ck else default
+                given = getattr(args, key)
+                if given is not None and given != stored:
+                    return _input_error(f"--{key} {given} differs from the checkpoint's "
+                                        f"({stored}): restart with the same model")
+                setattr(args, key, stored)
+            if args.model != "beam":
+                args.refine = None
         if args.case is None or args.output is None:
             return _input_error("give a case file and --output DIR, or --restart DIR")
     case_path = args.case
@@ -204,6 +250,10 @@ def _main(argv: list[str] | None = None) -> int:
         return EXIT_INPUT
     if getattr(args, "t_end", None) is not None and args.t_end <= 0:
         return _input_error(f"--t-end must be > 0 (s), got {args.t_end}")
+    if getattr(args, "refine", None) is not None and not args.refine > 0:
+        return _input_error(f"--refine must be > 0, got {args.refine}")
+    if getattr(args, "refine", None) is not None and (args.model or "string") != "beam":
+        return _input_error("--refine applies to --model beam only")
     if getattr(args, "n", None) is not None and args.n < 1:
         return _input_error(f"--n must be >= 1, got {args.n}")
 
@@ -239,7 +289,8 @@ def _main(argv: list[str] | None = None) -> int:
         if args.command == "run":
             run_case(case, args.output, t_end=args.t_end, form=args.moment_form,
                      dynamics=not args.static_only, figures=not args.no_figures,
-                     progress=not args.quiet, restart=args.restart is not None)
+                     progress=not args.quiet, restart=args.restart is not None,
+                     model=args.model or "string", refine=args.refine or 1.0)
         else:
             run_case(case, args.output, modes=args.n, dynamics=False, figures=False,
                      progress=not args.quiet)

@@ -96,12 +96,12 @@ def _make_ts(model, dt: float, rho_inf: float, history: SNESHistory):
                 # round-off, summed over the dofs) can exceed atol; a relative update of
                 # 1e-13 is converged
                 "snes_stol": 1e-13,
-                **linear_solver_options(3 * model.V.dofmap.index_map.size_global,
+                **linear_solver_options(model.bs * model.V.dofmap.index_map.size_global,
                                         model.comm.size)}
 
     n_owned = model.V.dofmap.index_map.size_local
     bc_rows = np.concatenate([a.flat_dofs for a in model.anchors]).astype(np.int32)
-    bc_rows = bc_rows[bc_rows < 3 * n_owned]  # owned rows; each rank zeroes its own
+    bc_rows = bc_rows[bc_rows < model.bs * n_owned]  # owned rows; each rank zeroes its own
     F_vec = fpetsc.create_vector(model.f_dynamic)
     J_mat = fpetsc.create_matrix(model.j_dynamic)
 
@@ -167,9 +167,9 @@ def integrate(model, t_end: float, dt: float, rho_inf: float = 0.9, output_every
         V.set(0.0)
         n_owned = model.V.dofmap.index_map.size_local
         for anc in model.anchors:  # the anchors start with their prescribed velocity
-            vel = anc.velocity(0.0)
-            for d in anc.dofs[anc.dofs < n_owned]:
-                V.array[3 * d: 3 * d + 3] = vel
+            rows = anc.flat_dofs
+            keep = rows < model.bs * n_owned
+            V.array[rows[keep]] = anc.prescribed("velocity", 0.0)[keep]
         copy_in(V, model.v)
     ts.setTime(t)
     ts.setMaxTime(t_end)

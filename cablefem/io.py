@@ -74,8 +74,6 @@ class StringWriter:
         else:
             self.file = XDMFFile(model.comm, str(path), "w")
             self.file.write_mesh(model.mesh)
-        self.tension = fem.Function(model.W, name="tension")
-        self.strain = fem.Function(model.W, name="strain")
         # the same fields as one dataset per time (ParaView shows the XDMF's functions as
         # separate blocks): string.pvd, or string_restart.pvd when a run is resumed
         pvd = Path(path).with_suffix(".pvd")
@@ -89,14 +87,13 @@ class StringWriter:
         m = self.model
         if self.skip_until is not None and t <= self.skip_until * (1 + 1e-12) + 1e-300:
             return
-        self.tension.interpolate(m.tension_expr)
-        self.strain.interpolate(m.strain_expr)
-        for f in (m.u, m.v, self.tension, self.strain):
+        fields = m.output_fields()
+        for f in fields:
             if not np.all(np.isfinite(f.x.array)):
                 raise FloatingPointError(f"non-finite {f.name} at t = {t:g}: not written")
-        for f in (m.u, m.v, self.tension, self.strain):
+        for f in fields:
             self.file.write_function(f, t)
-        self.vtk.write_function([m.u, m.v, self.tension, self.strain], t)
+        self.vtk.write_function(fields, t)
         # dolfinx 0.5.2 lists each rank's .vtu once per function in the .pvtu: ParaView
         # would load as many overlapping copies; keep one entry per piece
         m.comm.Barrier()
@@ -272,7 +269,6 @@ def write_modes(model, modal, path: Path) -> None:
     """Mode shapes to XDMF; mode ``i`` is stored at "time" ``i`` (ParaView's time slider)."""
     with XDMFFile(model.comm, str(path), "w") as f:
         f.write_mesh(model.mesh)
-        shape = fem.Function(model.V, name="mode_shape")
         for i, mode in enumerate(modal.shapes):
-            shape.x.array[:] = mode.x.array
+            shape = model.displacement_part(mode, "mode_shape")
             f.write_function(shape, float(i + 1))

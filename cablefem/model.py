@@ -43,11 +43,26 @@ class AnchorBC:
     dofs: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int32))
     owned: bool = False  #: True on the one rank that owns the anchor's dofs
     section: object = None  #: the Section of the cable at the anchor
+    bs: int = 3  #: components per node of the model (3: string, 6: beam)
+    comps: tuple = (0, 1, 2)  #: the components the anchor prescribes
+    rotation: np.ndarray | None = None  #: beam: Cayley vector held by a clamp
+    moment_map: np.ndarray | None = None  #: beam: reaction of the q rows -> moment
 
     @property
     def flat_dofs(self) -> np.ndarray:
-        """Unrolled (x, y, z) indices of the anchor's dofs in a local array."""
-        return (3 * self.dofs[:, None] + np.arange(3)[None, :]).reshape(-1)
+        """Unrolled indices (in a local array) of the components the anchor prescribes."""
+        comps = np.asarray(self.comps)
+        return (self.bs * self.dofs[:, None] + comps[None, :]).reshape(-1)
+
+    def prescribed(self, kind: str, t: float) -> np.ndarray:
+        """Values of ``kind`` ("displacement", "velocity", "acceleration") at ``t`` for
+        :attr:`flat_dofs`."""
+        val = getattr(self, kind)(t)
+        if self.bs == 6:
+            rot = self.rotation if kind == "displacement" and self.rotation is not None \
+                else np.zeros(3)
+            val = np.concatenate([val, rot])
+        return np.tile(np.asarray(val)[list(self.comps)], self.dofs.size)
 
     def displacement(self, t: float) -> np.ndarray:
         """Prescribed displacement of the anchor node from its reference position, m."""
@@ -99,7 +114,7 @@ class CableModel:
         self.length = self.geometry.length
         self.mesh = create_line_mesh(comm, self.geometry.points, self.geometry.cells)
         self.mesh.topology.create_connectivity(0, 1)
-        self.V = fem.VectorFunctionSpace(self.mesh, ("Lagrange", 1), dim=3)
+        self.V = self._space()
         self.W = fem.FunctionSpace(self.mesh, ("DG", 0))
         self.u = fem.Function(self.V, name="displacement")
         self.v = fem.Function(self.V, name="velocity")
@@ -122,12 +137,25 @@ class CableModel:
                             for pl in case.point_loads]
 
         self.anchors = self._build_anchors()
-        self.bcs = [fem.dirichletbc(self.u_bc, a.dofs) for a in self.anchors]
+        self.bcs = self._make_bcs()
         self._point_tags()
         self.build_forms()
         self.compile()
         self._nodal_map()
         self.set_time(0.0)
+
+    bs = 3  #: components per node
+    is_beam = False
+
+    def _space(self):
+        return fem.VectorFunctionSpace(self.mesh, ("Lagrange", 1), dim=3)
+
+    def _make_bcs(self):
+        return [fem.dirichletbc(self.u_bc, a.dofs) for a in self.anchors]
+
+    def initial_guess(self) -> np.ndarray:
+        """Nodal start of statics (n, bs): the elastic catenary through the anchors."""
+        return self.initial_shape - self.geometry.points
 
     # ------------------------------------------------------------------ geometry
     def _build_geometry(self):
@@ -355,13 +383,30 @@ class CableModel:
         arr = self.u_bc.x.array
         for anc in self.anchors:
             if anc.dofs.size:
-                arr[anc.flat_dofs] = np.tile(anc.displacement(t), anc.dofs.size)
+                arr[anc.flat_dofs] = anc.prescribed("displacement", t)
         for c, ld in self.loads:
             c.value[:] = np.asarray(ld.value) * ld.time.value(t)
         for c, pl in self.point_loads:
             c.value[:] = np.asarray(pl.value) * pl.time.value(t)
 
     # ------------------------------------------------------------------ fields
+    def output_fields(self) -> list[fem.Function]:
+        """The fields of ``string.xdmf`` at the current state (the same Function objects at
+        every call): displacement, velocity, tension, strain."""
+        if not hasattr(self, "_out"):
+            self._out = [self.u, self.v, fem.Function(self.W, name="tension"),
+                         fem.Function(self.W, name="strain")]
+        self._out[2].interpolate(self.tension_expr)
+        self._out[3].interpolate(self.strain_expr)
+        return self._out
+
+    def displacement_part(self, f: fem.Function, name: str) -> fem.Function:
+        """The displacement components of a function of the model's space (a string's
+        functions are nothing else)."""
+        g = fem.Function(self.V, name=name)
+        g.x.array[:] = f.x.array
+        return g
+
     def tension_field(self, name: str = "tension") -> fem.Function:
         f = fem.Function(self.W, name=name)
         f.interpolate(self.tension_expr)
@@ -399,21 +444,34 @@ class CableModel:
         self._owned_nodes = idx.astype(np.int64)
 
     def gather_nodal(self, f: fem.Function, root: int = 0) -> np.ndarray | None:
-        """Values of a P1 vector function at the nodes in station order, on ``root`` only."""
+        """Values of a P1 vector function of the model's space at the nodes in station
+        order, (n, 3) (the displacement part for a beam), on ``root`` only
+        (:meth:`gather_all` gives every component)."""
+        full = self.gather_all(f, root)
+        return None if full is None else full[:, :3]
+
+    def gather_all(self, f: fem.Function, root: int = 0) -> np.ndarray | None:
+        """Every component of ``f`` at the nodes in station order, (n, bs), on ``root``."""
+        bs = self.bs
         n_owned = self.V.dofmap.index_map.size_local
-        local = f.x.array[: 3 * n_owned].reshape(-1, 3)
+        local = f.x.array[: bs * n_owned].reshape(-1, bs)
         parts = self.comm.gather((self._owned_nodes, local.copy()), root=root)
         if self.comm.rank != root:
             return None
-        out = np.full((len(self.geometry.stations), 3), np.nan)
+        out = np.full((len(self.geometry.stations), bs), np.nan)
         for idx, vals in parts:
             out[idx] = vals
         return out
 
     def scatter_nodal(self, values: np.ndarray, f: fem.Function) -> None:
-        """Set a P1 vector function from nodal values in station order (given on all ranks)."""
+        """Set a P1 vector function from nodal values (n, bs) in station order (given on
+        all ranks)."""
         n_owned = self.V.dofmap.index_map.size_local
-        f.x.array[: 3 * n_owned] = np.asarray(values)[self._owned_nodes].reshape(-1)
+        values = np.asarray(values)
+        if values.shape[1] != self.bs:
+            raise ValueError(f"nodal values have {values.shape[1]} components, the model "
+                             f"{self.bs}")
+        f.x.array[: self.bs * n_owned] = values[self._owned_nodes].reshape(-1)
         f.x.scatter_forward()
 
     def dimensionless_groups(self) -> dict:

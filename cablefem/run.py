@@ -29,7 +29,8 @@ from .netmodel import NetworkModel
 from .post import ANCHOR_COLUMNS, MOMENT_COLUMNS, anchor_moments, composite_field
 from .statics import solve_static
 
-__all__ = ["RunResult", "RunError", "RunInterrupted", "run_case", "steady_state_stats", "static_sag_ratio"]
+__all__ = ["RunResult", "RunError", "RunInterrupted", "run_case", "steady_state_stats",
+           "static_sag_ratio", "rod_moment_columns"]
 
 log = logging.getLogger(__name__)
 
@@ -72,6 +73,22 @@ def steady_state_stats(times: np.ndarray, values: np.ndarray, fraction: float = 
             "mean": float(np.mean(v)), "window": [float(t0), float(times[-1])]}
 
 
+def rod_moment_columns(res: dict, M: np.ndarray, direction: np.ndarray) -> dict:
+    """A beam run's moment columns: the rod's own moment ``M`` (n, 3) at the anchor replaces
+    the asymptotic one; ``psi0`` is the azimuth of the rod's bending plane; ``delta``,
+    ``layer_length`` and ``moment_layer`` stay those of the closed form evaluated with the
+    beam's anchor force (what the asymptotics would say with the beam's force)."""
+    out = dict(res)
+    mag = np.linalg.norm(M, axis=1)
+    out.update({"moment": mag, "Mx": M[:, 0], "My": M[:, 1], "Mz": M[:, 2]})
+    f1, f2 = asymptotics.anchor_frame(direction)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        tp = np.cross(M / mag[:, None], direction)  # in the bending plane, normal to c
+        out["psi0"] = np.where(mag > 0, np.arctan2(tp @ f2, tp @ f1), np.nan)
+    out["valid"] = np.isfinite(mag).astype(int)
+    return out
+
+
 def static_sag_ratio(r: np.ndarray, p: np.ndarray, q: np.ndarray, gdir: np.ndarray) -> float:
     """Mid-span sag / chord from nodal positions: the distance along gravity from the chord
     down to the cable where the cable's horizontal projection is at mid-chord."""
@@ -105,6 +122,8 @@ class _Emitter:
         self.resume_after = resume_after
         self.clamped = [a for a in model.anchors if a.kind == "clamped"]
         self.network = getattr(model, "is_network", False)
+        self.beam = model.is_beam  # a rod: moments from the model, no composite field
+        self.rod: dict[str, list[np.ndarray]] = {a.name: [] for a in self.clamped}
         sec = model.case.section  # the single cable's (a network: per anchor, below)
         self.EI, self.EA, self.m = sec.EI, sec.EA, sec.mass
         cols = ANCHOR_COLUMNS + (MOMENT_COLUMNS if self.clamped else [])
@@ -128,7 +147,7 @@ class _Emitter:
         self.stations = None
         if self.clamped and self.network:
             self._segments_setup(static_forces)
-        elif self.clamped:
+        elif self.clamped and not self.beam:
             idx = {a.name: i for i, a in enumerate(model.anchors)}
             ells = [0.5 * self._moments(c, np.zeros(1), static_forces[idx[c.name]][None, :]
                                         )["layer_length"][0] for c in self.clamped]
@@ -157,6 +176,8 @@ class _Emitter:
             if name == self.model.anchors[0].name:
                 self.times.append(float(row["time"]))
             self.forces[name].append(np.array([num(row[k]) for k in ("Nx", "Ny", "Nz")]))
+            if name in self.rod:
+                self.rod[name].append(np.array([num(row[k]) for k in ("Mx", "My", "Mz")]))
             if name in self.columns:
                 for k in MOMENT_COLUMNS:
                     self.columns[name][k].append(num(row[k]))
@@ -216,7 +237,9 @@ class _Emitter:
         """Record the anchor forces at ``t`` (written in batches)."""
         self.times.append(t)
         for anc, N in zip(self.model.anchors, forces):
-            self.forces[anc.name].append(np.asarray(N, float))
+            self.forces[anc.name].append(np.asarray(N[:3], float))
+            if anc.name in self.rod:
+                self.rod[anc.name].append(np.asarray(N[3:6], float))
         self._pending += 1
         if self._pending >= self.FLUSH_ROWS:
             self.flush()
@@ -230,6 +253,9 @@ class _Emitter:
         per_anchor = {}
         for anc in self.clamped:
             res = self._moments(anc, times, np.array(self.forces[anc.name][-n:]))
+            if self.beam:
+                res = rod_moment_columns(res, np.array(self.rod[anc.name][-n:]),
+                                         anc.direction)
             for k in MOMENT_COLUMNS:
                 self.columns[anc.name][k].extend(res[k].tolist())
             per_anchor[anc.name] = res
@@ -250,7 +276,7 @@ class _Emitter:
         m = self.model
         self.string.write(t)
         self.last_fields_time = t
-        if not self.clamped:
+        if not self.clamped or self.beam:  # a beam's moment field is in string.xdmf
             return
         idx = {a.name: i for i, a in enumerate(m.anchors)}
         layers = {c.name: self._moments(c, np.array([t]), forces[idx[c.name]][None, :])
@@ -310,7 +336,8 @@ class _Emitter:
 def run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *,
              modes: int | None = None, dynamics: bool = True, t_end: float | None = None,
              form: str = "exact", progress: bool = True, figures: bool = True,
-             restart: bool = False) -> RunResult:
+             restart: bool = False, model: str = "string", refine: float = 1.0
+             ) -> RunResult:
     """Run a case: statics, modes, and dynamics when the case has a ``[dynamics]`` table.
 
     Writes ``summary.json``, ``anchors.csv``, ``string.xdmf``, ``modes.xdmf`` and, with a
@@ -318,13 +345,25 @@ def run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *,
     written so far stay valid, ``summary.json`` says what happened, and :class:`RunError` is
     raised. SIGINT/SIGTERM stop the dynamics cleanly (:class:`RunInterrupted`);
     ``restart=True`` continues a run in ``outdir`` from its last checkpoint.
+    ``model="beam"`` runs the reference rod (:mod:`cablefem.beam`) instead of the string,
+    its mesh density scaled by ``refine``; the anchor moments are then the rod's own.
     """
     wall0 = time.perf_counter()
     outdir = Path(outdir)
     if comm.rank == 0:
         outdir.mkdir(parents=True, exist_ok=True)
     comm.Barrier()
-    model = NetworkModel(case, comm) if case.network is not None else CableModel(case, comm)
+    kind = model
+    if kind not in ("string", "beam"):
+        raise ValueError(f"model must be 'string' or 'beam', got {kind!r}")
+    if kind == "beam":
+        from .beam import BeamModel
+
+        model = BeamModel(case, comm, refine=refine)
+    elif case.network is not None:
+        model = NetworkModel(case, comm)
+    else:
+        model = CableModel(case, comm)
     t_build = time.perf_counter() - wall0
     groups = model.dimensionless_groups()
     log.info("%s: l = %.6g m, %d elements, eps = %s, eps_b = %s", case.title, model.length,
@@ -332,9 +371,17 @@ def run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *,
              _g(groups.get("eps_b")))
     summary: dict = {"cablefem": __version__, "status": "running", "case": case.to_dict(),
                      "mpi_ranks": comm.size, "length": model.length,
-                     "elements": len(model.geometry.stations) - 1,
-                     "degrees_of_freedom": 3 * len(model.geometry.stations),
+                     "model": kind, "elements": len(model.geometry.stations) - 1,
+                     "degrees_of_freedom": model.bs * len(model.geometry.stations),
                      "dimensionless": groups, "wall_time": {"build": t_build}}
+    if kind == "beam":
+        st = model.geometry.stations
+        summary["beam"] = {"refine": refine, "min_element": float(np.min(np.diff(st))),
+                           "max_element": float(np.max(np.diff(st))),
+                           "layer_lengths_catenary": {
+                               case.anchors[e].name: ell
+                               for e, ell in model.layer_lengths.items()},
+                           **model.section_values}
     static = solve_static(model)
     r = model.gather_nodal(model.u)
     sag = None
@@ -344,7 +391,8 @@ def run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *,
                                np.asarray(case.gravity.direction, float))
     sag = comm.bcast(sag, root=0)
     summary["static"] = {
-        "anchor_forces": {a.name: f for a, f in zip(model.anchors, static.anchor_forces)},
+        "anchor_forces": {a.name: f[:3] for a, f in zip(model.anchors,
+                                                         static.anchor_forces)},
         "newton_iterations": static.newton_iterations,
         "continuation_steps": static.continuation_steps,
         "slack_elements": static.slack_elements, "max_tension": static.max_tension,
@@ -400,7 +448,8 @@ def run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *,
             def checkpoint(ck):
                 emitter.flush()
                 emitter.dump()
-                write_checkpoint(model, outdir, ck, digest, {"t_stop": t_stop})
+                write_checkpoint(model, outdir, ck, digest, {"t_stop": t_stop, "model": kind,
+                                                             "refine": refine})
 
             bar = Progress(t_stop, "dynamics", comm, enabled=progress)
             stride = math.gcd(dyn.output_every, dyn.fields_every)
@@ -444,7 +493,8 @@ def run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *,
         log.error("%s", err)
         if isinstance(err, DynamicsError) and emitter.times:
             # the last converged state (left in the model by integrate) goes to string.xdmf
-            last = np.array([emitter.forces[a.name][-1] for a in model.anchors])
+            last = static.anchor_forces if kind == "beam" else np.array(
+                [emitter.forces[a.name][-1] for a in model.anchors])  # beam: unused here
             try:
                 if err.time != emitter.last_fields_time:  # else it is already in the file
                     emitter.fields(err.time, last)
@@ -466,12 +516,16 @@ def run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *,
                  "section": _section_name(case, a.section),
                  "direction": a.direction if a.direction is not None else None,
                  "static_tension": float(np.linalg.norm(static.anchor_forces[
-                     model.anchors.index(a)]))}
+                     model.anchors.index(a)][:3]))}
         if a.kind == "clamped":
-            st = anchor_moments(static.anchor_forces[model.anchors.index(a)][None, :],
-                                a.direction, a.section.EI, a.section.EA,
+            F_static = static.anchor_forces[model.anchors.index(a)]
+            st = anchor_moments(F_static[None, :3], a.direction, a.section.EI, a.section.EA,
                                 a.section.mass, np.zeros((1, 3)),
                                 emitter.load_at(0.0, a.section.mass), model.length, None, form)
+            if kind == "beam":  # the rod's own; the composite with the beam's force beside
+                entry["static_moment_composite"] = float(st["moment"][0])
+                st = rod_moment_columns(st, F_static[None, 3:6], a.direction)
+                entry["static_moment_vector"] = F_static[3:6]
             entry["static_moment"] = float(st["moment"][0])
             entry["static_moment_layer"] = float(st["moment_layer"][0])
             entry["static_delta"] = float(st["delta"][0])

@@ -53,7 +53,7 @@ def _make_snes(model, history: SNESHistory, bilateral: bool = False
     defaults = {"snes_type": "newtonls", "snes_linesearch_type": "bt", "snes_max_it": 50,
                 "snes_rtol": 1e-10, "snes_atol": 1e-10 * model.force_scale,
                 "snes_stol": 1e-14,
-                **lu_options(model.comm.size)}
+                **lu_options(model.comm.size), **getattr(model, "static_options", {})}
     f_form = model.f_static_bilateral if bilateral else model.f_static
     j_form = model.j_static_bilateral if bilateral else model.j_static
     b = fpetsc.create_vector(f_form)
@@ -90,12 +90,25 @@ def solve_static(model, max_continuation_steps: int = 200) -> StaticResult:
     history = SNESHistory()
     snes, _ = _make_snes(model, history)
     model.set_time(0.0)
-    guess = model.initial_shape - model.geometry.points
+    guess = model.initial_guess()
     model.scatter_nodal(guess, model.u)
     x = model.u.vector.copy()
     model.load_factor.value = 1.0
+    total_its, steps = 0, 0
+    stages = getattr(model, "static_stages", None)  # a rod: soft-shear pre-solves
+    if stages is not None:
+        last = x.copy()
+        for label in stages():
+            ok, its = _try(snes, x, history)
+            total_its += its
+            if ok:
+                x.copy(last)
+                log.info("statics: pre-solve with %s converged in %d iterations", label, its)
+            else:
+                last.copy(x)
+                log.info("statics: pre-solve with %s failed (%s)", label, history.text())
     ok, its = _try(snes, x, history)
-    total_its, steps = its, 0
+    total_its += its
     if not ok and model.tension_only:
         # every element slack on the guess (e.g. a coarse mesh of a stiff cable: the chords
         # of the sampled catenary are shorter than the elements): compression allowed first

@@ -1,0 +1,558 @@
+"""The reference model: a geometrically exact rod (3D, large rotations) on the same meshes.
+
+This is what the string + asymptotics route is checked against (issue 4): a cable with its
+bending stiffness everywhere, solved by finite elements without any asymptotic assumption.
+It is far more expensive (a mesh graded to resolve the layer length ``ℓ`` at every clamp,
+six unknowns per node) and it is the model the paper's method avoids.
+
+Formulation (Simo-Reissner rod, written in UFL)
+-----------------------------------------------
+Unknowns at every node: the displacement ``u`` of the centre line (``r = X + u``) and a
+rotation of the cross-section, parametrised by its Cayley (Rodrigues, Gibbs) vector
+``q = 2 tan(φ/2) n`` relative to the stress-free straight reference frame
+``(E1, E2, E3 = t0)``::
+
+    Λ(q) = I + 4/(4 + q·q) (Q + Q²/2),  Q = skew(q),   d_i = Λ E_i.
+
+The parametrisation is rational (no trigonometry, no singularity at ``q = 0``) and covers
+every rotation below 180° from the reference, which a cable never approaches. Strains
+against the stress-free length ``s``, in the section's frame (material components)::
+
+    Γ_i = d_i · ∂s r − δ_i3          (shear Γ1, Γ2; axial strain Γ3)
+    K_i = ω · d_i,  ω = 4/(4 + q·q) (∂s q + q × ∂s q / 2)   (Λ' Λᵀ = skew(ω))
+
+Energy per stress-free length ``Ψ = ½ (EA Γ3² + GA (Γ1² + Γ2²) + EI (K1² + K2²) + GJ K3²)``;
+the internal virtual work is UFL's derivative of ``∫ Ψ ds``. The rod is shearable with a
+shear stiffness ``GA`` high enough to be unshearable in effect (default ``1e5 T``, ``T`` the
+catenary's largest tension, or ``EI/l²`` if larger: shear changes the anchor moment by
+``O(T/GA)`` = 1e-5 and a cantilever's deflection by ``3 EI/(GA l²)``; a far
+stiffer one slows Newton down as a stiff penalty does); linear elements
+(P1 for ``u`` and ``q``) with one-point (reduced) integration of the energy, the classic
+locking-free choice. The objectivity defect of interpolating a rotation parameter vanishes
+with the mesh size (Crisfield and Jelenić, 1999); the convergence tests show it.
+
+Inertia: the centre line's ``m ü`` (consistent mass) and the rotary inertia of a solid
+section, ``ρI = m EI/EA`` per length (``2 ρI`` about the axis), in its small-rotation form
+``ρI q̈``; its effect on the paper's cases is far below 1e-6 (``ρI ω²/T``), so the
+simplification does not show, but a rod spinning through large angles would need the full
+form. Damping: the string's (Rayleigh ``α M + β K0`` with this model's ``M`` and ``K0``).
+
+Anchors: every anchor prescribes ``u`` (and its motion). A clamped anchor also holds the
+rotation: the rod's tangent is the clamp direction (``d3 = c`` at ``s = 0``, ``d3 = −c`` at
+``s = l``, since ``d3`` runs along ``s``) and the section does not twist. A pinned anchor
+leaves the rotations free; it holds only the twist, through a torsional spring as stiff as
+its end element (``GJ/h``), which removes the rigid twist of a rod with no clamp and does
+nothing else (no torque acts on it). The anchor's force is the consistent reaction of the
+position rows, as for the string, and its moment the consistent reaction of the rotation
+rows (``M = −H⁻ᵀ R_q``, ``δθ = H δq``): the rod's internal moment at the anchor, which equals
+``EI κ(0)`` of the discrete equilibrium and converges at the rate of the solution, unlike the
+curvature of the first element (a mid-element value).
+
+The beam takes single straight cables (geometry by length, tension or sag; not a polyline or
+a network): its stress-free reference is straight and stress-free.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+
+import numpy as np
+import ufl
+from dolfinx import fem, mesh as dmesh
+from mpi4py import MPI
+from petsc4py import PETSc
+
+from . import catenary
+from .case import Case, CaseError
+from .model import CableModel
+from .network import straight_cable
+
+__all__ = ["BeamModel", "beam_stations", "cayley_from_rotation", "cayley_rotation",
+           "rotation_matrix", "virtual_rotation_map", "rod_strains"]
+
+log = logging.getLogger(__name__)
+
+#: default shear stiffness GA / T (T the catenary's largest tension): unshearable in effect,
+#: shear changes the anchor moment by O(T/GA) = 1e-5; far stiffer makes Newton stagnate
+#: (1e7 in case B: GA/EA = 1000) as a stiff penalty does
+SHEAR_FACTOR = 1.0e5
+#: default torsional stiffness when the case gives none: a solid circle, GJ = EI/(1 + nu)
+POISSON = 0.3
+
+
+# ----------------------------------------------------------------------------- NumPy side
+def _skew(a: np.ndarray) -> np.ndarray:
+    return np.array([[0.0, -a[2], a[1]], [a[2], 0.0, -a[0]], [-a[1], a[0], 0.0]])
+
+
+def rotation_matrix(q: np.ndarray) -> np.ndarray:
+    """``Λ(q)`` for a Cayley vector ``q`` (NumPy)."""
+    q = np.asarray(q, float)
+    Q = _skew(q)
+    return np.eye(3) + 4.0 / (4.0 + q @ q) * (Q + 0.5 * Q @ Q)
+
+
+def cayley_from_rotation(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Cayley vector of the smallest rotation taking unit vector ``a`` to unit vector ``b``:
+    ``q = 2 (a × b)/(1 + a·b)``. Raises ValueError for opposite vectors (180°)."""
+    a = np.asarray(a, float) / np.linalg.norm(a)
+    b = np.asarray(b, float) / np.linalg.norm(b)
+    d = 1.0 + float(a @ b)
+    if d < 1e-8:
+        raise ValueError("a rotation of 180 degrees has no Cayley vector")
+    return 2.0 * np.cross(a, b) / d
+
+
+def virtual_rotation_map(q: np.ndarray) -> np.ndarray:
+    """``H(q)`` with ``δθ = H δq`` (spatial virtual rotation from a variation of ``q``)."""
+    q = np.asarray(q, float)
+    return 4.0 / (4.0 + q @ q) * (np.eye(3) + 0.5 * _skew(q))
+
+
+def beam_stations(length: float, ends: dict[int, float], per_layer: float, growth: float,
+                  h_max: float, extra: tuple[float, ...] = ()) -> np.ndarray:
+    """Stress-free stations graded towards clamped ends.
+
+    ``ends`` maps an end (0: ``s = 0``, 1: ``s = l``) to its layer length ``ℓ``. The element
+    size is ``h(s) = min(h_max, min_a [ℓ_a/per_layer + (growth − 1) σ_a(s)])``, ``σ_a`` the
+    distance from end ``a``: a geometric progression of ratio ``growth`` away from each clamp
+    up to ``h_max``. Nodes follow ``∫ ds/h`` in equal steps; ``extra`` stations (point masses
+    and loads) are inserted as nodes.
+    """
+    h_max = min(h_max, length)
+    # fine sampling, geometric near the ends, to integrate 1/h accurately
+    h0 = min([ell / per_layer for ell in ends.values()] + [h_max])
+    n_geo = 400
+    g = np.geomspace(1e-3 * h0, length, n_geo)
+    s = np.unique(np.concatenate([[0.0], g, length - g, np.linspace(0, length, 2001)]))
+    s = s[(s >= 0) & (s <= length)]
+
+    def h(x):
+        out = np.full_like(x, h_max)
+        for end, ell in ends.items():
+            sig = x if end == 0 else length - x
+            out = np.minimum(out, ell / per_layer + (growth - 1.0) * sig)
+        return out
+
+    inv = 1.0 / h(s)
+    cum = np.concatenate([[0.0], np.cumsum(0.5 * (inv[1:] + inv[:-1]) * np.diff(s))])
+    n = max(2, int(math.ceil(cum[-1])))
+    st = np.interp(np.linspace(0.0, cum[-1], n + 1), cum, s)
+    st[0], st[-1] = 0.0, length
+    extra_arr = np.array(sorted(float(e) for e in extra if 0.0 < e < length))
+    if extra_arr.size:
+        hs = h(extra_arr)
+        keep = np.ones(st.size, bool)
+        for e, he in zip(extra_arr, hs):
+            near = np.abs(st - e) < 0.25 * he
+            near[[0, -1]] = False
+            keep &= ~near
+        st = np.unique(np.concatenate([st[keep], extra_arr]))
+    return st
+
+
+# ----------------------------------------------------------------------------- UFL side
+def _uskew(a):
+    return ufl.as_matrix([[0.0, -a[2], a[1]], [a[2], 0.0, -a[0]], [-a[1], a[0], 0.0]])
+
+
+def cayley_rotation(q):
+    """``Λ(q)`` as a UFL expression."""
+    Q = _uskew(q)
+    return ufl.Identity(3) + 4.0 / (4.0 + ufl.dot(q, q)) * (Q + 0.5 * Q * Q)
+
+
+def split(w):
+    """Displacement and Cayley vector of the six-component unknown ``w``."""
+    return ufl.as_vector([w[0], w[1], w[2]]), ufl.as_vector([w[3], w[4], w[5]])
+
+
+def rod_strains(w, t0, frame, c=1.0):
+    """Material strains ``(Γ, K, directors)`` of the rod (module docstring)."""
+    u, q = split(w)
+    rs = (t0 + ufl.grad(u) * t0) / c
+    qs = ufl.grad(q) * t0 / c
+    L = cayley_rotation(q)
+    d = [L * E for E in frame]
+    omega = 4.0 / (4.0 + ufl.dot(q, q)) * (qs + 0.5 * ufl.cross(q, qs))
+    G = ufl.as_vector([ufl.dot(d[0], rs), ufl.dot(d[1], rs), ufl.dot(d[2], rs) - 1.0])
+    K = ufl.as_vector([ufl.dot(omega, d[0]), ufl.dot(omega, d[1]), ufl.dot(omega, d[2])])
+    return G, K, d
+
+
+def _p1_product(a, b, t0, mesh):
+    """Integrand whose one-point (midpoint) quadrature gives ``∫ a·b`` exactly for P1
+    fields on an element of length ``h``: ``a·b + (h²/12) ∂a·∂b``.
+
+    Every cell integral of the rod uses one point: FFCx 0.5 cannot compile a form that mixes
+    two quadrature rules on cells (it declares the Jacobian twice), and the stiffness needs
+    the one-point rule (no locking) while the mass must stay consistent."""
+    h = ufl.CellVolume(mesh)
+    if len(a.ufl_shape) == 0:
+        return a * b + h * h / 12.0 * ufl.dot(ufl.grad(a), t0) * ufl.dot(ufl.grad(b), t0)
+    return ufl.inner(a, b) + h * h / 12.0 * ufl.inner(ufl.grad(a) * t0, ufl.grad(b) * t0)
+
+
+def energy_density(G, K, EA, GA, EI, GJ):
+    """``Ψ`` per stress-free length."""
+    return 0.5 * (EA * G[2] ** 2 + GA * (G[0] ** 2 + G[1] ** 2)
+                  + EI * (K[0] ** 2 + K[1] ** 2) + GJ * K[2] ** 2)
+
+
+# ----------------------------------------------------------------------------- the model
+class BeamModel(CableModel):
+    """The rod counterpart of :class:`~cablefem.model.CableModel` (same attributes, with six
+    components per node: ``u`` holds displacement and Cayley vector).
+
+    ``refine`` scales the mesh density (elements per layer and per span) for convergence
+    studies.
+    """
+
+    bs = 6
+    is_beam = True
+    #: statics: a rod's Newton step that turns sections shortens the axis at second order,
+    #: which the axial stiffness turns into a large residual (1e5 times the initial one
+    #: for a cantilever under an end moment): a line search on the residual norm ("bt")
+    #: then takes tiny steps and stagnates ("cp" too); full Newton steps converge
+    static_options = {"snes_linesearch_type": "basic", "snes_divergence_tolerance": -1}
+
+    def __init__(self, case: Case, comm: MPI.Comm = MPI.COMM_WORLD, prefix: str = "cable_",
+                 refine: float = 1.0):
+        problems = []
+        if case.network is not None:
+            problems.append(("network", "the beam model takes single cables, not networks"))
+        elif case.geometry.kind == "polyline":
+            problems.append(("geometry.polyline", "the beam model needs a straight stress-free "
+                             "reference: give length, horizontal_tension or sag_ratio"))
+        if not refine > 0:
+            problems.append(("refine", f"must be > 0, got {refine}"))
+        if problems:
+            raise CaseError(problems, case.source)
+        self.refine = float(refine)
+        self.spec = case.beam
+        super().__init__(case, comm, prefix)
+        self.tension_only = False  # a rod carries compression (bending stiffness)
+
+    # ------------------------------------------------------------------ geometry
+    def _build_geometry(self):
+        g, r0 = super()._build_geometry()  # the string's: length, catenary, anchor nodes
+        case, sec, spec = self.case, self.case.section, self.spec
+        # a rod's force scale (Newton's tolerances, GA) is at least EI/l^2: a weightless
+        # unstressed rod under an end load has no tension to scale with
+        self.force_scale = max(self.force_scale, sec.EI / g.length**2)
+        p, q = self._anchor_positions
+        length = g.length
+        shape = catenary.catenary_between(p, q, length, self.weight, sec.EA,
+                                          np.asarray(case.gravity.direction, float))
+        self.catenary_shape = shape
+        ends = {}
+        for end, a in enumerate(case.anchors):
+            if a.kind == "clamped":
+                T = float(shape.tension(np.array([0.0 if end == 0 else length]))[0])
+                # no tension (a weightless cable at its stress-free length): no layer
+                ends[end] = math.sqrt(sec.EI / (T * (1.0 + T / sec.EA))) if T > 0 else length
+                ends[end] = min(ends[end], length)
+        self.layer_lengths = ends
+        extra = [pm.s for pm in case.point_masses] + [pl.s for pl in case.point_loads]
+        # refine scales the whole size function h(s) by 1/refine (a uniform refinement)
+        stations = beam_stations(length, ends, spec.layer_elements * self.refine,
+                                 1.0 + (spec.growth - 1.0) / self.refine,
+                                 length / (spec.span_elements * self.refine), tuple(extra))
+        names = (case.anchors[0].name, case.anchors[1].name)
+        geo = straight_cable(p, (q - p) / np.linalg.norm(q - p), stations, names)
+        return geo, shape.position(geo.stations)
+
+    def _space(self):
+        return fem.VectorFunctionSpace(self.mesh, ("Lagrange", 1), dim=6)
+
+    # ------------------------------------------------------------------ anchors
+    def _build_anchors(self):
+        anchors = super()._build_anchors()
+        E3 = self._frame_np[2]
+        for anc in anchors:
+            anc.bs = 6
+            if anc.kind == "clamped":
+                d3 = anc.direction if anc.node == 0 else -anc.direction
+                try:
+                    anc.rotation = cayley_from_rotation(E3, d3)
+                except ValueError:
+                    raise CaseError([(f"anchors.{anc.name}.direction",
+                                      "the clamp turns the rod by 180 degrees from its "
+                                      "chord: point it into the cable")],
+                                    self.case.source) from None
+                anc.comps = (0, 1, 2, 3, 4, 5)
+                anc.moment_map = np.linalg.inv(virtual_rotation_map(anc.rotation)).T
+            else:
+                anc.comps = (0, 1, 2)
+                anc.moment_map = np.eye(3)
+        return anchors
+
+    def _make_bcs(self):
+        bcs, self._pin_values = [], []
+        for anc in self.anchors:
+            if anc.kind == "clamped":
+                bcs.append(fem.dirichletbc(self.u_bc, anc.dofs))
+                continue
+            verts = self._locate_node(anc.node)
+            for k in range(3):
+                dofs = fem.locate_dofs_topological(self.V.sub(k), 0, verts)
+                val = fem.Constant(self.mesh, PETSc.ScalarType(0.0))
+                self._pin_values.append((anc, k, val))
+                bcs.append(fem.dirichletbc(val, dofs, self.V.sub(k)))
+        return bcs
+
+    def set_time(self, t: float) -> None:
+        changed = t != getattr(self, "_time", None)
+        super().set_time(t)
+        if changed:
+            for anc, k, val in self._pin_values:
+                val.value = anc.displacement(t)[k]
+
+    # ------------------------------------------------------------------ forms
+    def _coefficients(self) -> None:
+        super()._coefficients()
+        sec, spec = self.case.section, self.case.beam
+        GJ = sec.GJ
+        if GJ <= 0.0:
+            GJ = sec.EI / (1.0 + POISSON)
+            if self.comm.rank == 0:
+                log.info("beam: section.GJ not given; GJ = EI/(1 + %.1f) = %.6g N m^2 (solid "
+                         "circle)", POISSON, GJ)
+        GA = spec.shear_stiffness if spec.shear_stiffness is not None else \
+            SHEAR_FACTOR * self.force_scale
+        self.section_values = {"EA": sec.EA, "EI": sec.EI, "GJ": GJ, "GA": GA,
+                               "rhoI": sec.mass * sec.EI / sec.EA}
+        m = self.mesh
+        self.EI = fem.Constant(m, PETSc.ScalarType(sec.EI))
+        self.GJ = fem.Constant(m, PETSc.ScalarType(GJ))
+        self.GA = fem.Constant(m, PETSc.ScalarType(GA))
+        self.rhoI = fem.Constant(m, PETSc.ScalarType(self.section_values["rhoI"]))
+        # the reference frame: E3 along the chord, E1 in the plane of chord and gravity
+        p, q = self._anchor_positions
+        E3 = (q - p) / np.linalg.norm(q - p)
+        gdir = np.asarray(self.case.gravity.direction, float)
+        trial = gdir - (gdir @ E3) * E3
+        if np.linalg.norm(trial) < 1e-6:  # a vertical chord
+            trial = np.eye(3)[int(np.argmin(np.abs(E3)))]
+            trial = trial - (trial @ E3) * E3
+        E1 = trial / np.linalg.norm(trial)
+        E2 = np.cross(E3, E1)
+        self._frame_np = (E1, E2, E3)
+        self.frame = [fem.Constant(m, np.asarray(E, dtype=PETSc.ScalarType))
+                      for E in self._frame_np]
+
+    def build_forms(self) -> None:
+        u, v, a, du, dw, t0 = self.u, self.v, self.a, self.du, self.dw, self.t0
+        case, cc = self.case, self.c
+        dxr = ufl.dx(metadata={"quadrature_degree": 0})  # one point: locking-free
+        G, K, d = rod_strains(u, t0, self.frame, cc)
+        psi = energy_density(G, K, self.EA, self.GA, self.EI, self.GJ)
+        self.Pi = psi * cc * dxr
+        F_int = ufl.derivative(self.Pi, u, du)
+        E3 = self.frame[2]
+        # pinned anchors hold the twist (a spring as stiff as the end element, GJ/h)
+        pinned = [anc for anc in self.anchors if anc.kind == "pinned"]
+        if pinned:
+            F_int = F_int + self._twist_springs(pinned)
+        self.F_internal = F_int
+        uu, qq = split(u)
+        duu, dqq = split(du)
+        vu, vq = split(v)
+        au, aq = split(a)
+
+        F_ext = cc * self.m * ufl.inner(self.gravity, duu) * dxr  # exact: constant load
+        extra = None
+        for ld_c, _ in self.loads:
+            term = cc * ufl.inner(ld_c, duu) * dxr
+            extra = term if extra is None else extra + term
+        for pm in case.point_masses:
+            for tag in self._item_tags(pm):
+                term = pm.mass * ufl.inner(self.gravity, duu("+")) * self.dS(tag)
+                extra = term if extra is None else extra + term
+        for ql, pl in self.point_loads:
+            for tag in self._item_tags(pl):
+                term = ufl.inner(ql, duu("+")) * self.dS(tag)
+                extra = term if extra is None else extra + term
+        if extra is not None:
+            F_ext = F_ext + self.load_factor * extra
+        self.F_external = F_ext
+
+        F_inertia = cc * (self.m * _p1_product(au, duu, t0, self.mesh)
+                          + self.rhoI * (_p1_product(aq, dqq, t0, self.mesh)
+                                         + _p1_product(ufl.dot(aq, E3), ufl.dot(dqq, E3),
+                                                       t0, self.mesh))) * dxr
+        for pm in case.point_masses:
+            for tag in self._item_tags(pm):
+                F_inertia = F_inertia + pm.mass * ufl.inner(au("+"), duu("+")) * self.dS(tag)
+        self.F_inertia = F_inertia
+
+        damp = case.damping
+        self.alpha = fem.Constant(self.mesh, PETSc.ScalarType(damp.alpha))
+        self.beta = fem.Constant(self.mesh, PETSc.ScalarType(damp.beta))
+        F_damp = None
+        if damp.model == "rayleigh" and (damp.alpha > 0 or damp.beta > 0):
+            F_damp = self.alpha * ufl.replace(F_inertia, {a: v})
+            if damp.beta > 0:
+                K0 = ufl.derivative(ufl.replace(F_int, {u: self.u_static}), self.u_static, dw)
+                F_damp = F_damp + self.beta * ufl.action(K0, v)
+        elif damp.model == "axial" and damp.beta > 0:
+            # the axial strain rate of the rod: d/dt Γ3 along v
+            G3_rate = ufl.derivative(G[2], u, v)
+            F_damp = self.beta * self.EA * G3_rate * ufl.derivative(G[2], u, du) * cc * dxr
+        self.F_damping = F_damp
+
+        self.F_static = F_int - F_ext
+        self.F_static_bilateral = self.F_static
+        self.F_dynamic = F_inertia + F_int - F_ext
+        if F_damp is not None:
+            self.F_dynamic = self.F_dynamic + F_damp
+        self.J_static = ufl.derivative(self.F_static, u, dw)
+        J = ufl.derivative(self.F_dynamic, u, dw) + self.shift_a * ufl.derivative(
+            self.F_dynamic, a, dw)
+        if F_damp is not None:
+            J = J + self.shift_v * ufl.derivative(self.F_dynamic, v, dw)
+        self.J_dynamic = J
+        self.M_form = ufl.derivative(F_inertia, a, dw)
+        # output fields (DG0 at the element midpoint, where the strains are sampled)
+        self._axial_strain = G[2]
+        self._tension = self.EA * G[2]
+        self._moment = self.EI * (K[0] * d[0] + K[1] * d[1]) + self.GJ * K[2] * d[2]
+
+    def _twist_springs(self, pinned):
+        _, qq = split(self.u)
+        _, dqq = split(self.du)
+        E3 = self.frame[2]
+        ents, vals = [], []
+        for i, anc in enumerate(pinned):
+            v = self._locate_node(anc.node)
+            ents.append(v)
+            vals.append(np.full(v.size, i + 1, dtype=np.int32))
+        ents_a = np.concatenate(ents).astype(np.int32)
+        vals_a = np.concatenate(vals)
+        order = np.argsort(ents_a)
+        tags = dmesh.meshtags(self.mesh, 0, ents_a[order], vals_a[order])
+        ds = ufl.Measure("ds", domain=self.mesh, subdomain_data=tags)
+        st = self.geometry.stations
+        form = None
+        for i, anc in enumerate(pinned):
+            h = st[1] - st[0] if anc.node == 0 else st[-1] - st[-2]
+            k_t = fem.Constant(self.mesh, PETSc.ScalarType(self.section_values["GJ"] / h))
+            term = k_t * ufl.dot(qq, E3) * ufl.dot(dqq, E3) * ds(i + 1)
+            form = term if form is None else form + term
+        return form
+
+    def _compile(self) -> None:
+        self.f_static = fem.form(self.F_static)
+        self.j_static = fem.form(self.J_static)
+        self.f_static_bilateral, self.j_static_bilateral = self.f_static, self.j_static
+        self.f_dynamic = fem.form(self.F_dynamic)
+        self.j_dynamic = fem.form(self.J_dynamic)
+        self.m_form = fem.form(self.M_form)
+        pts = self.W.element.interpolation_points()
+        self.tension_expr = fem.Expression(self._tension, pts)
+        self.strain_expr = fem.Expression(self._axial_strain, pts)
+        self.W3 = fem.VectorFunctionSpace(self.mesh, ("DG", 0), dim=3)
+        self.V3 = fem.VectorFunctionSpace(self.mesh, ("Lagrange", 1), dim=3)
+        # the output copies components node by node: both spaces must number nodes alike
+        n3 = self.V3.dofmap.index_map.size_local + self.V3.dofmap.index_map.num_ghosts
+        n6 = self.V.dofmap.index_map.size_local + self.V.dofmap.index_map.num_ghosts
+        if n3 != n6 or not np.allclose(self.V3.tabulate_dof_coordinates(),
+                                       self.V.tabulate_dof_coordinates()):
+            raise RuntimeError("beam: P1 spaces of 3 and 6 components number nodes apart")
+        self.moment_expr = fem.Expression(self._moment, self.W3.element.interpolation_points())
+        _, vq = split(self.v)
+        vu, _ = split(self.v)
+        kin = 0.5 * self.c * (self.m * ufl.inner(vu, vu) + self.rhoI * (
+            ufl.inner(vq, vq) + ufl.dot(vq, self.frame[2]) ** 2))
+        uu, _ = split(self.u)
+        self.energy_forms = (fem.form(kin * ufl.dx), fem.form(self.Pi),
+                             fem.form(-ufl.inner(self.c * self.m * self.gravity, uu) * ufl.dx))
+
+    def _part(self, f: fem.Function, comps: slice, out: fem.Function) -> fem.Function:
+        out.x.array[:] = f.x.array.reshape(-1, 6)[:, comps].reshape(-1)
+        return out
+
+    def displacement_part(self, f: fem.Function, name: str) -> fem.Function:
+        return self._part(f, slice(0, 3), fem.Function(self.V3, name=name))
+
+    def output_fields(self) -> list[fem.Function]:
+        """Displacement, velocity, rotation (Cayley vector), tension (axial force),
+        axial strain and the internal moment vector per element."""
+        if not hasattr(self, "_out"):
+            self._out = [fem.Function(self.V3, name="displacement"),
+                         fem.Function(self.V3, name="velocity"),
+                         fem.Function(self.V3, name="rotation"),
+                         fem.Function(self.W, name="tension"),
+                         fem.Function(self.W, name="strain"),
+                         fem.Function(self.W3, name="moment")]
+        d, v, rot, T, e, mom = self._out
+        self._part(self.u, slice(0, 3), d)
+        self._part(self.v, slice(0, 3), v)
+        self._part(self.u, slice(3, 6), rot)
+        T.interpolate(self.tension_expr)
+        e.interpolate(self.strain_expr)
+        mom.interpolate(self.moment_expr)
+        return self._out
+
+    def moment_field(self, name: str = "moment") -> fem.Function:
+        """The rod's internal moment vector per element (N m, DG0, spatial components)."""
+        f = fem.Function(self.W3, name=name)
+        f.interpolate(self.moment_expr)
+        return f
+
+    def slack_elements(self) -> int:
+        """Elements in compression (a rod may carry it; reported, as slack for a string)."""
+        return super().slack_elements()
+
+    # ------------------------------------------------------------------ statics start
+    def static_stages(self):
+        """Pre-solves of statics with a softer shear stiffness (``GA`` 1000, 100 and 10
+        times smaller, while above the force scale): the initial guess turns the sections
+        in the layers but leaves the centre line on the catenary, a shear strain of up to
+        ``Δ`` that the full ``GA`` turns into a residual Newton cannot cross (case B at
+        twice the default mesh). Yields a label per stage; restores ``GA``."""
+        target = self.section_values["GA"]
+        try:
+            for f in (1e-3, 1e-2, 1e-1):
+                if target * f > 10.0 * self.force_scale:
+                    self.GA.value = target * f
+                    yield f"GA = {target * f:.3g} N"
+        finally:
+            self.GA.value = target
+
+    def initial_guess(self) -> np.ndarray:
+        """Nodal (n, 6): the elastic catenary's positions, and rotations that turn the rod
+        from the string's tangent towards each clamp over the layer, by the inner
+        solution's angle ``φ(σ) = 4 atan(tan(Δ/4) exp(−σ/ℓ))`` (physics.md section 3)."""
+        st = self.geometry.stations
+        shape = self.catenary_shape
+        r = self.initial_shape
+        tang = shape.tangent(st) if hasattr(shape, "tangent") else np.gradient(r, st, axis=0)
+        tang = tang / np.linalg.norm(tang, axis=1)[:, None]
+        E3 = self._frame_np[2]
+        d3 = tang.copy()
+        for anc in self.anchors:
+            if anc.kind != "clamped":
+                continue
+            ell = self.layer_lengths[0 if anc.node == 0 else 1]
+            c3 = anc.direction if anc.node == 0 else -anc.direction  # d3 wanted at the clamp
+            t_a = tang[anc.node]
+            delta = math.atan2(np.linalg.norm(np.cross(c3, t_a)), float(c3 @ t_a))
+            sigma = st if anc.node == 0 else st[-1] - st
+            phi = 4.0 * np.arctan(math.tan(delta / 4.0) * np.exp(-sigma / ell))
+            for k in np.nonzero(phi > 1e-12 * max(delta, 1e-300))[0]:
+                axis = np.cross(tang[k], c3)
+                na = np.linalg.norm(axis)
+                if na < 1e-14:
+                    continue
+                R = rotation_matrix(2.0 * math.tan(phi[k] / 2.0) * axis / na)
+                d3[k] = R @ tang[k]
+            d3[anc.node] = c3
+        out = np.zeros((st.size, 6))
+        out[:, :3] = r - self.geometry.points
+        out[:, 3:] = np.array([cayley_from_rotation(E3, d) for d in d3])
+        for anc in self.anchors:
+            if anc.kind == "clamped":
+                out[anc.node, 3:] = anc.rotation
+        return out
