@@ -1,0 +1,225 @@
+"""``cablefem compare``: two hand-made run folders with known sinusoidal moment histories
+(run b = 1.1 x run a over their common time range) give relative differences of 0.1 and the
+closed-form steady-state peak and RMS; bad input exits 2 with one line naming the folder or
+file. The in-process tests run serially and under ``mpirun -n 2`` (rank 0 writes the
+folders); the subprocess tests are serial."""
+
+from __future__ import annotations
+
+import json
+import math
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from mpi4py import MPI
+
+from cablefem.cli import main
+from cablefem.comparecmd import compare_runs
+
+COLUMNS = ["time", "anchor", "Nx", "Ny", "Nz", "tension", "delta", "moment", "Mx", "My", "Mz",
+           "psi0", "layer_length", "moment_layer", "valid"]
+M0, A, W = 2.0, 1.0, 2 * np.pi  # moment = M0 + A sin(W t): period 1
+PER_PERIOD = 600  # samples per period; times k / 600 are exact at whole and quarter periods
+
+
+def _cell(x) -> str:
+    return "" if isinstance(x, float) and not math.isfinite(x) else (
+        x if isinstance(x, str) else repr(float(x)))
+
+
+def write_run(folder: Path, *, model: str | None, scale: float, t_end: float,
+              after: float = 1.0, anchors=(("p", "clamped"), ("q", "pinned")),
+              omega: float | None = 10.0, wall: dict | None = None,
+              static_moment: float = 0.5) -> Path:
+    """A run folder as cablefem writes it: summary.json and anchors.csv. Clamped anchors
+    have ``moment = scale (M0 + A sin(W t))`` for ``t <= 3`` and ``after`` times that
+    beyond (what a window over the run's own range, not the common one, would see);
+    pinned anchors have empty moment columns. ``model=None``: an old run without the key.
+    Rank 0 writes; collective."""
+    if MPI.COMM_WORLD.rank == 0:
+        folder.mkdir(parents=True)
+        times = np.arange(round(t_end * PER_PERIOD) + 1) / PER_PERIOD
+        lines = [",".join(COLUMNS)]
+        for t in times:
+            for name, kind in anchors:
+                row = {"time": t, "anchor": name, "Nx": 100.0, "Ny": 0.0, "Nz": 0.0,
+                       "tension": 100.0}
+                if kind == "clamped":
+                    m = scale * (M0 + A * np.sin(W * t)) * (after if t > 3.0 else 1.0)
+                    row.update({"delta": 0.1, "moment": m, "Mx": 0.0, "My": m, "Mz": 0.0,
+                                "psi0": 0.0, "layer_length": 0.01, "moment_layer": m,
+                                "valid": "1"})
+                lines.append(",".join(_cell(row.get(c, math.nan)) for c in COLUMNS))
+        (folder / "anchors.csv").write_text("\n".join(lines) + "\n")
+        entries = {}
+        for name, kind in anchors:
+            e = {"kind": kind, "static_tension": 100.0}
+            if kind == "clamped":
+                e.update({"static_moment": static_moment * scale,
+                          "steady_state_moment": {"peak": 0.0, "rms": 0.0, "mean": 0.0,
+                                                  "window": [0.0, 0.0]}})
+            entries[name] = e
+        summary = {"cablefem": "0.1.0", "status": "completed",
+                   "case": {"title": "compare test"}, "anchors": entries,
+                   "wall_time": wall or {"total": 2.0, "dynamics": 1.5}}
+        if model is not None:
+            summary["model"] = model
+        if omega is not None:
+            summary["modes"] = [{"omega": omega, "frequency_hz": omega / (2 * np.pi)}]
+        (folder / "summary.json").write_text(json.dumps(summary))
+    MPI.COMM_WORLD.Barrier()
+    return folder
+
+
+@pytest.fixture
+def runs(mpi_tmp_path):
+    """Run a: an old string run (no "model" key), t in [0, 3]. Run b: a beam run, t in
+    [0, 4.5], 1.1 x run a up to t = 3 and 5.5 x beyond: the common range is [0, 3], its
+    last third [2, 3] holds one whole period."""
+    a = write_run(mpi_tmp_path / "string", model=None, scale=1.0, t_end=3.0)
+    b = write_run(mpi_tmp_path / "beam", model="beam", scale=1.1, t_end=4.5, after=5.0,
+                  omega=10.5, wall={"total": 20.0, "dynamics": 18.0})
+    return a, b
+
+
+def test_compare_known_differences(runs):
+    a, b = runs
+    res = compare_runs(a, b)
+    p = res["anchors"]["p"]
+    assert list(res["anchors"]) == ["p"] and res["skipped_anchors"] == []
+    assert res["runs"]["a"]["model"] == "string" and res["runs"]["b"]["model"] == "beam"
+    assert res["runs"]["a"]["label"] == "string (string)"
+    assert res["runs"]["b"]["label"] == "beam (beam)"
+    # the last third of the COMMON range [0, 3] (run b alone would give [3, 4.5]); the
+    # times k/600 and 3 - 3/3 are exact in binary
+    assert res["common_time_range"] == [0.0, 3.0]
+    assert p["window"] == [2.0, 3.0]
+    # peak |M0 + A sin| = M0 + A, sampled exactly at t = 2.25 (sin = 1 to 1e-15)
+    assert p["steady_peak"]["a"] == pytest.approx(M0 + A, rel=1e-14)
+    # RMS over a whole period sqrt(M0^2 + A^2/2); the window's 601 samples include both
+    # ends of the period (one extra sample with sin = 0): mean(sin^2) = 300/601 instead of
+    # 1/2, a relative error of (A^2/2)/(601 (M0^2 + A^2/2)) = 1.8e-4 in RMS^2, half in RMS
+    assert p["steady_rms"]["a"] == pytest.approx(math.sqrt(M0 ** 2 + A ** 2 / 2), rel=1e-4)
+    assert p["steady_mean"]["a"] == pytest.approx(M0, rel=1e-12)  # sin sums to 0 (round-off)
+    # b = 1.1 a sample by sample: the relative differences are 0.1 up to round-off
+    for key in ("static_moment", "steady_peak", "steady_rms", "steady_mean"):
+        assert p[key]["rel_diff"] == pytest.approx(0.1, abs=1e-12), key
+    assert p["static_tension"]["rel_diff"] == 0.0
+    assert res["first_frequency"]["omega"]["rel_diff"] == pytest.approx(0.05, abs=1e-14)
+    assert res["wall_time"]["total"] == {"a": 2.0, "b": 20.0, "ratio": 10.0}
+    assert res["wall_time"]["dynamics"]["ratio"] == pytest.approx(12.0, rel=1e-14)
+
+    # outputs in dir_b (the default): the JSON is the returned dict; a markdown table with
+    # one row per quantity; one figure per clamped anchor (none for the pinned q)
+    assert json.loads((b / "compare.json").read_text()) == res
+    md = (b / "compare.md").read_text()
+    assert "| p: steady-state RMS \\|M\\| |" in md and "+10.00 %" in md
+    assert "x 10" in md and "+5.00 %" in md
+    assert res["figures"] == ["compare_p.png"]
+    assert (b / "compare_p.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert not (b / "compare_q.png").exists()
+
+
+def test_compare_static_runs_and_output_folder(mpi_tmp_path):
+    """Runs with the static state only (one time): static quantities compared, steady state
+    not (no common time range), missing modes and dynamics wall time give nulls."""
+    a = write_run(mpi_tmp_path / "a", model="string", scale=1.0, t_end=0.0, omega=None,
+                  wall={"total": 1.0})
+    b = write_run(mpi_tmp_path / "b", model="beam", scale=1.1, t_end=0.0, omega=None,
+                  wall={"total": 3.0})
+    out = mpi_tmp_path / "out" / "cmp"
+    res = compare_runs(a, b, out)
+    p = res["anchors"]["p"]
+    assert p["static_moment"]["rel_diff"] == pytest.approx(0.1, abs=1e-12)
+    assert p["window"] is None and p["steady_rms"]["rel_diff"] is None
+    assert res["common_time_range"] is None
+    assert res["first_frequency"]["omega"] == {"a": None, "b": None, "rel_diff": None}
+    assert "dynamics" not in res["wall_time"] and res["wall_time"]["total"]["ratio"] == 3.0
+    for name in ("compare.json", "compare.md", "compare_p.png"):
+        assert (out / name).is_file(), name
+    assert not (b / "compare.json").exists()
+
+
+def _bad_summary(folder: Path) -> None:
+    if MPI.COMM_WORLD.rank == 0:
+        (folder / "summary.json").write_text('{"anchors": {"p": ')
+    MPI.COMM_WORLD.Barrier()
+
+
+def _bad_csv(folder: Path) -> None:
+    if MPI.COMM_WORLD.rank == 0:
+        path = folder / "anchors.csv"
+        lines = path.read_text().splitlines()
+        cells = lines[3].split(",")  # line 4 of the file: anchor p at t = 1/600
+        cells[COLUMNS.index("moment")] = "abc"
+        lines[3] = ",".join(cells)
+        path.write_text("\n".join(lines) + "\n")
+    MPI.COMM_WORLD.Barrier()
+
+
+def _no_csv(folder: Path) -> None:
+    if MPI.COMM_WORLD.rank == 0:
+        (folder / "anchors.csv").unlink()
+    MPI.COMM_WORLD.Barrier()
+
+
+@pytest.mark.parametrize("spoil,message", [
+    (None, "no such run folder"),
+    (_bad_summary, "summary.json: not valid JSON (line 1"),
+    (_no_csv, "anchors.csv: no such file"),
+    (_bad_csv, "anchors.csv:4: column 'moment'"),
+])
+def test_cli_bad_folder_exit_2(runs, capsys, spoil, message):
+    a, b = runs
+    if spoil is None:
+        b = b.parent / "missing"
+    else:
+        spoil(b)
+    assert main(["compare", str(a), str(b), "-q"]) == 2
+    err = capsys.readouterr().err
+    assert message in err and str(b) in err, err
+    assert err.count("\n") == 1 and "Traceback" not in err
+
+
+def test_cli_different_anchors_exit_2(runs, mpi_tmp_path, capsys):
+    a, _ = runs
+    c = write_run(mpi_tmp_path / "other", model="beam", scale=1.0, t_end=1.0,
+                  anchors=(("p", "clamped"), ("r", "pinned")))
+    assert main(["compare", str(a), str(c)]) == 2
+    err = capsys.readouterr().err
+    assert "different anchors" in err and "'q'" in err and "'r'" in err, err
+    assert not (c / "compare.json").exists()
+
+
+def test_cli_no_clamped_anchor_exit_2(mpi_tmp_path, capsys):
+    pinned = (("p", "pinned"), ("q", "pinned"))
+    a = write_run(mpi_tmp_path / "a", model=None, scale=1.0, t_end=1.0, anchors=pinned)
+    b = write_run(mpi_tmp_path / "b", model="beam", scale=1.0, t_end=1.0, anchors=pinned)
+    assert main(["compare", str(a), str(b)]) == 2
+    err = capsys.readouterr().err
+    assert "nothing to compare" in err and str(a) in err and str(b) in err, err
+
+
+def cablefem(*args):
+    return subprocess.run([sys.executable, "-m", "cablefem", *map(str, args)],
+                          capture_output=True, text=True, timeout=120)
+
+
+@pytest.mark.serial  # a subprocess: not under mpirun
+def test_cli_prints_table(runs, tmp_path):
+    a, b = runs
+    out = tmp_path / "cmp"
+    res = cablefem("compare", a, b, "--output", out)
+    assert res.returncode == 0, res.stderr
+    assert "p: steady-state RMS |M|" in res.stdout and "+10.00 %" in res.stdout
+    assert "steady state: t in [2, 3]" in res.stdout
+    assert json.loads((out / "compare.json").read_text())["anchors"]["p"]["window"] == [2, 3]
+    res = cablefem("compare", a, b, "-o", out, "-q")
+    assert res.returncode == 0 and res.stdout == "" and res.stderr == "", res.stderr
+    res = cablefem("compare", a, b, "--bogus")
+    assert res.returncode == 2 and "--bogus" in res.stderr
+    help_ = cablefem("--help").stdout
+    assert "compare" in help_ and "two runs" in help_
