@@ -286,3 +286,39 @@ def test_static_anchor_moment_converges_to_the_composite(name, tol):
     d2 = abs(moments[1.0] - moments[2.0])
     order = np.log2(d1 / d2)
     assert 1.7 < order < 2.3  # measured 1.9-2.0 (case B pre-asymptotic at r = 0.5)
+
+
+# ----------------------------------------------------------------------------- a beam run
+def test_beam_run_writes_the_string_runs_files(mpi_tmp_path):
+    """run_case(model="beam") on case A without its anchor motion and damping: the state
+    stays the static equilibrium, so the dynamic anchor moment (consistent reaction with
+    the equilibrium acceleration, rotary inertia included) equals the static one to
+    Newton's tolerance (1e-9 of it), and the files carry the rod's moment."""
+    import csv
+    import dataclasses
+    import json
+
+    from cablefem.run import run_case
+
+    case = load_case(DEMOS / "paper_inplane.toml")
+    anchors = [dataclasses.replace(a, motion=None) for a in case.anchors]
+    case = dataclasses.replace(case, anchors=anchors, damping=dataclasses.replace(
+        case.damping, alpha=0.0, beta=0.0), dynamics=dataclasses.replace(
+        case.dynamics, t_end=0.05, fields_every=5))
+    res = run_case(case, mpi_tmp_path, MPI.COMM_WORLD, model="beam", progress=False,
+                   figures=False, modes=0)
+    summary = json.loads((mpi_tmp_path / "summary.json").read_text())
+    assert summary["model"] == "beam" and summary["status"] == "completed"
+    assert summary["degrees_of_freedom"] == 6 * (summary["elements"] + 1)
+    p = summary["anchors"]["p"]
+    # the rod's static moment against the composite with its own force (test above: 2e-5)
+    assert p["static_moment"] == pytest.approx(p["static_moment_composite"], rel=2e-5)
+    M = res.moments["p"]["moment"]
+    assert M.size == 11
+    assert np.allclose(M, p["static_moment"], rtol=1e-9, atol=0)
+    with open(mpi_tmp_path / "anchors.csv", newline="") as fh:
+        rows = [r for r in csv.DictReader(fh) if r["anchor"] == "p"]
+    assert float(rows[-1]["My"]) == pytest.approx(p["static_moment"], rel=1e-9)
+    xdmf = (mpi_tmp_path / "string.xdmf").read_text()
+    for field in ("displacement", "rotation", "tension", "moment"):
+        assert f'Name="{field}"' in xdmf
