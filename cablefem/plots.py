@@ -28,9 +28,10 @@ def is_spatial(psi0: np.ndarray, valid: np.ndarray) -> bool:
 
 
 def anchor_figures(outdir: Path, times: np.ndarray, moments: dict[str, dict[str, np.ndarray]],
-                   comm: MPI.Comm = MPI.COMM_WORLD, fraction: float = 1 / 3) -> list[str]:
+                   comm: MPI.Comm = MPI.COMM_WORLD, fraction: float = 1 / 3,
+                   source: str = "inner solution + string curvature") -> list[str]:
     """Draw the figures (at most :data:`MAX_PANELS` anchors: the most loaded); returns their
-    file names (on every rank)."""
+    file names (on every rank). ``source`` says where the moments come from (title)."""
     names: list[str] = []
     if len(moments) > MAX_PANELS:  # a network: the most loaded anchors
         peak = {n: np.nanmax(np.where(mo["valid"] > 0, mo["moment"], np.nan), initial=0.0)
@@ -64,7 +65,7 @@ def anchor_figures(outdir: Path, times: np.ndarray, moments: dict[str, dict[str,
             ax.grid(True, lw=0.3)
             ax.legend(loc="upper left", fontsize=7)
         axes[-1, 0].set_xlabel("time t")
-        fig.suptitle("Bending moment at the clamped anchors: inner solution + string curvature")
+        fig.suptitle(f"Bending moment at the clamped anchors: {source}")
         fig.tight_layout(rect=(0, 0, 1, 1 - 0.35 / fig.get_figheight()))
         fig.savefig(outdir / "anchor_moments.png", dpi=130)
         plt.close(fig)

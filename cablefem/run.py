@@ -541,7 +541,9 @@ def run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *,
     if figures and len(times) > 1 and moments:
         from .plots import anchor_figures
 
-        summary["figures"] = anchor_figures(outdir, times, moments, comm)
+        source = ("the rod's own moment (beam model)" if kind == "beam"
+                  else "inner solution + string curvature")
+        summary["figures"] = anchor_figures(outdir, times, moments, comm, source=source)
     if case.fatigue is not None and len(times) > 1 and moments:
         from .fatiguecmd import run_fatigue
 
