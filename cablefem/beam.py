@@ -59,11 +59,10 @@ import math
 
 import numpy as np
 import ufl
-from dolfinx import fem, mesh as dmesh
+from dolfinx import fem
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from . import catenary
 from .case import Case, CaseError
 from .model import CableModel
 from .network import straight_cable
@@ -243,9 +242,7 @@ class BeamModel(CableModel):
         self.force_scale = max(self.force_scale, sec.EI / g.length**2)
         p, q = self._anchor_positions
         length = g.length
-        shape = catenary.catenary_between(p, q, length, self.weight, sec.EA,
-                                          np.asarray(case.gravity.direction, float))
-        self.catenary_shape = shape
+        shape = self.catenary_shape  # the string's, through the same anchors
         ends = {}
         for end, a in enumerate(case.anchors):
             if a.kind == "clamped":
@@ -343,95 +340,44 @@ class BeamModel(CableModel):
                       for E in self._frame_np]
 
     def build_forms(self) -> None:
-        u, v, a, du, dw, t0 = self.u, self.v, self.a, self.du, self.dw, self.t0
-        case, cc = self.case, self.c
+        u, a, du, t0, cc = self.u, self.a, self.du, self.t0, self.c
         dxr = ufl.dx(metadata={"quadrature_degree": 0})  # one point: locking-free
         G, K, d = rod_strains(u, t0, self.frame, cc)
         psi = energy_density(G, K, self.EA, self.GA, self.EI, self.GJ)
         self.Pi = psi * cc * dxr
         F_int = ufl.derivative(self.Pi, u, du)
-        E3 = self.frame[2]
         # pinned anchors hold the twist (a spring as stiff as the end element, GJ/h)
         pinned = [anc for anc in self.anchors if anc.kind == "pinned"]
         if pinned:
             F_int = F_int + self._twist_springs(pinned)
-        self.F_internal = F_int
-        uu, qq = split(u)
         duu, dqq = split(du)
-        vu, vq = split(v)
         au, aq = split(a)
-
-        F_ext = cc * self.m * ufl.inner(self.gravity, duu) * dxr  # exact: constant load
-        extra = None
-        for ld_c, _ in self.loads:
-            term = cc * ufl.inner(ld_c, duu) * dxr
-            extra = term if extra is None else extra + term
-        for pm in case.point_masses:
-            for tag in self._item_tags(pm):
-                term = pm.mass * ufl.inner(self.gravity, duu("+")) * self.dS(tag)
-                extra = term if extra is None else extra + term
-        for ql, pl in self.point_loads:
-            for tag in self._item_tags(pl):
-                term = ufl.inner(ql, duu("+")) * self.dS(tag)
-                extra = term if extra is None else extra + term
-        if extra is not None:
-            F_ext = F_ext + self.load_factor * extra
-        self.F_external = F_ext
-
+        E3 = self.frame[2]
         F_inertia = cc * (self.m * _p1_product(au, duu, t0, self.mesh)
                           + self.rhoI * (_p1_product(aq, dqq, t0, self.mesh)
                                          + _p1_product(ufl.dot(aq, E3), ufl.dot(dqq, E3),
                                                        t0, self.mesh))) * dxr
-        for pm in case.point_masses:
-            for tag in self._item_tags(pm):
-                F_inertia = F_inertia + pm.mass * ufl.inner(au("+"), duu("+")) * self.dS(tag)
-        self.F_inertia = F_inertia
-
-        damp = case.damping
-        self.alpha = fem.Constant(self.mesh, PETSc.ScalarType(damp.alpha))
-        self.beta = fem.Constant(self.mesh, PETSc.ScalarType(damp.beta))
-        F_damp = None
-        if damp.model == "rayleigh" and (damp.alpha > 0 or damp.beta > 0):
-            F_damp = self.alpha * ufl.replace(F_inertia, {a: v})
-            if damp.beta > 0:
-                K0 = ufl.derivative(ufl.replace(F_int, {u: self.u_static}), self.u_static, dw)
-                F_damp = F_damp + self.beta * ufl.action(K0, v)
-        elif damp.model == "axial" and damp.beta > 0:
-            # the axial strain rate of the rod: d/dt Γ3 along v
-            G3_rate = ufl.derivative(G[2], u, v)
-            F_damp = self.beta * self.EA * G3_rate * ufl.derivative(G[2], u, du) * cc * dxr
-        self.F_damping = F_damp
-
-        self.F_static = F_int - F_ext
-        self.F_static_bilateral = self.F_static
-        self.F_dynamic = F_inertia + F_int - F_ext
-        if F_damp is not None:
-            self.F_dynamic = self.F_dynamic + F_damp
-        self.J_static = ufl.derivative(self.F_static, u, dw)
-        J = ufl.derivative(self.F_dynamic, u, dw) + self.shift_a * ufl.derivative(
-            self.F_dynamic, a, dw)
-        if F_damp is not None:
-            J = J + self.shift_v * ufl.derivative(self.F_dynamic, v, dw)
-        self.J_dynamic = J
-        self.M_form = ufl.derivative(F_inertia, a, dw)
+        self._dxr, self._G3 = dxr, G[2]
+        # constant loads on P1 fields: one point integrates them exactly
+        self._set_forms(F_int=F_int,
+                        F_weight=cc * self.m * ufl.inner(self.gravity, duu) * dxr,
+                        F_inertia=F_inertia, du_t=duu, a_t=au, dx=dxr)
         # output fields (DG0 at the element midpoint, where the strains are sampled)
         self._axial_strain = G[2]
         self._tension = self.EA * G[2]
         self._moment = self.EI * (K[0] * d[0] + K[1] * d[1]) + self.GJ * K[2] * d[2]
 
+    def _axial_damping_work(self):
+        """The rod's axial strain-rate damping: ``β EA (dΓ3/dt) δΓ3``."""
+        G3, u = self._G3, self.u
+        return (self.beta * self.EA * ufl.derivative(G3, u, self.v)
+                * ufl.derivative(G3, u, self.du) * self.c * self._dxr)
+
     def _twist_springs(self, pinned):
         _, qq = split(self.u)
         _, dqq = split(self.du)
         E3 = self.frame[2]
-        ents, vals = [], []
-        for i, anc in enumerate(pinned):
-            v = self._locate_node(anc.node)
-            ents.append(v)
-            vals.append(np.full(v.size, i + 1, dtype=np.int32))
-        ents_a = np.concatenate(ents).astype(np.int32)
-        vals_a = np.concatenate(vals)
-        order = np.argsort(ents_a)
-        tags = dmesh.meshtags(self.mesh, 0, ents_a[order], vals_a[order])
+        tags = self._vertex_tags({anc.node: i + 1 for i, anc in enumerate(pinned)})
         ds = ufl.Measure("ds", domain=self.mesh, subdomain_data=tags)
         st = self.geometry.stations
         form = None
@@ -461,8 +407,7 @@ class BeamModel(CableModel):
                                        self.V.tabulate_dof_coordinates()):
             raise RuntimeError("beam: P1 spaces of 3 and 6 components number nodes apart")
         self.moment_expr = fem.Expression(self._moment, self.W3.element.interpolation_points())
-        _, vq = split(self.v)
-        vu, _ = split(self.v)
+        vu, vq = split(self.v)
         kin = 0.5 * self.c * (self.m * ufl.inner(vu, vu) + self.rhoI * (
             ufl.inner(vq, vq) + ufl.dot(vq, self.frame[2]) ** 2))
         uu, _ = split(self.u)
@@ -501,10 +446,6 @@ class BeamModel(CableModel):
         f.interpolate(self.moment_expr)
         return f
 
-    def slack_elements(self) -> int:
-        """Elements in compression (a rod may carry it; reported, as slack for a string)."""
-        return super().slack_elements()
-
     # ------------------------------------------------------------------ statics start
     def static_stages(self):
         """Pre-solves of statics with a softer shear stiffness (``GA`` 1000, 100 and 10
@@ -526,9 +467,8 @@ class BeamModel(CableModel):
         from the string's tangent towards each clamp over the layer, by the inner
         solution's angle ``φ(σ) = 4 atan(tan(Δ/4) exp(−σ/ℓ))`` (physics.md section 3)."""
         st = self.geometry.stations
-        shape = self.catenary_shape
         r = self.initial_shape
-        tang = shape.tangent(st) if hasattr(shape, "tangent") else np.gradient(r, st, axis=0)
+        tang = np.gradient(r, st, axis=0)
         tang = tang / np.linalg.norm(tang, axis=1)[:, None]
         E3 = self._frame_np[2]
         d3 = tang.copy()

@@ -199,6 +199,7 @@ class CableModel:
         # initial shape: the elastic catenary through the anchors (exact for the bare cable)
         try:
             shape = catenary.catenary_between(p, q, length, self.weight, sec.EA, gdir)
+            self.catenary_shape = shape
             r0 = shape.position(g.stations)
             self.force_scale = float(max(self.weight * length,
                                          np.max(shape.tension(g.stations))))
@@ -242,21 +243,25 @@ class CableModel:
             raise RuntimeError(f"anchor ownership is not unique across ranks: {nowners}")
         return out
 
-    def _point_tags(self) -> None:
-        """Vertex tags for point masses and point loads (one tag per loaded node)."""
-        nodes = sorted({k for item in list(self.case.point_masses) + list(self.case.point_loads)
-                        for k in self._item_nodes(item)})
-        self._node_tag = {k: i + 1 for i, k in enumerate(nodes)}
+    def _vertex_tags(self, node_tags: dict[int, int]):
+        """Mesh tags of dimension 0: reference node -> tag (the node's local vertices)."""
         ents, vals = [], []
-        for k, tag in self._node_tag.items():
+        for k, tag in node_tags.items():
             v = self._locate_node(k)
             ents.append(v)
             vals.append(np.full(v.size, tag, dtype=np.int32))
         ents_a = np.concatenate(ents).astype(np.int32) if ents else np.zeros(0, np.int32)
         vals_a = np.concatenate(vals) if vals else np.zeros(0, np.int32)
         order = np.argsort(ents_a)
-        tags = dmesh.meshtags(self.mesh, 0, ents_a[order], vals_a[order])
-        self.dS = ufl.Measure("dS", domain=self.mesh, subdomain_data=tags)
+        return dmesh.meshtags(self.mesh, 0, ents_a[order], vals_a[order])
+
+    def _point_tags(self) -> None:
+        """Vertex tags for point masses and point loads (one tag per loaded node)."""
+        nodes = sorted({k for item in list(self.case.point_masses) + list(self.case.point_loads)
+                        for k in self._item_nodes(item)})
+        self._node_tag = {k: i + 1 for i, k in enumerate(nodes)}
+        self.dS = ufl.Measure("dS", domain=self.mesh,
+                              subdomain_data=self._vertex_tags(self._node_tag))
 
     ramp_weight = False  #: statics ramps the weight with the extra loads (networks)
 
@@ -278,35 +283,47 @@ class CableModel:
     # ------------------------------------------------------------------ forms
     def build_forms(self) -> None:
         """Build the UFL residuals and Jacobians (override or extend, then :meth:`compile`)."""
-        u, v, a, du, dw, t0 = self.u, self.v, self.a, self.du, self.dw, self.t0
-        case = self.case
-        cc = self.c
-        self.F_internal = string.internal_work(u, du, t0, self.EA, self.tension_only, c=cc)
-        # the cable's own weight, then "extra" loads that statics may ramp (load_factor)
-        F_ext = string.load_work(self.m * self.gravity, du, c=cc)
-        extra = None
-        for q, _ in self.loads:
-            term = string.load_work(q, du, c=cc)
-            extra = term if extra is None else extra + term
-        for pm in case.point_masses:
-            for tag in self._item_tags(pm):
-                term = pm.mass * ufl.inner(self.gravity, du("+")) * self.dS(tag)
-                extra = term if extra is None else extra + term
-        for q, pl in self.point_loads:
-            for tag in self._item_tags(pl):
-                term = ufl.inner(q, du("+")) * self.dS(tag)
-                extra = term if extra is None else extra + term
+        u, a, du, t0, cc = self.u, self.a, self.du, self.t0, self.c
+        self._set_forms(
+            F_int=string.internal_work(u, du, t0, self.EA, self.tension_only, c=cc),
+            F_weight=string.load_work(self.m * self.gravity, du, c=cc),
+            F_inertia=string.inertia_work(self.m, a, du, c=cc),
+            du_t=du, a_t=a, dx=ufl.dx,
+            # the same with compression allowed: statics uses it to get off a guess on
+            # which every element is slack (zero tangent stiffness under tension only)
+            bilateral=string.internal_work(u, du, t0, self.EA, False, c=cc))
+
+    def _axial_damping_work(self):
+        """The "axial" damping model's virtual work (strain-rate damping along the axis)."""
+        return string.axial_damping_work(self.u, self.v, self.du, self.t0, self.EA,
+                                         self.beta, c=self.c)
+
+    def _set_forms(self, F_int, F_weight, F_inertia, du_t, a_t, dx, bilateral=None) -> None:
+        """What the string and the rod share: the extra loads (ramped by statics through
+        ``load_factor``), point masses, damping, the residuals and their Jacobians.
+
+        ``F_int``, ``F_weight``, ``F_inertia``: the model's internal work, own weight and
+        distributed inertia; ``du_t``, ``a_t``: the translational parts of the test function
+        and the acceleration; ``dx``: the cell measure of distributed loads; ``bilateral``:
+        the internal work with compression allowed (default ``F_int``)."""
+        u, v, a, dw = self.u, self.v, self.a, self.dw
+        case, cc = self.case, self.c
+        self.F_internal = F_int
+        extra = [string.load_work(q, du_t, dx=dx, c=cc) for q, _ in self.loads]
+        extra += [pm.mass * ufl.inner(self.gravity, du_t("+")) * self.dS(tag)
+                  for pm in case.point_masses for tag in self._item_tags(pm)]
+        extra += [ufl.inner(q, du_t("+")) * self.dS(tag)
+                  for q, pl in self.point_loads for tag in self._item_tags(pl)]
+        F_ext = F_weight
         if self.ramp_weight:  # networks: statics ramps the weight too (from the pretension)
-            extra = F_ext if extra is None else F_ext + extra
-            F_ext = self.load_factor * extra
-        elif extra is not None:
-            F_ext = F_ext + self.load_factor * extra
+            F_ext = self.load_factor * sum(extra, F_weight)
+        elif extra:
+            F_ext = F_weight + self.load_factor * sum(extra[1:], extra[0])
         self.F_external = F_ext
 
-        F_inertia = string.inertia_work(self.m, a, du, c=cc)
         for pm in case.point_masses:
             for tag in self._item_tags(pm):
-                F_inertia = F_inertia + pm.mass * ufl.inner(a("+"), du("+")) * self.dS(tag)
+                F_inertia = F_inertia + pm.mass * ufl.inner(a_t("+"), du_t("+")) * self.dS(tag)
         self.F_inertia = F_inertia
 
         damp = case.damping
@@ -316,22 +333,16 @@ class CableModel:
         F_damp = None
         if damp.model == "rayleigh" and (damp.alpha > 0 or damp.beta > 0):
             F_damp = self.alpha * ufl.replace(F_inertia, {a: v})
-            if damp.beta > 0:
-                K0 = ufl.derivative(
-                    string.internal_work(self.u_static, du, t0, self.EA, self.tension_only,
-                                         c=cc),
-                    self.u_static, dw)
+            if damp.beta > 0:  # K0: the tangent stiffness at the static state
+                K0 = ufl.derivative(ufl.replace(F_int, {u: self.u_static}), self.u_static, dw)
                 F_damp = F_damp + self.beta * ufl.action(K0, v)
         elif damp.model == "axial" and damp.beta > 0:
-            F_damp = string.axial_damping_work(u, v, du, t0, self.EA, self.beta, c=cc)
+            F_damp = self._axial_damping_work()
         self.F_damping = F_damp
 
-        self.F_static = self.F_internal - self.F_external
-        # the same with compression allowed: statics uses it to get off a guess on which
-        # every element is slack (zero tangent stiffness under the tension-only law)
-        self.F_static_bilateral = string.internal_work(u, du, t0, self.EA, False,
-                                                       c=cc) - F_ext
-        self.F_dynamic = F_inertia + self.F_internal - self.F_external
+        self.F_static = F_int - F_ext
+        self.F_static_bilateral = (bilateral if bilateral is not None else F_int) - F_ext
+        self.F_dynamic = F_inertia + F_int - F_ext
         if F_damp is not None:
             self.F_dynamic = self.F_dynamic + F_damp
         self.J_static = ufl.derivative(self.F_static, u, dw)

@@ -493,8 +493,7 @@ def run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *,
         log.error("%s", err)
         if isinstance(err, DynamicsError) and emitter.times:
             # the last converged state (left in the model by integrate) goes to string.xdmf
-            last = static.anchor_forces if kind == "beam" else np.array(
-                [emitter.forces[a.name][-1] for a in model.anchors])  # beam: unused here
+            last = np.array([emitter.forces[a.name][-1] for a in model.anchors])
             try:
                 if err.time != emitter.last_fields_time:  # else it is already in the file
                     emitter.fields(err.time, last)

@@ -223,8 +223,7 @@ def test_taut_pinned_beam_frequencies():
     T = EA * (L / l - 1.0)
     modal = solve_modes(model, 4)
     for k, n in enumerate((1, 1, 2, 2)):
-        # the mass per stress-free length m over the stretched span: m L/l per stretched
-        # length... the string's own test uses m per chord length; here lambda = L/l
+        # m is per stress-free length; the formula wants mass per stretched length, m l/L
         mL = m * l / L
         exact = n * np.pi / L * np.sqrt(T / mL) * np.sqrt(1 + (n * np.pi) ** 2 * EI / (T * L**2))
         # consistent-mass P1 error (omega h)^2/24 ~ 1e-5 and rotary inertia
