@@ -98,6 +98,9 @@ class AnchorForces:
             own = anc.dofs[anc.dofs < n_owned]
             if own.size:
                 local[i] = -arr[bs * own[0]: bs * own[0] + bs]
+                if m.hinges:  # the layer's weight and inertia: the force at the real anchor
+                    acc = anc.acceleration(t) if dynamic else np.zeros(3)
+                    local[i, :3] += m.hinges.layer_force(i, acc)
                 if bs == 6:  # a rod: the rotation rows' reaction -> the moment (beam.py)
                     local[i, 3:] = anc.moment_map @ local[i, 3:]
         return m.comm.allreduce(local, op=MPI.SUM)

@@ -29,7 +29,7 @@ from numpy.typing import ArrayLike
 __all__ = [
     "AnchorLayer", "anchor_frame", "layer", "angle_profile", "curvature_profile",
     "moment_profile", "exact_angle_profile", "exact_curvature_profile", "string_curvature",
-    "composite_curvature", "graded_stations",
+    "composite_curvature", "graded_stations", "far_field_offsets", "virtual_hinge",
 ]
 
 #: ``|c x t|`` below this: the bending plane (step 4) is undefined.
@@ -331,6 +331,84 @@ def composite_curvature(kappa_string: ArrayLike, sigmas: ArrayLike, deltas: Arra
     kap = np.where(active[..., None], curvature_profile(sig, d, el), 0.0) * o[:, None]
     nrm = np.where(active[..., None], np.asarray(normals, float), 0.0)
     return ks + np.einsum("...ap,...ak->...pk", kap, nrm)
+
+
+#: Gauss-Legendre nodes and weights on [0, 1] for the far-field integrals over the angle.
+#: Their integrands are analytic in phi on [0, pi]: 16 points give round-off (checked in
+#: tests/test_hinge.py against an integration of the elastica along sigma).
+_GL_X, _GL_W = np.polynomial.legendre.leggauss(16)
+_GL_X, _GL_W = 0.5 * (_GL_X + 1.0), 0.5 * _GL_W
+
+
+def far_field_offsets(delta: ArrayLike, T: ArrayLike, EI: ArrayLike,
+                      EA: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
+    """Where the rod's far field lies relative to the anchor (the layer's far field).
+
+    The rod leaves the anchor along c and turns to the string tangent t over the layer;
+    its centre line is ``r(sigma) = A + int_0^sigma lambda d3``, with ``d3 = cos(phi) t +
+    sin(phi) n`` (``n`` normal to t in the bending plane, on the side of c) and the
+    stretch ``lambda = 1 + (T/EA) cos(phi)`` of an unshearable rod whose internal force is
+    the constant N = T t (physics.md section 3). Far from the anchor it is the straight line
+    ``A + D + lambda_inf sigma t``, ``lambda_inf = 1 + T/EA``, with the offset
+    ``D = D_t t + D_n n = int_0^inf (lambda d3 - lambda_inf t) dsigma``. Changing the
+    variable to phi with the exact first integral (Eq. 35),
+    ``dphi/dsigma = -(2/ell0) sin(phi/2) sqrt(1 + beta cos^2(phi/2))``, ell0 = sqrt(EI/T),
+    beta = T/EA::
+
+        D_n = ell0 int_0^Delta (1 + beta cos phi) cos(phi/2) / sqrt(1 + beta cos^2(phi/2)) dphi
+        D_t = -ell0 int_0^Delta sin(phi/2) (1 + 2 beta cos^2(phi/2))
+              / sqrt(1 + beta cos^2(phi/2)) dphi
+
+    (beta = 0: D_n = 2 ell0 sin(Delta/2), D_t = -2 ell0 (1 - cos(Delta/2))). Returns
+    ``(D_t, D_n)`` [m], broadcast over the arguments; NaN where T <= 0.
+    """
+    d = np.asarray(delta, float)
+    T = np.asarray(T, float)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        Tp = np.where(T > 0, T, np.nan)
+        beta = Tp / np.asarray(EA, float)
+        ell0 = np.sqrt(np.asarray(EI, float) / Tp)
+        phi = d[..., None] * _GL_X
+        ch = np.cos(phi / 2)
+        root = np.sqrt(1 + beta[..., None] * ch**2)
+        i_n = (1 + beta[..., None] * np.cos(phi)) * ch / root
+        i_t = np.sin(phi / 2) * (1 + 2 * beta[..., None] * ch**2) / root
+        D_n = ell0 * d * (i_n @ _GL_W)
+        D_t = -ell0 * d * (i_t @ _GL_W)
+    return D_t, D_n
+
+
+def virtual_hinge(delta: ArrayLike, T: ArrayLike, EI: ArrayLike,
+                  EA: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
+    """The virtual hinge of the first-order outer problem at a clamped anchor.
+
+    Away from the clamp the rod is a string that starts at the hinge ``H = A + h c`` on
+    the clamp line, with ``sigma_h`` of stress-free length less: H is the point where the
+    far-field line ``A + D + lambda_inf sigma t`` (:func:`far_field_offsets`) crosses the
+    clamp line, ``h c = D + lambda_inf sigma_h t``, i.e.::
+
+        h = D_n / sin(Delta),   sigma_h = (h cos(Delta) - D_t) / lambda_inf
+
+    Small Delta: h -> lambda_inf ell and sigma_h -> ell (ell = ell0/sqrt(1 + beta), the
+    layer length): the hinge is one layer length into the cable, and the rod's stretch in
+    the layer is kept. At finite Delta the hinge moves out (h = ell0/cos(Delta/2) for an
+    inextensible rod) and less length is removed (sigma_h = ell0 (2 cos(Delta/2) - 1) /
+    cos(Delta/2)). H moves only at second order in a change of Delta, so that the string
+    turns about it as the rod's far field does. Returns ``(h, sigma_h)`` [m]; NaN where
+    T <= 0 or Delta >= pi.
+    """
+    d = np.asarray(delta, float)
+    D_t, D_n = far_field_offsets(d, T, EI, EA)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        T = np.asarray(T, float)
+        beta = np.where(T > 0, T, np.nan) / np.asarray(EA, float)
+        ell0 = np.sqrt(np.asarray(EI, float) / np.where(T > 0, T, np.nan))
+        small = np.abs(d) < 1e-6  # D_n / sin(Delta) -> its limit, to O(Delta^2)
+        h = np.where(small, ell0 * np.sqrt(1 + beta),
+                     D_n / np.where(small, 1.0, np.sin(d)))
+        h = np.where(d < np.pi, h, np.nan)
+        sigma_h = (h * np.cos(d) - D_t) / (1 + beta)
+    return h, sigma_h
 
 
 def _geometric_steps(n: int, total: float, h0: float) -> np.ndarray:

@@ -210,6 +210,10 @@ class BeamModel(CableModel):
 
     bs = 6
     is_beam = True
+
+    def has_hinges(self) -> bool:
+        """The rod resolves its layers: no virtual hinge (``outer_correction`` is ignored)."""
+        return False
     #: statics: a rod's Newton step that turns sections shortens the axis at second order,
     #: which the axial stiffness turns into a large residual (1e5 times the initial one
     #: for a cantilever under an end moment): a line search on the residual norm ("bt")

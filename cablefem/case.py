@@ -232,6 +232,10 @@ CASE_KEYS: dict[str, KeyDoc | TableDoc] = {
     }),
     "solver": TableDoc("table", None, "", "Solver settings.", {
         "tension_only": KeyDoc("boolean", True, "", "No compression: T = EA max(v3, 0)."),
+        "outer_correction": KeyDoc(
+            "string", "none", "", "'none' the string pinned at the clamped anchors (leading "
+            "order) | 'hinge' the first-order correction: pinned at a virtual hinge about "
+            "one layer length along each clamp (cablefem.hinge); the rod ignores it."),
         "petsc_options": KeyDoc(
             "table of options", {}, "",
             "PETSc options without '-' (values string/number/boolean), e.g. ts_type, "
@@ -493,6 +497,7 @@ class SolverSpec:
 
     tension_only: bool
     petsc_options: dict
+    outer_correction: str = "none"
 
 
 @dataclass
@@ -1058,7 +1063,8 @@ def parse_case(data: dict, base_dir: str | os.PathLike = Path("."),
                                                                        le=1_000_000),
                     beam_r.number("shear_stiffness", gt=0))
     solver_r = table("solver")
-    solver = SolverSpec(solver_r.boolean("tension_only"), _parse_petsc_options(solver_r))
+    solver = SolverSpec(solver_r.boolean("tension_only"), _parse_petsc_options(solver_r),
+                        solver_r.string("outer_correction", ("none", "hinge")))
     if problems:
         raise CaseError(problems, source)
     parts = [title, section, gravity, geometry, mesh.elements, mesh.grading, damping,
@@ -1134,7 +1140,8 @@ def _parse_network_case(data: dict, base_dir: Path, source: str) -> Case:
     dynamics = _parse_dynamics(top.table("dynamics"))
     modal = ModalSpec(table("modal").integer("modes"))
     solver_r = table("solver")
-    solver = SolverSpec(solver_r.boolean("tension_only"), _parse_petsc_options(solver_r))
+    solver = SolverSpec(solver_r.boolean("tension_only"), _parse_petsc_options(solver_r),
+                        solver_r.string("outer_correction", ("none", "hinge")))
     first = sections.get(cables[0].section) if cables else None
     fatigue = _parse_fatigue(top.table("fatigue"), first)
     if problems:

@@ -69,6 +69,10 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--refine", type=float, default=None,
                      help="beam: scale the mesh density ([beam] layer_elements and "
                           "span_elements), > 0; default 1")
+    run.add_argument("--outer-correction", choices=["none", "hinge"], default=None,
+                     help="string: override solver.outer_correction ('hinge': the string "
+                          "pinned at a virtual hinge near each clamp, first order in the "
+                          "layer length)")
     run.add_argument("--moment-form", choices=["exact", "explicit"], default="exact",
                      help="anchor moment from the exact first integral (default) or the "
                           "paper's explicit form")
@@ -82,6 +86,8 @@ def _parser() -> argparse.ArgumentParser:
                            epilog="Case file keys:\n\n" + keys)
     common(modes)
     modes.add_argument("--n", type=int, help="number of modes (default: modal.modes)")
+    modes.add_argument("--outer-correction", choices=["none", "hinge"], default=None,
+                       help="override solver.outer_correction")
 
     post = sub.add_parser("post", help="anchor moments from another solver's anchor forces",
                           description="Apply the inner (boundary-layer) solution to "
@@ -231,7 +237,8 @@ def _main(argv: list[str] | None = None) -> int:
                 return _input_error("--output must be the --restart folder (or omitted)")
             args.output = args.restart
             args.case = args.case or Path(str(ck["case"]))
-            for key, default in (("model", "string"), ("refine", 1.0)):
+            for key, default in (("model", "string"), ("refine", 1.0),
+                                 ("outer_correction", "")):
                 stored = type(default)(ck[key]) if key in ck else default
                 given = getattr(args, key)
                 if given is not None and given != stored:
@@ -240,6 +247,7 @@ def _main(argv: list[str] | None = None) -> int:
                 setattr(args, key, stored)
             if args.model != "beam":
                 args.refine = None
+            args.outer_correction = args.outer_correction or None
         if args.case is None or args.output is None:
             return _input_error("give a case file and --output DIR, or --restart DIR")
     case_path = args.case
@@ -248,6 +256,8 @@ def _main(argv: list[str] | None = None) -> int:
     except CaseError as err:
         sys.stderr.write(str(err) + "\n")
         return EXIT_INPUT
+    if getattr(args, "outer_correction", None) is not None:
+        case.solver.outer_correction = args.outer_correction
     if getattr(args, "t_end", None) is not None and args.t_end <= 0:
         return _input_error(f"--t-end must be > 0 (s), got {args.t_end}")
     if getattr(args, "refine", None) is not None and not args.refine > 0:

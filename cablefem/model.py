@@ -137,6 +137,11 @@ class CableModel:
                             for pl in case.point_loads]
 
         self.anchors = self._build_anchors()
+        self.hinges = None
+        if self.has_hinges():
+            from .hinge import VirtualHinges
+
+            self.hinges = VirtualHinges(self)
         self.bcs = self._make_bcs()
         self._point_tags()
         self.build_forms()
@@ -146,6 +151,12 @@ class CableModel:
 
     bs = 3  #: components per node
     is_beam = False
+
+    def has_hinges(self) -> bool:
+        """True when the case asks for the first-order outer correction (virtual hinges at
+        the clamped anchors, :mod:`cablefem.hinge`) and there is a clamped anchor."""
+        return (getattr(self.case.solver, "outer_correction", "none") == "hinge"
+                and any(a.kind == "clamped" for a in self.case.anchors))
 
     def _space(self):
         return fem.VectorFunctionSpace(self.mesh, ("Lagrange", 1), dim=3)
@@ -271,7 +282,11 @@ class CableModel:
         sec = self.case.section
         self.EA = fem.Constant(self.mesh, PETSc.ScalarType(sec.EA))
         self.m = fem.Constant(self.mesh, PETSc.ScalarType(sec.mass))
-        self.c = fem.Constant(self.mesh, PETSc.ScalarType(1.0))
+        if self.has_hinges():  # the hinges shorten the first elements: a cell field
+            self.c = fem.Function(self.W, name="c")
+            self.c.x.array[:] = 1.0
+        else:
+            self.c = fem.Constant(self.mesh, PETSc.ScalarType(1.0))
 
     def _item_nodes(self, item) -> list[int]:
         """Nodes of a point mass or point load (a single cable: the node at ``item.s``)."""
@@ -399,6 +414,12 @@ class CableModel:
             c.value[:] = np.asarray(ld.value) * ld.time.value(t)
         for c, pl in self.point_loads:
             c.value[:] = np.asarray(pl.value) * pl.time.value(t)
+        if self.hinges:
+            self.hinges.apply(t)
+
+    def invalidate_time(self) -> None:
+        """Make the next :meth:`set_time` write everything again (the hinges changed)."""
+        self._time = None
 
     # ------------------------------------------------------------------ fields
     def output_fields(self) -> list[fem.Function]:

@@ -398,6 +398,9 @@ def run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *,
         "slack_elements": static.slack_elements, "max_tension": static.max_tension,
         "min_tension": static.min_tension, "sag_ratio": sag}
     summary["wall_time"]["statics"] = static.wall_time
+    summary["outer_correction"] = "none" if kind == "beam" else case.solver.outer_correction
+    if model.hinges:
+        summary["static"]["virtual_hinges"] = model.hinges.report()
 
     n_modes = case.modal.modes if modes is None else modes
     if n_modes:
@@ -448,8 +451,9 @@ def run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *,
             def checkpoint(ck):
                 emitter.flush()
                 emitter.dump()
-                write_checkpoint(model, outdir, ck, digest, {"t_stop": t_stop, "model": kind,
-                                                             "refine": refine})
+                extra = {"t_stop": t_stop, "model": kind, "refine": refine,
+                         "outer_correction": case.solver.outer_correction}
+                write_checkpoint(model, outdir, ck, digest, extra)
 
             bar = Progress(t_stop, "dynamics", comm, enabled=progress)
             stride = math.gcd(dyn.output_every, dyn.fields_every)

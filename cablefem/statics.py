@@ -83,6 +83,37 @@ def _try(snes, x, history) -> tuple[bool, int]:
     return snes.getConvergedReason() > 0, snes.getIterationNumber()
 
 
+def _hinge_iterations(model, snes, x, history, reaction, forces, tol: float = 1e-9,
+                      max_iterations: int = 30) -> int:
+    """Fixed point hinge -> equilibrium -> anchor forces -> hinge (:mod:`cablefem.hinge`).
+
+    The hinge depends on the anchor force only through ell ~ T^-1/2 and Delta, and its
+    offset h and removed length sigma_h nearly cancel in the span's tension: the relative
+    change falls by orders of magnitude per iteration. Returns the Newton iterations."""
+    from .hinge import HingeError
+
+    its_total = 0
+    for it in range(1, max_iterations + 1):
+        try:
+            change = model.hinges.update(forces)
+        except HingeError as err:
+            raise StaticError(str(err)) from None
+        model.set_time(0.0)
+        ok, its = _try(snes, x, history)
+        its_total += its
+        if not ok:
+            raise StaticError(f"static equilibrium with the virtual hinges (iteration {it}) "
+                              f"not found: Newton history {history.text()}")
+        copy_in(x, model.u)
+        forces[:] = reaction.compute(0.0, dynamic=False)
+        log.info("statics: virtual hinges, iteration %d: relative change %.2e, %d Newton "
+                 "iterations", it, change, its)
+        if change < tol:
+            return its_total
+    raise StaticError(f"the virtual-hinge iteration did not converge in {max_iterations} "
+                      f"iterations (last relative change {change:.2e})")
+
+
 def solve_static(model, max_continuation_steps: int = 200) -> StaticResult:
     """Solve the static equilibrium of ``model``; leaves it in ``model.u`` and
     ``model.u_static``."""
@@ -161,9 +192,13 @@ def solve_static(model, max_continuation_steps: int = 200) -> StaticResult:
     copy_in(x, model.u)
     if not np.all(np.isfinite(model.u.x.array)):
         raise StaticError("static solution contains NaN/inf")
-    model.u_static.x.array[:] = model.u.x.array
     model.v.x.array[:] = 0.0
-    forces = AnchorForces(model).compute(0.0, dynamic=False)
+    reaction = AnchorForces(model)
+    forces = reaction.compute(0.0, dynamic=False)
+    if model.hinges:
+        total_its += _hinge_iterations(model, snes, x, history, reaction, forces)
+        forces = reaction.compute(0.0, dynamic=False)
+    model.u_static.x.array[:] = model.u.x.array
     T = model.tension_field()
     n_owned = model.mesh.topology.index_map(1).size_local
     tmax = model.comm.allreduce(float(np.max(T.x.array[:n_owned], initial=-np.inf)),
