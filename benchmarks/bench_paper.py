@@ -3,10 +3,12 @@
 For case A and case B (demos/paper_inplane.toml, demos/paper_spatial.toml), in one process:
 
 * the string run (``cablefem run CASE``): the whole run with its output, as users get it;
+* the string run with the first-order outer correction (``--outer-correction hinge``);
 * the beam run (``cablefem run CASE --model beam --refine r``) for r = 0.5, 1, 2, ... until
   the steady-state RMS anchor moment changes by less than 1 % (``--tol``) from the previous
   mesh; the converged mesh's run is the one compared;
-* optionally (``--dt-check``) the converged beam mesh again with half the time step.
+* optionally (``--dt-check``) the converged beam mesh and both string runs again with half
+  the time step, and their differences at that step.
 
 Both models write the same files (figures off for both, the same output stride), after a
 short warm-up run of each (JIT compilation of the forms is not timed). Prints
@@ -21,6 +23,7 @@ mesh (and time-step) convergence.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import platform
 import tempfile
@@ -82,6 +85,9 @@ def bench_case(label: str, t_end: float | None, tol: float, dt_check: bool,
         one_run(case, tmp / "warm_string", t_end=two_steps)
         one_run(case, tmp / "warm_beam", t_end=two_steps, model="beam")
         string = one_run(case, tmp / "string", **kw)
+        hinged = dataclasses.replace(case, solver=dataclasses.replace(
+            case.solver, outer_correction="hinge"))
+        string_hinge = one_run(hinged, tmp / "string_hinge", **kw)
         beams, r, prev = [], 0.5, None
         converged = False
         while r <= max_refine:
@@ -102,16 +108,28 @@ def bench_case(label: str, t_end: float | None, tol: float, dt_check: bool,
         out = {"case": label, "file": str(CASES[label]), "string": string,
                "beam_mesh_study": beams, "beam_converged": converged, "beam": beam,
                "ratio_wall_time_beam_over_string": beam["wall_time"] / string["wall_time"],
-               "relative_difference_beam_minus_string_over_string": compare(string, beam)}
+               "relative_difference_beam_minus_string_over_string": compare(string, beam),
+               "string_hinge": string_hinge,
+               "relative_difference_beam_minus_string_hinge_over_string_hinge":
+                   compare(string_hinge, beam)}
         if dt_check:
             dt = case.dynamics.dt / 2
-            import dataclasses
 
-            case2 = dataclasses.replace(case, dynamics=dataclasses.replace(
-                case.dynamics, dt=dt, output_every=2 * case.dynamics.output_every,
-                fields_every=2 * case.dynamics.fields_every,
-                checkpoint_every=2 * case.dynamics.checkpoint_every))
-            bh = one_run(case2, tmp / "beam_dt2", model="beam", refine=beam["refine"], **kw)
+            def half(c):
+                return dataclasses.replace(c, dynamics=dataclasses.replace(
+                    c.dynamics, dt=dt, output_every=2 * c.dynamics.output_every,
+                    fields_every=2 * c.dynamics.fields_every,
+                    checkpoint_every=2 * c.dynamics.checkpoint_every))
+
+            bh = one_run(half(case), tmp / "beam_dt2", model="beam", refine=beam["refine"],
+                         **kw)
+            sh = one_run(half(case), tmp / "string_dt2", **kw)
+            hh = one_run(half(hinged), tmp / "string_hinge_dt2", **kw)
+            out["half_dt"] = {"dt": dt, "string": sh, "string_hinge": hh, "beam": bh,
+                              "relative_difference_beam_minus_string_over_string":
+                                  compare(sh, bh),
+                              "relative_difference_beam_minus_string_hinge_over_"
+                              "string_hinge": compare(hh, bh)}
             name = next(iter(bh["anchors"]))
             out["beam_half_dt"] = {"dt": dt, "wall_time": bh["wall_time"],
                                    "rms": bh["anchors"][name]["rms"],
@@ -130,7 +148,7 @@ def main() -> None:
     ap.add_argument("--tol", type=float, default=0.01, help="beam mesh convergence: RMS "
                     "change below this (default 1 %%)")
     ap.add_argument("--max-refine", type=float, default=8.0)
-    ap.add_argument("--dt-check", action="store_true", help="also the beam at dt/2")
+    ap.add_argument("--dt-check", action="store_true", help="also the beam and the strings at dt/2")
     args = ap.parse_args()
     res = {"benchmark": "bench_paper", "machine": platform.node(),
            "mpi_ranks": MPI.COMM_WORLD.size,

@@ -1,0 +1,151 @@
+"""The first-order outer correction (cablefem.hinge, asymptotics.virtual_hinge): the far
+field of the layer's elastica, and the string pinned at the virtual hinge against the rod.
+
+Runs serially and on 2 MPI ranks (every model is built on COMM_WORLD)."""
+
+from __future__ import annotations
+
+import dataclasses
+import tomllib
+from pathlib import Path
+
+import numpy as np
+import pytest
+from mpi4py import MPI
+from scipy.integrate import solve_ivp
+
+from cablefem.asymptotics import far_field_offsets, virtual_hinge
+from cablefem.beam import BeamModel
+from cablefem.case import CaseError, load_case, parse_case
+from cablefem.modal import solve_modes
+from cablefem.model import CableModel
+from cablefem.post import anchor_moments
+from cablefem.statics import StaticError, solve_static
+
+DEMOS = Path(__file__).resolve().parents[1] / "demos"
+
+
+def _hinged(name: str, correction: str = "hinge"):
+    case = load_case(DEMOS / name)
+    return dataclasses.replace(case, solver=dataclasses.replace(
+        case.solver, outer_correction=correction))
+
+
+# ----------------------------------------------------------------------------- far field
+@pytest.mark.parametrize("delta", [1e-3, 0.02, 0.2, 1.0, 2.0])
+@pytest.mark.parametrize("beta", [0.0, 1e-3, 1e-2])
+def test_far_field_offsets_match_the_integrated_elastica(delta, beta):
+    """Integrate the rod along sigma (phi' from the exact first integral, r' = lambda d3)
+    far into the span and read the offset of its straight far field."""
+    T, EI = 2.0, 3e-4
+    EA = T / beta if beta else np.inf
+    ell0 = np.sqrt(EI / T)
+
+    def rhs(s, y):
+        phi = y[0]
+        lam = 1 + beta * np.cos(phi)
+        return [-(2 / ell0) * np.sin(phi / 2) * np.sqrt(1 + beta * np.cos(phi / 2) ** 2),
+                lam * np.cos(phi), lam * np.sin(phi)]
+
+    S = 60 * ell0  # phi(S) ~ Delta exp(-60): the far field, to round-off
+    sol = solve_ivp(rhs, [0, S], [delta, 0, 0], rtol=1e-12, atol=1e-16, method="DOP853")
+    Dt_num, Dn_num = sol.y[1, -1] - (1 + beta) * S, sol.y[2, -1]
+    Dt, Dn = far_field_offsets(delta, T, EI, EA)
+    # ODE tolerance 1e-12 on coordinates of size S = 60 ell0: 1e-10 ell0 absolute
+    assert Dt == pytest.approx(Dt_num, abs=1e-10 * ell0)
+    assert Dn == pytest.approx(Dn_num, abs=1e-10 * ell0)
+    # the hinge is where the far-field line crosses the clamp line: h c = D + lam sigma_h t
+    h, sig = virtual_hinge(delta, T, EI, EA)
+    t, n = np.array([1.0, 0.0]), np.array([0.0, 1.0])
+    c = np.cos(delta) * t + np.sin(delta) * n
+    assert np.allclose(h * c, Dt * t + Dn * n + (1 + beta) * sig * t, atol=1e-12 * ell0)
+
+
+def test_virtual_hinge_closed_forms_and_limits():
+    T, EI = 3.0, 1e-4
+    ell0 = np.sqrt(EI / T)
+    d = np.array([1e-9, 1e-3, 0.3, 1.5])
+    h, sig = virtual_hinge(d, T, EI, np.inf)
+    # inextensible: h = ell0 / cos(Delta/2), sigma_h = ell0 (2 cos(Delta/2) - 1) / cos(Delta/2)
+    # (16-point Gauss-Legendre of analytic integrands: round-off)
+    assert np.allclose(h, ell0 / np.cos(d / 2), rtol=1e-13)
+    assert np.allclose(sig, ell0 * (2 * np.cos(d / 2) - 1) / np.cos(d / 2), rtol=1e-13)
+    # small Delta, extensible: h -> lambda_inf ell, sigma_h -> ell (ell = ell0/sqrt(1+beta));
+    # the next term is O(Delta^2) = 1e-18
+    beta = 0.01
+    h, sig = virtual_hinge(1e-9, T, EI, T / beta)
+    ell = ell0 / np.sqrt(1 + beta)
+    assert h == pytest.approx((1 + beta) * ell, rel=1e-12)
+    assert sig == pytest.approx(ell, rel=1e-12)
+    # no layer: slack anchor, or Delta = pi
+    assert np.all(np.isnan(virtual_hinge(np.array([0.1, np.pi]), np.array([0.0, T]), EI,
+                                         np.inf)))
+
+
+# ----------------------------------------------------------------------------- against the rod
+@pytest.mark.parametrize("name", ["paper_inplane.toml", "paper_spatial.toml"])
+def test_hinged_string_matches_the_rod_statics_and_first_frequency(name):
+    """Static anchor tension, anchor moment and first frequency within 0.2 % of the rod
+    (the issue's target); the leading-order string misses at least one of them."""
+    rod = BeamModel(load_case(DEMOS / name), MPI.COMM_WORLD)
+    F_rod = solve_static(rod).anchor_forces[0]
+    w_rod = solve_modes(rod, 1).omegas[0]
+    res = {}
+    for corr in ("none", "hinge"):
+        m = CableModel(_hinged(name, corr), MPI.COMM_WORLD)
+        F = solve_static(m).anchor_forces[0]
+        w = solve_modes(m, 1).omegas[0]
+        anc = m.anchors[0]
+        mom = anchor_moments(F[None, :3], anc.direction, anc.section.EI, anc.section.EA,
+                             anc.section.mass, np.zeros((1, 3)),
+                             anc.section.mass * m.g_vec, m.length, None, "exact")["moment"][0]
+        res[corr] = (np.linalg.norm(F[:3]), mom, w)
+    T_rod, M_rod = np.linalg.norm(F_rod[:3]), np.linalg.norm(F_rod[3:6])
+    errors = {corr: np.abs(np.array(v) / np.array([T_rod, M_rod, w_rod]) - 1)
+              for corr, v in res.items()}
+    # measured with the hinge: <= 1.4e-3 (case B tension; the string's 20 elements and the
+    # rod's mesh are both in it); 2e-3 is the issue's 0.2 %
+    assert np.all(errors["hinge"] < 2e-3), errors
+    # leading order: case A's frequency is 0.7 % off, case B's tension 2.6 %
+    assert np.any(errors["none"] > 5e-3), errors
+
+
+def test_hinge_keeps_the_whole_weight_on_the_anchors():
+    """The layer's mass is out of the string and its weight is added at the anchor: the
+    vertical anchor forces still carry the cable's whole weight m g l."""
+    m = CableModel(_hinged("paper_spatial.toml"), MPI.COMM_WORLD)
+    F = solve_static(m).anchor_forces
+    W = m.case.section.mass * m.case.gravity.g * m.length
+    # the consistent reactions balance the assembled weight to Newton's tolerance (1e-10
+    # relative to the force scale) and the layer weights are added exactly
+    assert -np.sum(F[:, 2]) == pytest.approx(W, rel=1e-8)
+    rep = m.hinges.report()
+    for name, hg in rep.items():
+        # about one layer length along the clamp (case B: Delta = 0.2, ell ~ 6.3e-3 m)
+        assert 0.9 * hg["sigma_h"] < hg["h"] < 1.1 * hg["sigma_h"]
+        anc = next(a for a in m.anchors if a.name == name)
+        assert np.allclose(m.u_bc.x.array[anc.flat_dofs].reshape(-1, 3),
+                           anc.displacement(0.0) + hg["h"] * anc.direction, atol=1e-14)
+
+
+def test_hinge_parallel_equals_serial():
+    case = _hinged("paper_inplane.toml")
+    F_world = solve_static(CableModel(case, MPI.COMM_WORLD)).anchor_forces
+    F_self = solve_static(CableModel(case, MPI.COMM_SELF)).anchor_forces
+    # Newton's tolerance 1e-10 of the force scale; the partition only reorders sums
+    assert np.allclose(F_world, F_self, rtol=1e-9, atol=1e-9 * np.abs(F_self).max())
+
+
+def test_hinge_refuses_elements_shorter_than_the_layer():
+    case = _hinged("paper_inplane.toml")
+    case = dataclasses.replace(case, mesh=dataclasses.replace(case.mesh, elements=600))
+    with pytest.raises(StaticError, match="outer_correction"):
+        # l/600 = 1.7e-3 m < 2 sigma_h = 8e-3 m
+        solve_static(CableModel(case, MPI.COMM_WORLD))
+
+
+def test_outer_correction_key_is_validated():
+    data = tomllib.loads((DEMOS / "paper_inplane.toml").read_text())
+    data.setdefault("solver", {})["outer_correction"] = "hing"
+    with pytest.raises(CaseError, match=r"outer_correction.*did you mean 'hinge'"):
+        parse_case(data, DEMOS)
