@@ -10,8 +10,8 @@ the frequencies (the span turns about H, not about A).
 
 :class:`VirtualHinges` puts that into the finite-element string:
 
-* the anchor node is prescribed at H (``u_bc`` = the anchor's displacement + h c, so an
-  anchor motion moves the hinge with it);
+* the anchor node is prescribed at H (the anchor's ``offset`` h c, added to its
+  prescribed displacement, so an anchor motion moves the hinge with it);
 * the stress-free length of the element next to the anchor is shortened by ``sigma_h``
   (its coefficient ``c``, stress-free length per mesh length): the layer's
   material is not in the string;
@@ -41,16 +41,12 @@ its layers itself. A first element shorter than ``sigma_h / MAX_FRACTION`` is re
 
 from __future__ import annotations
 
-import logging
-
 import numpy as np
 from mpi4py import MPI
 
 from .asymptotics import layer, virtual_hinge
 
 __all__ = ["VirtualHinges", "HingeError", "MAX_FRACTION"]
-
-log = logging.getLogger(__name__)
 
 #: Largest fraction of the first element's stress-free length that the hinge may remove.
 MAX_FRACTION = 0.5
@@ -63,12 +59,13 @@ class HingeError(RuntimeError):
 class _Hinge:
     """One clamped anchor's hinge: its cells, their base coefficient, h and sigma_h."""
 
-    def __init__(self, index, anc, cells, lengths, c0):
+    def __init__(self, index, anc, cells, lengths, c0, first):
         self.index = index  # position in model.anchors
         self.anchor = anc
         self.cells = cells  # local cell indices next to the anchor node (owned and ghost)
         self.lengths = lengths  # their mesh lengths, m
         self.c0 = c0  # their base stress-free length per mesh length
+        self.first = first  # the first element's stress-free length (all ranks), m
         self.h = 0.0  # the node is at A + h c
         self.sigma = 0.0  # stress-free length removed from the first element
 
@@ -97,21 +94,13 @@ class VirtualHinges:
             lengths = np.array([np.linalg.norm(x[gdofs.links(c)[1]] - x[gdofs.links(c)[0]])
                                 for c in cells])
             c0 = model.c.x.array[cells].copy()
-            self.items.append(_Hinge(i, anc, cells.astype(np.int32), lengths, c0))
+            first = model.comm.allreduce(float(np.min(c0 * lengths, initial=np.inf)),
+                                         op=MPI.MIN)
+            self.items.append(_Hinge(i, anc, cells.astype(np.int32), lengths, c0, first))
         self.g_vec = np.asarray(model.g_vec, float)
 
     def __bool__(self) -> bool:
         return bool(self.items)
-
-    def apply(self, t: float) -> None:
-        """Put the hinges into the model at time ``t``: the anchor rows of ``u_bc`` (on top
-        of the anchor's own displacement, which ``set_time`` has just written)."""
-        m = self.model
-        for hg in self.items:
-            anc = hg.anchor
-            if anc.dofs.size:
-                m.u_bc.x.array[anc.flat_dofs] = anc.prescribed("displacement", t) + np.tile(
-                    hg.h * anc.direction, anc.dofs.size)
 
     def layer_force(self, i: int, acceleration: np.ndarray) -> np.ndarray:
         """Weight and inertia of anchor ``i``'s layer, ``m sigma_h (g - a)``, N (zero for
@@ -132,12 +121,9 @@ class VirtualHinges:
             why = "no layer (slack anchor or anchor angle near 180 deg)"
         elif sig <= 0.0:
             why = f"sigma_h = {sig:.3g} m <= 0 (anchor angle above ~120 deg)"
-        else:
-            short = self.model.comm.allreduce(
-                float(np.min(hg.c0 * hg.lengths, initial=np.inf)), op=MPI.MIN)
-            if sig > MAX_FRACTION * short:
-                why = (f"sigma_h = {sig:.3g} m is more than {MAX_FRACTION:g} of the first "
-                       f"element's stress-free length {short:.3g} m")
+        elif sig > MAX_FRACTION * hg.first:
+            why = (f"sigma_h = {sig:.3g} m is more than {MAX_FRACTION:g} of the first "
+                   f"element's stress-free length {hg.first:.3g} m")
         if why is not None:
             raise HingeError(f"anchor {hg.anchor.name}: cannot place the virtual hinge: "
                              f"{why}. Use solver.outer_correction = \"none\" (or "
@@ -154,6 +140,7 @@ class VirtualHinges:
             change = max(change, np.inf if hg.sigma == 0.0 else
                          max(abs(h - hg.h), abs(sig - hg.sigma)) / sig)
             hg.h, hg.sigma = h, sig
+            hg.anchor.offset = h * hg.anchor.direction
             if hg.cells.size:
                 self.model.c.x.array[hg.cells] = hg.c0 - sig / hg.lengths
         self.model.invalidate_time()

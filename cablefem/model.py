@@ -47,6 +47,8 @@ class AnchorBC:
     comps: tuple = (0, 1, 2)  #: the components the anchor prescribes
     rotation: np.ndarray | None = None  #: beam: Cayley vector held by a clamp
     moment_map: np.ndarray | None = None  #: beam: reaction of the q rows -> moment
+    offset: np.ndarray = field(default_factory=lambda: np.zeros(3))  #: string: where the
+    #: node is prescribed relative to the anchor (a virtual hinge, cablefem.hinge), m
 
     @property
     def flat_dofs(self) -> np.ndarray:
@@ -58,6 +60,8 @@ class AnchorBC:
         """Values of ``kind`` ("displacement", "velocity", "acceleration") at ``t`` for
         :attr:`flat_dofs`."""
         val = getattr(self, kind)(t)
+        if kind == "displacement":
+            val = val + self.offset
         if self.bs == 6:
             rot = self.rotation if kind == "displacement" and self.rotation is not None \
                 else np.zeros(3)
@@ -139,9 +143,13 @@ class CableModel:
         self.anchors = self._build_anchors()
         self.hinges = None
         if self.has_hinges():
-            from .hinge import VirtualHinges
+            from .hinge import HingeError, VirtualHinges
 
-            self.hinges = VirtualHinges(self)
+            try:
+                self.hinges = VirtualHinges(self)
+            except HingeError as err:
+                raise CaseError([("solver.outer_correction", str(err))],
+                                case.source) from None
         self.bcs = self._make_bcs()
         self._point_tags()
         self.build_forms()
@@ -155,7 +163,7 @@ class CableModel:
     def has_hinges(self) -> bool:
         """True when the case asks for the first-order outer correction (virtual hinges at
         the clamped anchors, :mod:`cablefem.hinge`) and there is a clamped anchor."""
-        return (getattr(self.case.solver, "outer_correction", "none") == "hinge"
+        return (self.case.solver.outer_correction == "hinge"
                 and any(a.kind == "clamped" for a in self.case.anchors))
 
     def _space(self):
@@ -414,8 +422,6 @@ class CableModel:
             c.value[:] = np.asarray(ld.value) * ld.time.value(t)
         for c, pl in self.point_loads:
             c.value[:] = np.asarray(pl.value) * pl.time.value(t)
-        if self.hinges:
-            self.hinges.apply(t)
 
     def invalidate_time(self) -> None:
         """Make the next :meth:`set_time` write everything again (the hinges changed)."""

@@ -89,7 +89,8 @@ def _hinge_iterations(model, snes, x, history, reaction, forces, tol: float = 1e
 
     The hinge depends on the anchor force only through ell ~ T^-1/2 and Delta, and its
     offset h and removed length sigma_h nearly cancel in the span's tension: the relative
-    change falls by orders of magnitude per iteration. Returns the Newton iterations."""
+    change falls by orders of magnitude per iteration. ``forces`` is updated in place to
+    the last equilibrium's; returns the Newton iterations."""
     from .hinge import HingeError
 
     its_total = 0
@@ -197,7 +198,6 @@ def solve_static(model, max_continuation_steps: int = 200) -> StaticResult:
     forces = reaction.compute(0.0, dynamic=False)
     if model.hinges:
         total_its += _hinge_iterations(model, snes, x, history, reaction, forces)
-        forces = reaction.compute(0.0, dynamic=False)
     model.u_static.x.array[:] = model.u.x.array
     T = model.tension_field()
     n_owned = model.mesh.topology.index_map(1).size_local
