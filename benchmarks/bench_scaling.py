@@ -1,5 +1,6 @@
 """Benchmark: cost of a network time step from 1e3 to 1e6 degrees of freedom, and the
-speed-up from 1 to 2 MPI ranks on a large network. Prints JSON.
+speed-up from 1 to 2 MPI ranks on a large network (the fastest of ``--repeat`` alternated
+runs on each rank count). Prints JSON.
 
 Each size is a cable-net roof (meshes/make_roof.py, k = 10 elements per bay) run in a fresh
 process: build, statics, then ``--steps`` time steps of the harmonic uplift case
@@ -97,6 +98,8 @@ def main() -> None:
     ap.add_argument("--worker", type=int, help=argparse.SUPPRESS)
     ap.add_argument("--steps", type=int, default=10)
     ap.add_argument("--large", action="store_true", help="include 1e6 dofs")
+    ap.add_argument("--repeat", type=int, default=3,
+                    help="1- and 2-rank runs of the largest size, alternated")
     a = ap.parse_args()
     if a.worker is not None:
         worker(a.worker, a.steps)
@@ -104,7 +107,11 @@ def main() -> None:
     sizes = [s for s in SIZES if a.large or s < 1e6]
     rows = [run(SIZES[s], a.steps) for s in sizes]
     big = SIZES[max(sizes)]
-    one, two = run(big, a.steps, 1), run(big, a.steps, 2)
+    # single-core speed drifts by ~25 % over minutes on shared machines: alternate 1- and
+    # 2-rank runs and compare the fastest of each
+    pairs = [(run(big, a.steps, 1), run(big, a.steps, 2)) for _ in range(a.repeat)]
+    one = min((p[0] for p in pairs), key=lambda r: r["step_s"])
+    two = min((p[1] for p in pairs), key=lambda r: r["step_s"])
     base = rows[0]
     out = {"case": "cable-net roof, harmonic uplift, dt = 0.005 s, no file output",
            "sizes": rows,
@@ -113,7 +120,10 @@ def main() -> None:
                for r in rows],
            "speedup_1_to_2_ranks": {"dofs": one["dofs"], "step_s_1": one["step_s"],
                                     "step_s_2": two["step_s"],
-                                    "speedup": one["step_s"] / two["step_s"], "aim": 1.6}}
+                                    "speedup": one["step_s"] / two["step_s"], "aim": 1.6,
+                                    "pairs_step_s": [[round(p[0]["step_s"], 4),
+                                                      round(p[1]["step_s"], 4)]
+                                                     for p in pairs]}}
     print(json.dumps(out, indent=2))
 
 

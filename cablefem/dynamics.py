@@ -35,6 +35,7 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from .anchors import AnchorForces
+from .hinge import HingeError
 from .petsc_utils import (SNESHistory, assemble_jacobian_rows, assemble_residual_rows,
                           case_options, copy_in, default_options,
                           linear_solver_options)
@@ -103,7 +104,6 @@ def _make_ts(model, dt: float, rho_inf: float, history: SNESHistory):
     bc_rows = np.concatenate([a.flat_dofs for a in model.anchors]).astype(np.int32)
     bc_rows = bc_rows[bc_rows < model.bs * n_owned]  # owned rows; each rank zeroes its own
     F_vec = fpetsc.create_vector(model.f_dynamic)
-    J_mat = fpetsc.create_matrix(model.j_dynamic)
 
     def I2Function(ts, t, U, V, A, F):
         model.set_time(t)
@@ -122,13 +122,17 @@ def _make_ts(model, dt: float, rho_inf: float, history: SNESHistory):
     ts.setOptionsPrefix(prefix)
     ts.setType(PETSc.TS.Type.ALPHA2)
     ts.setI2Function(I2Function, F_vec)
-    # zeroing the anchor rows must keep the sparsity pattern: otherwise every assembly
-    # changes it and every factorisation redoes its symbolic phase (and allocates)
-    J_mat.setOption(PETSc.Mat.Option.KEEP_NONZERO_PATTERN, True)
-    ts.setI2Jacobian(I2Jacobian, J_mat)
     ts.setTimeStep(dt)
     ts.setExactFinalTime(PETSc.TS.ExactFinalTime.MATCHSTEP)
     with default_options(prefix, defaults, case_options(model, "")):
+        # -cable_mat_type (default baij: bs x bs blocks, assembly and triangular solves
+        # faster than aij) is read here: the matrix must exist before the TS is configured
+        J_mat = fpetsc.create_matrix(model.j_dynamic,
+                                     PETSc.Options().getString(prefix + "mat_type"))
+        # zeroing the anchor rows must keep the sparsity pattern: otherwise every assembly
+        # changes it and every factorisation redoes its symbolic phase (and allocates)
+        J_mat.setOption(PETSc.Mat.Option.KEEP_NONZERO_PATTERN, True)
+        ts.setI2Jacobian(I2Jacobian, J_mat)
         ts.setFromOptions()
     ts.getSNES().setMonitor(history)
     return ts, (F_vec, J_mat)
@@ -176,6 +180,11 @@ def integrate(model, t_end: float, dt: float, rho_inf: float = 0.9, output_every
     ts.setStepNumber(step)
     ts.setSolution2(U, V)
     ts.setUp()
+    hinges = getattr(model, "hinges", None)
+    if hinges:  # the layers follow the tension and angle from the static state on
+        hinges.start_dynamics(model.u_static.x.array)
+        if start is not None:
+            hinges.follow(model.u.x.array, t)
     if start is None:
         stats.output_times.append(t)
         yield t, forces.compute(t)
@@ -240,6 +249,13 @@ def integrate(model, t_end: float, dt: float, rho_inf: float = 0.9, output_every
             stats.output_times.append(t)
             stats.wall_time = time.perf_counter() - wall0
             yield t, forces.compute(t)
+        if hinges:  # after the output: the forces above are those of the step's own layers
+            copy_in(U2, model.u)
+            try:
+                hinges.follow(model.u.x.array, t)
+            except HingeError as err:
+                copy_in(V2, model.v)
+                raise DynamicsError(str(err), t) from err
         if checkpoint_every and step % checkpoint_every == 0 and not last:
             ts.restartStep()  # the next step re-estimates A from (u, v), as a resumed run
             copy_in(U2, model.u)

@@ -288,12 +288,14 @@ class CableModel:
         """Section coefficients of the forms: EA, m and c (stress-free length per mesh
         length, 1 for a single cable whose mesh is stress-free)."""
         sec = self.case.section
-        self.EA = fem.Constant(self.mesh, PETSc.ScalarType(sec.EA))
         self.m = fem.Constant(self.mesh, PETSc.ScalarType(sec.mass))
-        if self.has_hinges():  # the hinges shorten the first elements: a cell field
+        if self.has_hinges():  # the hinges change the first elements: cell fields
             self.c = fem.Function(self.W, name="c")
             self.c.x.array[:] = 1.0
+            self.EA = fem.Function(self.W, name="EA")
+            self.EA.x.array[:] = sec.EA
         else:
+            self.EA = fem.Constant(self.mesh, PETSc.ScalarType(sec.EA))
             self.c = fem.Constant(self.mesh, PETSc.ScalarType(1.0))
 
     def _item_nodes(self, item) -> list[int]:

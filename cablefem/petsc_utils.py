@@ -27,37 +27,40 @@ LARGE_ABOVE = 20_000
 def linear_solver_options(n_dofs: int, comm_size: int = 1) -> dict[str, object]:
     """The automatic linear solver of the time integrator's Newton steps.
 
-    Up to :data:`LARGE_ABOVE` degrees of freedom, and in parallel: a direct solve (PETSc's
-    LU in serial, MUMPS in parallel). In serial above that size the numeric factorisation
-    dominates (measured: 67 ms of a 0.3 s step at 1e5 dofs, ~4 per step), so it is reused:
-    GMRES preconditioned by an LU refreshed every 20 Jacobians, across steps
-    (``snes_lag_preconditioner``): 0.20 s per step instead of 0.30 s on a 1e5-dof roof
-    (``benchmarks/bench_scaling.py``). Measured and rejected on these axially stiff,
+    The Jacobian is a block matrix (``mat_type baij``, blocks of the node's 3 or 6
+    unknowns): its assembly, factorisation and triangular solves are faster than with AIJ.
+    Up to :data:`LARGE_ABOVE` degrees of freedom: a direct solve (:func:`lu_options`). Above
+    it the numeric factorisation dominates, so it is reused: GMRES preconditioned by an LU
+    refreshed every 10 Jacobians, across steps (``snes_lag_preconditioner``).
+
+    Measured on the 94 000-dof roof of ``benchmarks/bench_scaling.py`` (seconds per step,
+    2-core machine): serial AIJ + LU lagged 20, 0.28; BAIJ + LU lagged 10, 0.15; on 2 ranks
+    MUMPS, 0.6; BAIJ + redundant LU lagged 10, 0.13-0.16. Rejected on these axially stiff,
     anisotropic systems: algebraic multigrid (GAMG, BoomerAMG: 10-25 times slower),
-    block-Jacobi/ILU and additive Schwarz (hundreds of GMRES iterations on 2 ranks), a
-    lagged MUMPS (its solves cost 33 ms at 1e5 dofs). Open: MUMPS on 2 ranks (0.49 s per
-    step at 1e5 dofs) is slower than PETSc's serial LU (0.19 s) although two independent
-    serial runs on this 2-core machine take 0.20 s each: a parallel solver that scales here
-    is still to be found. Tried in an experiment (not in the code): PCFIELDSPLIT Schur on the
-    partition interface (dofs of cells shared between ranks: 270 at 1e5 dofs; the interior
-    block is block-diagonal across ranks, so bjacobi/LU solves it exactly), exact Schur
-    complement, preconditioner lagged 20: 0.21 s per step on 2 ranks against 0.18 s for the
-    serial default (0.018 s against 0.039 s with MUMPS at 9e3 dofs): the most promising.
-    Override with ``-cable_ksp_type``, ``-cable_pc_type``, ``-cable_snes_lag_preconditioner``.
+    block-Jacobi/ILU and additive Schwarz (hundreds of GMRES iterations on 2 ranks),
+    PCFIELDSPLIT with a Schur complement on the partition interface (0.28 s per step on 2
+    ranks: forming the Schur complement costs 300 triangular solves), MUMPS with METIS or
+    SCOTCH orderings (0.6-0.75 s). Override with ``-cable_mat_type``, ``-cable_ksp_type``,
+    ``-cable_pc_type``, ``-cable_snes_lag_preconditioner``.
     """
-    if n_dofs <= LARGE_ABOVE or comm_size > 1:
-        return lu_options(comm_size)
-    return {"ksp_type": "gmres", "ksp_rtol": 1e-12, "ksp_max_it": 500, "pc_type": "lu",
-            "snes_lag_preconditioner": 20, "snes_lag_preconditioner_persists": "true"}
+    opts: dict[str, object] = {"mat_type": "baij", **lu_options(comm_size)}
+    if n_dofs > LARGE_ABOVE:
+        opts.update(ksp_type="gmres", ksp_rtol=1e-12, ksp_max_it=500,
+                    snes_lag_preconditioner=10, snes_lag_preconditioner_persists="true")
+    return opts
 
 
 def lu_options(comm_size: int = 1) -> dict[str, str]:
-    """A direct solver: PETSc's own LU in serial (MUMPS costs ~0.3 ms per factorisation of a
-    small system, which dominates a 30-element string), MUMPS in parallel."""
-    opts = {"ksp_type": "preonly", "pc_type": "lu"}
-    if comm_size > 1 and PETSc.Sys.hasExternalPackage("mumps"):
-        opts["pc_factor_mat_solver_type"] = "mumps"
-    return opts
+    """A direct solver: PETSc's own LU; in parallel every rank factors the whole system
+    (``pc_type redundant``). On the cable systems seen here (1D cells, nested-dissection
+    ordering, little fill) that is 2.5 to 4 times faster on 2 ranks than MUMPS (measured from
+    6e3 to 1e5 dofs: MUMPS's factorisation ~100 ms and solve ~30 ms at 1e5 dofs against 40
+    and 4 ms). The cost: each rank holds the whole factorisation. ``-cable_pc_type lu
+    -cable_pc_factor_mat_solver_type mumps`` (and ``static_``/``modal_``/``mass_``
+    prefixes) selects MUMPS."""
+    if comm_size == 1:
+        return {"ksp_type": "preonly", "pc_type": "lu"}
+    return {"ksp_type": "preonly", "pc_type": "redundant", "redundant_pc_type": "lu"}
 
 
 class default_options:

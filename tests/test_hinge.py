@@ -149,3 +149,112 @@ def test_outer_correction_key_is_validated():
     data.setdefault("solver", {})["outer_correction"] = "hing"
     with pytest.raises(CaseError, match=r"outer_correction.*did you mean 'hinge'"):
         parse_case(data, DEMOS)
+
+
+# ----------------------------------------------------------------------------- dynamics
+def _static_hinged(name: str, comm=MPI.COMM_WORLD):
+    m = CableModel(_hinged(name), comm)
+    solve_static(m)
+    m.hinges.start_dynamics(m.u_static.x.array)
+    return m
+
+
+def test_following_layer_is_the_static_layer_at_the_static_state():
+    """At the static state the layer follows to itself: sigma stays sigma_h, and the first
+    element's new law (EA', c' = R/L: the layer's compliance in series) gives the same
+    tension at the same length; the stress-free length is conserved (c' L + removed = s1)."""
+    m = _static_hinged("paper_spatial.toml")
+    hg = m.hinges
+    T0, d0 = hg._measure(m.u_static.x.array)
+    sig0 = [h.sigma for h in hg.items]
+    hg.follow(m.u_static.x.array, 0.0)
+    T1, d1 = hg._measure(m.u_static.x.array)
+    # identities up to round-off of O(1) quantities (the finite-difference sigma_T does not
+    # enter: the law is exact at the tension it is linearised about)
+    np.testing.assert_allclose(T1, T0, rtol=1e-10)
+    np.testing.assert_allclose(d1, d0, rtol=0, atol=1e-14)
+    np.testing.assert_allclose([h.sigma for h in hg.items], sig0, rtol=1e-12)
+    for h in hg.items:
+        if h.cells.size:
+            c_new = m.c.x.array[h.cells[0]] * h.lengths[0]
+            assert c_new + h.removed == pytest.approx(h.first, rel=1e-14)
+            assert m.EA.x.array[h.cells[0]] < h.EA0[0]  # a compliance in series: softer
+
+
+def test_following_layer_matches_the_rod_far_field_along_the_string():
+    """Move the second node (tension and angle change): sigma is such that the string from
+    the fixed node at A + h c lies on the rod's far-field line at the new tension and angle
+    along the string: sigma = (h cos(Delta) - D_t(T, Delta))/lambda + (the static state's
+    mismatch between element and anchor force, which is kept), D_t from far_field_offsets."""
+    m = _static_hinged("paper_spatial.toml")
+    hg = m.hinges
+    u = m.u_static.x.array.copy()
+    T0, d0 = hg._measure(u)
+
+    def far(h, d, T):  # the string's stress-free length to the rod's far-field line
+        sec = h.anchor.section
+        return (h.h * np.cos(d) - far_field_offsets(d, T, sec.EI, sec.EA)[0]) / (1 + T / sec.EA)
+
+    ref = [h.sigma - far(h, d, T) for h, d, T in zip(hg.items, d0, T0)]
+    X, x = m.V.tabulate_dof_coordinates(), u.reshape(-1, 3)
+    for h in hg.items:  # push the element's far node in the bending plane and along it
+        if h.nodes is not None:
+            a, b = h.nodes
+            e = X[b] + x[b] - X[a] - x[a]
+            le = np.linalg.norm(e)
+            perp = h.anchor.direction - np.dot(h.anchor.direction, e) / le**2 * e
+            # 0.01 rad more angle, a strain of 5e-5 more (T/EA = 2.5e-4: T up by ~20 %)
+            x[b] += 0.01 * le * perp / np.linalg.norm(perp) + 5e-5 * e
+    T, d = hg._measure(u)
+    assert np.all(np.abs(d - d0) > 1e-3) and np.all(np.abs(T / T0 - 1) > 1e-2)
+    hg.follow(u, 0.0)
+    for h, dk, Tk, r, d_s, T_s in zip(hg.items, d, T, ref, d0, T0):
+        # an identity of the formula: round-off of lengths ~ h ~ 6e-3 m; the layer moved by
+        # much more than that
+        assert h.sigma - far(h, dk, Tk) == pytest.approx(r, abs=1e-16)
+        assert abs(far(h, dk, Tk) - far(h, d_s, T_s)) > 1e-6
+
+
+def test_following_hinge_dynamics_is_stable_and_partition_independent():
+    """Case B's first 0.5 s (100 steps, the t = 0 velocity jump sends axial waves through
+    the first elements): a layer updated after each step from its element's tension, without
+    the series compliance, blew up within 15 steps (the element's EA/L times the layer's
+    axial compliance is ~2.4). Runs to the end, stays finite, and gives the serial anchor
+    forces on 2 ranks to Newton's tolerance (1e-9 of the force scale, amplified by 100
+    steps: 1e-7)."""
+    from cablefem.dynamics import integrate
+
+    hist = {}
+    for comm in (MPI.COMM_WORLD, MPI.COMM_SELF):
+        m = CableModel(_hinged("paper_spatial.toml"), comm)
+        solve_static(m)
+        m.u.x.array[:] = m.u_static.x.array
+        hist[comm.size] = np.array([f.copy() for _, f in integrate(m, 0.5, 0.005, 0.9, 10)])
+        sig = [h.sigma for h in m.hinges.items]
+        rep = m.hinges.report()
+        # the layer moves, but stays near its static length (tension within +-30 %)
+        assert all(0.8 < s / r["sigma_h"] < 1.2 for s, r in zip(sig, rep.values()))
+    a, b = hist[MPI.COMM_WORLD.size], hist[1]
+    assert np.all(np.isfinite(a)) and a.shape[0] == 11
+    assert np.abs(a[:, :, :3]).max() < 10.0  # static tension 2.5 N
+    np.testing.assert_allclose(a, b, rtol=0, atol=1e-7 * np.abs(b).max())
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", ["paper_inplane.toml", "paper_spatial.toml"])
+def test_hinged_string_steady_state_rms_against_the_rod(name, mpi_tmp_path):
+    """The paper's cases over 30 s (the rod: 141 and 133 elements, converged to 0.12 % in
+    RMS, benchmarks/bench_paper.py): the steady-state RMS anchor moment of the string with
+    the following hinge within 1 % of the rod's (the issue's target; measured 0.08-0.76 %).
+    The peaks are not asserted: they miss the 1 % target (2.5-4 %, README)."""
+    from cablefem.run import run_case
+
+    rms = {}
+    for label, case, kw in (("rod", load_case(DEMOS / name), {"model": "beam"}),
+                            ("hinge", _hinged(name), {})):
+        res = run_case(case, mpi_tmp_path / label, MPI.COMM_WORLD, progress=False,
+                       figures=False, **kw)
+        rms[label] = np.array([a["steady_state_moment"]["rms"]
+                               for a in res.summary["anchors"].values()
+                               if a["kind"] == "clamped"])
+    assert np.all(np.abs(rms["rod"] / rms["hinge"] - 1) < 1e-2), rms
