@@ -53,6 +53,8 @@ class Checkpoint:
     step: int
     level: int = 0
     calm: int = 0
+    #: virtual hinges: (n_hinges, 2) tension and angle of each layer's law (cablefem.hinge)
+    layers: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
 
 
 class Interrupted(RuntimeError):
@@ -183,8 +185,8 @@ def integrate(model, t_end: float, dt: float, rho_inf: float = 0.9, output_every
     hinges = getattr(model, "hinges", None)
     if hinges:  # the layers follow the tension and angle from the static state on
         hinges.start_dynamics(model.u_static.x.array)
-        if start is not None:
-            hinges.follow(model.u.x.array, t)
+        if start is not None:  # the laws the checkpointed state was being solved with
+            hinges.set_state(start.layers, t)
     if start is None:
         stats.output_times.append(t)
         yield t, forces.compute(t)
@@ -261,7 +263,8 @@ def integrate(model, t_end: float, dt: float, rho_inf: float = 0.9, output_every
             copy_in(U2, model.u)
             copy_in(V2, model.v)
             if on_checkpoint is not None:
-                on_checkpoint(Checkpoint(t, step, level, calm))
+                on_checkpoint(Checkpoint(t, step, level, calm,
+                                         hinges.state() if hinges else np.zeros((0, 2))))
         stop = bool(should_stop()) if should_stop is not None else False
         if model.comm.allreduce(stop, op=MPI.LOR) and not last:
             copy_in(U2, model.u)

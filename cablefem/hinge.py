@@ -76,6 +76,7 @@ class _Hinge:
         self.shift = 0.0  # dynamics: sigma - sigma_far at the static state, m
         self.removed = 0.0  # stress-free length taken from the first element, m
         self.EA0 = None  # the first element's own EA (set by VirtualHinges)
+        self.last = (np.nan, np.nan)  # dynamics: (T, Delta) the law was last set from
 
 
 class VirtualHinges:
@@ -209,8 +210,18 @@ class VirtualHinges:
         to first order, with R = s1 - sigma + sigma_T T and EA' = R / ((s1 - sigma)/EA -
         sigma_T); the layer's mass is s1 - R. Raises :class:`HingeError` when sigma leaves
         (0, MAX_FRACTION x first element] or the element is slack."""
-        T, delta = self._measure(u)
-        for hg, t_k, d_k in zip(self.items, T, delta):
+        self.set_state(np.column_stack(self._measure(u)), t)
+
+    def state(self) -> np.ndarray:
+        """(n_hinges, 2): the tension and angle each layer's law was last set from (what a
+        checkpoint must keep: the state alone does not give them back, the tension measured
+        in it depends on the law it was solved with)."""
+        return np.array([hg.last for hg in self.items], float).reshape(-1, 2)
+
+    def set_state(self, state: np.ndarray, t: float) -> None:
+        """Set each layer's sigma and its first element's law from a tension and angle
+        (n_hinges, 2); see :meth:`follow`."""
+        for hg, (t_k, d_k) in zip(self.items, np.asarray(state, float).reshape(-1, 2)):
             sig = self._sigma_far(hg, t_k, d_k) + hg.shift
             dT = 1e-4 * t_k
             sig_T = (self._sigma_far(hg, t_k + dT, d_k)
@@ -223,7 +234,7 @@ class VirtualHinges:
                                  f"angle {np.degrees(d_k):.3g} deg)")
             s1 = hg.first  # the full stress-free length of the first element
             R = s1 - sig + sig_T * t_k
-            hg.sigma, hg.removed = sig, s1 - R
+            hg.sigma, hg.removed, hg.last = sig, s1 - R, (t_k, d_k)
             if hg.cells.size:
                 self.model.c.x.array[hg.cells] = R / hg.lengths
                 self.model.EA.x.array[hg.cells] = R / ((s1 - sig) / hg.EA0 - sig_T)
