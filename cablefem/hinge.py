@@ -70,9 +70,9 @@ class _Hinge:
         self.lengths = lengths  # their mesh lengths, m
         self.c0 = c0  # their base stress-free length per mesh length
         self.first = first  # the first element's stress-free length (all ranks), m
-        self.nodes = nodes  # local (anchor, other) node of the first element, or None
+        self.nodes = nodes  # first element: (anchor node, other node, X_other - X_anchor)
         self.h = 0.0  # the node is at A + h c
-        self.sigma = 0.0  # stress-free length removed from the first element
+        self.sigma = 0.0  # the layer's stress-free length (the first element's, removed)
         self.shift = 0.0  # dynamics: sigma - sigma_far at the static state, m
         self.removed = 0.0  # stress-free length taken from the first element, m
         self.EA0 = None  # the first element's own EA (set by VirtualHinges)
@@ -110,7 +110,8 @@ class VirtualHinges:
             if cells.size:  # the first element's two nodes, the anchor's first
                 dofs = model.V.dofmap.cell_dofs(cells[0])
                 at_anchor = np.linalg.norm(X[dofs] - anc.reference, axis=1)
-                nodes = (dofs[np.argmin(at_anchor)], dofs[np.argmax(at_anchor)])
+                a, b = dofs[np.argmin(at_anchor)], dofs[np.argmax(at_anchor)]
+                nodes = (a, b, X[b] - X[a])  # and the element in the reference geometry
             hg = _Hinge(i, anc, cells.astype(np.int32), lengths, c0, first, nodes)
             hg.EA0 = model.EA.x.array[cells].copy()
             self.items.append(hg)
@@ -168,14 +169,13 @@ class VirtualHinges:
         """Tension and anchor angle Delta (between the clamp direction and the first
         element) of every hinge's first element in the displacement ``u`` (a Function's
         array, ghosts up to date); from the ranks that have the element, to all ranks."""
-        X = self.model.V.tabulate_dof_coordinates()
         x = u.reshape(-1, 3)
         local = np.zeros((len(self.items), 3))
         for k, hg in enumerate(self.items):
             if hg.nodes is None:
                 continue
-            a, b = hg.nodes
-            e = (X[b] + x[b]) - (X[a] + x[a])
+            a, b, E = hg.nodes
+            e = E + x[b] - x[a]
             le = float(np.linalg.norm(e))
             stretch = le / (self.model.c.x.array[hg.cells[0]] * hg.lengths[0])
             cosd = float(np.dot(hg.anchor.direction, e)) / le
