@@ -521,10 +521,15 @@ class Case:
     fatigue: FatigueSpec | None = None
     network: NetworkSpec | None = None
     beam: BeamSpec = field(default_factory=BeamSpec)
+    #: (key, message) pairs for input that is valid but suspicious; a run logs them and
+    #: lists them under ``warnings`` in summary.json (``--strict`` makes them fatal)
+    warnings: list = field(default_factory=list, compare=False)
 
     def to_dict(self) -> dict:
         """JSON-serialisable echo of the inputs (motions and time functions via describe())."""
-        return _jsonable(self)
+        out = _jsonable(self)
+        out.pop("warnings", None)  # reported under summary.json's own "warnings"
+        return out
 
 
 def _jsonable(obj: Any) -> Any:

@@ -2,7 +2,9 @@
 
 Exit codes: 0 success; 1 a solve failed (the files written so far are valid and
 ``summary.json`` says why); 2 bad input (case file, options, CSV), reported one line per
-problem before any expensive work, without a traceback; 128 + the signal's number (130 for
+problem before any expensive work, without a traceback; 3 with ``--strict``, the run finished
+but warned (its warnings are listed under ``warnings`` in ``summary.json``); 128 + the
+signal's number (130 for
 Ctrl-C, 143 for SIGTERM) when a run was stopped by a signal: every file is valid and
 ``cablefem run --restart DIR`` continues it from its last checkpoint.
 
@@ -20,7 +22,7 @@ from pathlib import Path
 
 __all__ = ["main"]
 
-EXIT_OK, EXIT_FAILED, EXIT_INPUT = 0, 1, 2
+EXIT_OK, EXIT_FAILED, EXIT_INPUT, EXIT_WARNED = 0, 1, 2, 3
 
 
 class _Parser(argparse.ArgumentParser):
@@ -53,6 +55,9 @@ def _parser() -> argparse.ArgumentParser:
             sp.add_argument("case", type=Path, help="case file (TOML)")
             sp.add_argument("--output", "-o", type=Path, required=True, help="output folder")
         sp.add_argument("--quiet", "-q", action="store_true", help="warnings and errors only")
+        sp.add_argument("--strict", action="store_true",
+                        help="exit 3 when the run warns (input out of the method's range, "
+                             "implausible values, ...): the warnings are in summary.json")
 
     run = sub.add_parser("run", formatter_class=argparse.RawDescriptionHelpFormatter,
                          help="statics, modes and dynamics of a case",
@@ -297,13 +302,13 @@ def _main(argv: list[str] | None = None) -> int:
 
     try:
         if args.command == "run":
-            run_case(case, args.output, t_end=args.t_end, form=args.moment_form,
+            result = run_case(case, args.output, t_end=args.t_end, form=args.moment_form,
                      dynamics=not args.static_only, figures=not args.no_figures,
                      progress=not args.quiet, restart=args.restart is not None,
                      model=args.model or "string", refine=args.refine or 1.0)
         else:
-            run_case(case, args.output, modes=args.n, dynamics=False, figures=False,
-                     progress=not args.quiet)
+            result = run_case(case, args.output, modes=args.n, dynamics=False,
+                              figures=False, progress=not args.quiet)
     except CaseError as err:
         sys.stderr.write(str(err) + "\n")
         return EXIT_INPUT
@@ -313,6 +318,12 @@ def _main(argv: list[str] | None = None) -> int:
     except RunInterrupted as err:
         sys.stderr.write(f"cablefem: {err}\n")
         return 128 + (err.signal or 2)
+    warned = result.summary.get("warnings") or []
+    if warned:
+        sys.stderr.write(f"cablefem: {len(warned)} warning(s), listed under 'warnings' in "
+                         f"{Path(args.output) / 'summary.json'}\n")
+        if args.strict:
+            return EXIT_WARNED
     return EXIT_OK
 
 

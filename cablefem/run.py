@@ -29,7 +29,7 @@ from .netmodel import NetworkModel
 from .post import ANCHOR_COLUMNS, MOMENT_COLUMNS, anchor_moments, composite_field
 from .statics import solve_static
 
-__all__ = ["RunResult", "RunError", "RunInterrupted", "run_case", "steady_state_stats",
+__all__ = ["RunResult", "RunError", "RunInterrupted", "run_case", "steady_state_stats", "warn",
            "static_sag_ratio", "rod_moment_columns"]
 
 log = logging.getLogger(__name__)
@@ -56,6 +56,13 @@ class RunResult:
     forces: dict[str, np.ndarray]  #: anchor -> (n_t, 3)
     moments: dict[str, dict[str, np.ndarray]] = field(default_factory=dict)
     model: CableModel | None = None
+
+
+def warn(summary: dict, key: str | None, message: str) -> None:
+    """Record a warning: logged once (rank 0) and listed under ``summary["warnings"]`` as
+    ``{"key": ..., "message": ...}`` (``key``: the case key or run step it concerns)."""
+    summary.setdefault("warnings", []).append({"key": key, "message": message})
+    log.warning("%s%s", f"{key}: " if key else "", message)
 
 
 def steady_state_stats(times: np.ndarray, values: np.ndarray, fraction: float = 1 / 3) -> dict:
@@ -373,7 +380,10 @@ def run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *,
                      "mpi_ranks": comm.size, "length": model.length,
                      "model": kind, "elements": len(model.geometry.stations) - 1,
                      "degrees_of_freedom": model.bs * len(model.geometry.stations),
-                     "dimensionless": groups, "wall_time": {"build": t_build}}
+                     "dimensionless": groups, "wall_time": {"build": t_build},
+                     "warnings": []}
+    for key, message in list(case.warnings) + list(getattr(model, "warnings", [])):
+        warn(summary, key, message)
     if kind == "beam":
         st = model.geometry.stations
         summary["beam"] = {"refine": refine, "min_element": float(np.min(np.diff(st))),
