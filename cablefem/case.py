@@ -107,6 +107,9 @@ _MOTION_KEYS = {
 
 CASE_KEYS: dict[str, KeyDoc | TableDoc] = {
     "title": KeyDoc("string", "", "", "Free text echoed in the outputs."),
+    "units": KeyDoc("string", "SI", "", "'SI' (m, N, s, kg) | 'dimensionless' (the paper's "
+                    "scaling: lengths in l, forces in w l, moments in w l^2, times in "
+                    "sqrt(l/g)); names the units in logs, figures and reports."),
     "section": TableDoc("table", REQUIRED, "", "Cross-section of the cable.", {
         "EA": KeyDoc("number", REQUIRED, "N", "Axial stiffness, > 0."),
         "EI": KeyDoc("number", REQUIRED, "N m^2", "Bending stiffness, > 0."),
@@ -262,7 +265,7 @@ def _network_keys() -> dict:
     c = CASE_KEYS
     section_keys = c["section"].keys
     anchors = c["anchors"]
-    keys = {"title": c["title"],
+    keys = {"title": c["title"], "units": c["units"],
             "network": TableDoc("table", REQUIRED, "", "A cable network from a mesh file.", {
                 "mesh": KeyDoc("string", REQUIRED, "", "gmsh file (.msh) relative to the case "
                                "file: 1D physical groups for the cables, 0D groups for anchors "
@@ -521,6 +524,7 @@ class Case:
     fatigue: FatigueSpec | None = None
     network: NetworkSpec | None = None
     beam: BeamSpec = field(default_factory=BeamSpec)
+    units: str = "SI"  #: 'SI' or 'dimensionless' (labels only: see cablefem.units)
     #: (key, message) pairs for input that is valid but suspicious; a run logs them and
     #: lists them under ``warnings`` in summary.json (``--strict`` makes them fatal)
     warnings: list = field(default_factory=list, compare=False)
@@ -1025,6 +1029,7 @@ def parse_case(data: dict, base_dir: str | os.PathLike = Path("."),
         return top.table(name) or _Reader({}, name, CASE_KEYS[name].keys, problems)
 
     title = top.string("title")
+    units = top.string("units", ("SI", "dimensionless"))
     section_r, geometry_r = top.table("section"), top.table("geometry")
     section = _parse_section(section_r) if section_r else None
     geometry = _parse_geometry(geometry_r) if geometry_r else None
@@ -1082,7 +1087,8 @@ def parse_case(data: dict, base_dir: str | os.PathLike = Path("."),
     if _missing(beam.layer_elements, beam.growth, beam.span_elements):
         raise RuntimeError("cablefem internal error: a case value failed without a message")
     return Case(title, section, gravity, geometry, mesh, anchors, loads, masses, point_loads,
-                damping, dynamics, modal, solver, source, fatigue, beam=beam)
+                damping, dynamics, modal, solver, source, fatigue, beam=beam,
+                units=units or "SI")
 
 
 def _parse_network_case(data: dict, base_dir: Path, source: str) -> Case:
@@ -1095,6 +1101,7 @@ def _parse_network_case(data: dict, base_dir: Path, source: str) -> Case:
         return top.table(name) or _Reader({}, name, NETWORK_KEYS[name].keys, problems)
 
     title = top.string("title")
+    units = top.string("units", ("SI", "dimensionless"))
     net_r = top.table("network")
     mesh_path = None
     if net_r is not None:
@@ -1155,7 +1162,7 @@ def _parse_network_case(data: dict, base_dir: Path, source: str) -> Case:
         raise RuntimeError("cablefem internal error: a case value failed without a message")
     return Case(title, first, gravity, None, MeshSpec(1, 1.0), anchors, loads, masses,
                 point_loads, damping, dynamics, modal, solver, source, fatigue,
-                NetworkSpec(mesh_path, sections, cables))
+                NetworkSpec(mesh_path, sections, cables), units=units or "SI")
 
 
 def _parse_fatigue(r: _Reader | None, section: Section | None) -> FatigueSpec | None:

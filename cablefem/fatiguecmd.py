@@ -16,6 +16,7 @@ import numpy as np
 from mpi4py import MPI
 
 from .case import Case, CaseError
+from .units import unit
 from .fatigue import SNCurve, StressSection, fatigue_report, read_anchor_csv, write_report
 
 __all__ = ["run_fatigue"]
@@ -89,10 +90,14 @@ def run_fatigue(case: Case, rundir: Path, outdir: Path | None = None, *,
             outdir.mkdir(parents=True, exist_ok=True)
             first = _stress_section(spec, sections[clamped[0]]) if clamped else None
             write_report(outdir, reports, curve, first, spec.units)
+            tu = unit(case.units, "time")
             for name, rep in reports.items():
-                log.info("fatigue at %s: damage %.4g over %.4g time units, time to failure "
-                         "%s", name, rep.get("damage", np.nan), rep.get("duration", np.nan),
-                         rep.get("time_to_failure"))
+                ttf = rep.get("time_to_failure")
+                log.info("fatigue at %s: damage %.3g over %.4g %s, time to failure %s", name,
+                         rep.get("damage", np.nan), rep.get("duration", np.nan), tu,
+                         "infinite (no damaging cycle)" if ttf is None
+                         else f"{ttf:.3g} {tu}" + (f" ({ttf / 3.15576e7:.3g} years)"
+                                                    if tu == "s" else ""))
         except (ValueError, OSError) as err:
             error = str(err)
     error = comm.bcast(error, root=0)

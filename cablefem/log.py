@@ -7,13 +7,14 @@ that an MPI run prints each message once.
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import sys
 import time
 
 from mpi4py import MPI
 
-__all__ = ["setup_logging", "Progress"]
+__all__ = ["setup_logging", "Progress", "quiet_compiler"]
 
 
 class _RankZeroFilter(logging.Filter):
@@ -36,6 +37,34 @@ def setup_logging(level: int = logging.INFO, comm: MPI.Comm = MPI.COMM_WORLD) ->
         handler._cablefem = True  # type: ignore[attr-defined]
         logger.addHandler(handler)
     logger.propagate = False
+
+
+def _below_warning(record: logging.LogRecord) -> bool:
+    return record.levelno >= logging.WARNING
+
+
+@contextlib.contextmanager
+def quiet_compiler():
+    """Keep the C compiler's messages off the console while FFCx builds forms and elements.
+
+    setuptools logs every compiler command at INFO through the *root* logger, which FFCx
+    gives a console handler at import (``logging.basicConfig()``): "INFO:root:gcc ...". For
+    the duration, a filter on the root logger itself drops its records below WARNING (a
+    logger's filters see only the records logged on it, not those of other loggers passed
+    up to its handlers), and a :class:`logging.NullHandler` keeps ``logging.info`` from
+    installing a handler when there is none. The root's level, filters and handlers are
+    restored afterwards, so a user's own logging set-up is untouched."""
+    root = logging.getLogger()
+    level = root.level
+    null = logging.NullHandler()
+    root.addHandler(null)
+    root.addFilter(_below_warning)
+    try:
+        yield
+    finally:
+        root.removeFilter(_below_warning)
+        root.removeHandler(null)
+        root.setLevel(level)
 
 
 class Progress:
@@ -66,11 +95,12 @@ class Progress:
         self._last = now
         frac = min(max(done / self.total, 0.0), 1.0) if self.total > 0 else 1.0
         elapsed = now - self.t0
-        eta = elapsed * (1.0 - frac) / frac if frac > 0 else float("nan")
+        # no estimate before any progress: say so rather than print "nan"
+        eta = f"{elapsed * (1.0 - frac) / frac:7.1f} s" if frac > 0 else "    n/a  "
         width = 30
         bar = "#" * int(round(frac * width))
         text = (f"{self.label} [{bar:<{width}}] {100 * frac:5.1f}% "
-                f"elapsed {elapsed:7.1f} s, ETA {eta:7.1f} s {info}")
+                f"elapsed {elapsed:7.1f} s, ETA {eta} {info}")
         if self.tty:
             sys.stderr.write("\r" + text)
             if frac >= 1.0:

@@ -23,6 +23,7 @@ from dolfinx import fem
 from dolfinx.fem import petsc as fpetsc
 from slepc4py import SLEPc
 
+from .units import unit
 from .petsc_utils import case_options, default_options, lu_options
 
 __all__ = ["ModalResult", "solve_modes", "classify_mode"]
@@ -39,14 +40,20 @@ class ModalResult:
 
 
 def classify_mode(stations: np.ndarray, shape: np.ndarray, chord: np.ndarray,
-                  gravity_dir: np.ndarray | None, level: bool) -> dict:
-    """Classify a nodal mode shape (n_nodes, 3) in station order.
+                  gravity_dir: np.ndarray | None, mirror: bool) -> dict:
+    """Classify a nodal mode shape (n_nodes, 3) of a single cable, in station order.
 
-    Returns ``{"plane": "in-plane"|"out-of-plane"|"n/a", "symmetry": "symmetric"|
-    "antisymmetric"|"n/a", "out_of_plane_share": float, "symmetry_correlation": float}``.
+    ``plane``: 'in-plane' or 'out-of-plane', the side of the plane of the chord and gravity
+    holding most of the shape's squared amplitude (absent without gravity or with a chord
+    along gravity). ``symmetry``: the correlation of the shape with its mirror image about
+    the plane normal to the chord at mid-span, when the stations are mirror-symmetric:
+    'symmetric' above 0.5, 'antisymmetric' below -0.5, else 'mixed'. A level cable's modes
+    are exactly one or the other; an inclined cable's are so to O(sag x inclination), and
+    the correlation is reported beside the label. Returns also ``out_of_plane_share`` and
+    ``symmetry_correlation`` where they are defined (absent, never "n/a", otherwise).
     """
     e_c = chord / np.linalg.norm(chord)
-    out: dict = {"plane": "n/a", "symmetry": "n/a"}
+    out: dict = {}
     norm2 = float(np.sum(shape * shape))
     if gravity_dir is not None:
         n = np.cross(e_c, gravity_dir)
@@ -55,18 +62,35 @@ def classify_mode(stations: np.ndarray, shape: np.ndarray, chord: np.ndarray,
             share = float(np.sum((shape @ n) ** 2) / norm2)
             out["out_of_plane_share"] = share
             out["plane"] = "out-of-plane" if share > 0.5 else "in-plane"
-    if level:
+    if mirror:
         L = stations[-1]
         mirrored = np.column_stack([np.interp(L - stations, stations, shape[:, k])
                                     for k in range(3)])
         P = np.eye(3) - 2.0 * np.outer(e_c, e_c)
         corr = float(np.sum(shape * (mirrored @ P.T)) / norm2)
         out["symmetry_correlation"] = corr
-        if corr > 0.5:
-            out["symmetry"] = "symmetric"
-        elif corr < -0.5:
-            out["symmetry"] = "antisymmetric"
+        out["symmetry"] = ("symmetric" if corr > 0.5 else "antisymmetric" if corr < -0.5
+                           else "mixed")
     return out
+
+
+def classify_network_mode(points: np.ndarray, shape: np.ndarray) -> dict:
+    """Classify a nodal mode shape (n_nodes, 3) of a network against the plane that fits
+    its nodes best (least squares): ``plane`` 'normal' when most of the squared amplitude is
+    normal to that plane, else 'in-plane', with ``normal_share``; nothing when the nodes
+    are on a line (no plane)."""
+    X = points - points.mean(axis=0)
+    _, sv, vt = np.linalg.svd(X, full_matrices=False)
+    if sv.size < 2 or sv[1] < 1e-9 * sv[0]:
+        return {}
+    n = vt[-1]
+    share = float(np.sum((shape @ n) ** 2) / np.sum(shape * shape))
+    return {"plane": "normal" if share > 0.5 else "in-plane", "normal_share": share}
+
+
+def _label_text(lab: dict) -> str:
+    parts = [lab[k] for k in ("plane", "symmetry") if k in lab]
+    return (" " + " ".join(parts)) if parts else ""
 
 
 def solve_modes(model, n: int = 6) -> ModalResult:
@@ -111,12 +135,11 @@ def solve_modes(model, n: int = 6) -> ModalResult:
         chord = a1.position - a0.position
         g = model.case.gravity
         gdir = np.asarray(g.direction, float) if g.g > 0 else None
-        # mirror symmetry about mid-span: a level cable, or any straight weightless one
-        level = gdir is None or abs(chord @ gdir) < 1e-9 * np.linalg.norm(chord)
         st = model.geometry.stations
-        level = level and np.allclose(st, st[-1] - st[::-1], atol=1e-12 * st[-1])
+        # mirror symmetry about mid-span needs mirror-symmetric stations
+        mirror = bool(np.allclose(st, st[-1] - st[::-1], atol=1e-12 * st[-1]))
         classify = True
-    else:  # a network: no single plane or mid-span to classify against
+    else:  # a network: against the plane that fits its nodes
         classify = False
     labels = []
     for i, f in enumerate(shapes):
@@ -124,8 +147,8 @@ def solve_modes(model, n: int = 6) -> ModalResult:
         lab = None
         if model.comm.rank == 0:
             amax = np.max(np.abs(nodal))
-            lab = (classify_mode(st, nodal / amax, chord, gdir, level) if classify
-                   else {"plane": "n/a", "symmetry": "n/a"})
+            lab = (classify_mode(st, nodal / amax, chord, gdir, mirror) if classify
+                   else classify_network_mode(model.geometry.points, nodal / amax))
             sign = np.sign(nodal.flat[np.argmax(np.abs(nodal))])
             lab["scale"] = float(sign / amax)
         lab = model.comm.bcast(lab, root=0)
@@ -137,6 +160,7 @@ def solve_modes(model, n: int = 6) -> ModalResult:
     M.destroy()
     res = ModalResult(omegas, shapes, labels, time.perf_counter() - t0)
     for i, (w, lab) in enumerate(zip(omegas, labels)):
-        log.info("mode %d: omega = %.6g rad/s (f = %.6g Hz) %s %s", i + 1, w, w / 2 / np.pi,
-                 lab["plane"], lab["symmetry"])
+        log.info("mode %d: omega = %.6g %s (f = %.6g %s)%s", i + 1, w,
+                 unit(model.case.units, "omega"), w / 2 / np.pi,
+                 unit(model.case.units, "frequency"), _label_text(lab))
     return res

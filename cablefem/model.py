@@ -20,6 +20,7 @@ from petsc4py import PETSc
 
 from . import catenary, string
 from .case import Case, CaseError
+from .log import quiet_compiler
 from .motion import Motion
 from .network import create_line_mesh, polyline_cable, straight_cable, \
     graded_stations
@@ -118,8 +119,9 @@ class CableModel:
         self.length = self.geometry.length
         self.mesh = create_line_mesh(comm, self.geometry.points, self.geometry.cells)
         self.mesh.topology.create_connectivity(0, 1)
-        self.V = self._space()
-        self.W = fem.FunctionSpace(self.mesh, ("DG", 0))
+        with quiet_compiler():  # the elements are JIT-compiled on first use
+            self.V = self._space()
+            self.W = fem.FunctionSpace(self.mesh, ("DG", 0))
         self.u = fem.Function(self.V, name="displacement")
         self.v = fem.Function(self.V, name="velocity")
         self.a = fem.Function(self.V, name="acceleration")
@@ -381,13 +383,10 @@ class CableModel:
     def compile(self) -> None:
         """JIT-compile the forms (FFCx caches them: later runs take milliseconds).
 
-        The C compiler's INFO messages (setuptools turns the root logger to INFO while it
-        builds) are silenced meanwhile."""
-        logging.disable(logging.INFO)
-        try:
+        The C compiler's messages (setuptools logs them through the root logger) are kept
+        off the console meanwhile (:func:`cablefem.log.quiet_compiler`)."""
+        with quiet_compiler():
             self._compile()
-        finally:
-            logging.disable(logging.NOTSET)
 
     def _compile(self) -> None:
         self.f_static = fem.form(self.F_static)

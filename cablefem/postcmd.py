@@ -91,7 +91,8 @@ def run_post(case: Case, forces_csv: Path, outdir: Path, form: str = "exact",
                     row.update({k: moments[name][k][i] for k in MOMENT_COLUMNS})
                 rows.append(row)
         out.write(rows)
-    figs = anchor_figures(outdir, times, moments, comm) if moments and times.size > 1 else []
+    figs = (anchor_figures(outdir, times, moments, comm, units=case.units)
+            if moments and times.size > 1 else [])
     summary = {"cablefem": __version__, "status": "completed", "command": "post",
                "forces": str(forces_csv), "case": case.to_dict(), "length": length,
                "anchors": summary_anchors, "figures": figs,

@@ -22,7 +22,8 @@ from .checkpoint import (case_digest, read_checkpoint, truncate_csv, write_check
                          xdmf_times)
 from .dynamics import DynamicsError, DynamicsStats, Interrupted, integrate
 from .io import AnchorCSV, MomentsWriter, StringWriter, write_json, write_modes
-from .log import Progress
+from .log import Progress, quiet_compiler
+from .units import unit
 from .modal import solve_modes
 from .model import CableModel
 from .netmodel import NetworkModel
@@ -340,7 +341,15 @@ class _Emitter:
                 self.moments.close()
 
 
-def run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *,
+def run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, **kwargs
+             ) -> RunResult:
+    """Run a case (see :func:`_run_case` for the arguments), the compiler's messages kept
+    off the console (:func:`cablefem.log.quiet_compiler`)."""
+    with quiet_compiler():
+        return _run_case(case, outdir, comm, **kwargs)
+
+
+def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *,
              modes: int | None = None, dynamics: bool = True, t_end: float | None = None,
              form: str = "exact", progress: bool = True, figures: bool = True,
              restart: bool = False, model: str = "string", refine: float = 1.0
@@ -373,7 +382,8 @@ def run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *,
         model = CableModel(case, comm)
     t_build = time.perf_counter() - wall0
     groups = model.dimensionless_groups()
-    log.info("%s: l = %.6g m, %d elements, eps = %s, eps_b = %s", case.title, model.length,
+    log.info("%s: l = %.6g %s, %d elements, eps = %s, eps_b = %s", case.title, model.length,
+             unit(case.units, "length"),
              len(model.geometry.stations) - 1, _g(groups.get("eps")),
              _g(groups.get("eps_b")))
     summary: dict = {"cablefem": __version__, "status": "running", "case": case.to_dict(),
@@ -552,11 +562,15 @@ def run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *,
     if summary["status"] == "running":
         summary["status"] = "completed"
     if figures and len(times) > 1 and moments:
-        from .plots import anchor_figures
+        from .plots import MAX_PANELS, anchor_figures
 
         source = ("the rod's own moment (beam model)" if kind == "beam"
                   else "inner solution + string curvature")
-        summary["figures"] = anchor_figures(outdir, times, moments, comm, source=source)
+        summary["figures"] = anchor_figures(outdir, times, moments, comm, source=source,
+                                            units=case.units)
+        if len(moments) > MAX_PANELS:
+            log.info("figures: the %d most loaded of %d clamped anchors (all are in "
+                     "anchors.csv)", MAX_PANELS, len(moments))
     if case.fatigue is not None and len(times) > 1 and moments:
         from .fatiguecmd import run_fatigue
 

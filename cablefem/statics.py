@@ -21,6 +21,7 @@ from dolfinx.fem import petsc as fpetsc
 from mpi4py import MPI
 from petsc4py import PETSc
 
+from .units import unit
 from .anchors import AnchorForces
 from .petsc_utils import (SNESHistory, assemble_jacobian, assemble_residual, copy_in,
                           case_options, default_options, lu_options)
@@ -211,6 +212,7 @@ def solve_static(model, max_continuation_steps: int = 200) -> StaticResult:
     res = StaticResult(forces, total_its, steps, slack, tmax, tmin,
                        time.perf_counter() - t_start)
     log.info("statics: converged in %d Newton iterations (%d continuation steps), "
-             "tension %.6g..%.6g N, %.2f s", total_its, steps, tmin, tmax, res.wall_time)
+             "tension %.6g..%.6g %s, %.2f s", total_its, steps, tmin, tmax,
+             unit(model.case.units, "force"), res.wall_time)
     snes.destroy()
     return res

@@ -1,0 +1,55 @@
+"""What a user sees on the console and in the figures: no compiler chatter, no "nan" ETA,
+units named, axes that show the data."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from cablefem.log import Progress
+from cablefem.plots import moment_axis_range
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+@pytest.mark.serial
+def test_no_compiler_lines_with_an_empty_form_cache(tmp_path):
+    """FFCx compiles every element and form anew into an empty cache; setuptools logs each
+    gcc command through the root logger ("INFO:root:..."). None of it may reach the console,
+    while cablefem's own messages do, with the case's units (a dimensionless case)."""
+    env = dict(os.environ, XDG_CACHE_HOME=str(tmp_path / "cache"))
+    proc = subprocess.run([sys.executable, "-m", "cablefem", "run",
+                           str(ROOT / "demos" / "paper_inplane.toml"), "-o",
+                           str(tmp_path / "out"), "--static-only", "--no-figures"],
+                          env=env, capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0, proc.stderr
+    assert any((tmp_path / "cache").rglob("*.so")), "the cache was not used: no compile"
+    assert "INFO:root" not in proc.stderr and "gcc" not in proc.stderr, proc.stderr[:2000]
+    assert "[cablefem] statics: converged" in proc.stderr
+    assert "w l" in proc.stderr and " N," not in proc.stderr  # dimensionless, not N
+
+
+def test_progress_never_prints_nan(capsys):
+    bar = Progress(10.0, "dynamics", enabled=True, every_s=0.0)
+    bar.enabled = True  # rank 0 or not: the text is what is tested
+    bar.update(0.0, "step 0")
+    bar.update(5.0, "step 5")
+    err = capsys.readouterr().err
+    assert "nan" not in err.lower() and "ETA" in err
+
+
+def test_moment_axis_range_shows_a_small_variation():
+    """A +-1.3 % variation about 1.0: the axis spans the data (with 5 % margins), so the
+    variation fills the axes instead of being squeezed next to a forced zero."""
+    t = np.linspace(0, 1, 200)
+    m = 1.0 + 0.013 * np.sin(20 * t)
+    lo, hi = moment_axis_range(m)
+    span = m.max() - m.min()
+    assert lo == pytest.approx(m.min() - 0.05 * span) and hi == pytest.approx(m.max() + 0.05 * span)
+    assert lo > 0.9  # zero is not forced in
+    assert moment_axis_range(np.array([np.nan])) is None
