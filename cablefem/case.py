@@ -177,8 +177,12 @@ CASE_KEYS: dict[str, KeyDoc | TableDoc] = {
     }),
     "damping": TableDoc("table", None, "", "Damping; default none. Give alpha/beta, or ratio "
                         "(or ratios) with frequencies, not both.", {
-        "model": KeyDoc("string", "rayleigh", "", "'rayleigh' C = alpha M + beta K0 | 'axial' "
-                        "N_d = beta EA dv3/dt (beta only) | 'none'."),
+        "model": KeyDoc("string", "rayleigh", "", "'rayleigh' alpha M v + beta K_t(u) v, K_t "
+                        "the current tangent stiffness (= beta d/dt of the internal force: "
+                        "turns with the cable) | 'rayleigh_k0' the same with K0, the tangent "
+                        "at the static state (not objective: damps a swinging cable "
+                        "spuriously; for comparison) | 'axial' N_d = beta EA dv3/dt (beta "
+                        "only) | 'none'."),
         "alpha": KeyDoc("number", 0.0, "1/s", "Mass-proportional coefficient, >= 0."),
         "beta": KeyDoc("number", 0.0, "s", "Stiffness-proportional coefficient, >= 0."),
         "ratio": KeyDoc("number", None, "-", "Damping ratio at both frequencies, 0 <= r < 1."),
@@ -415,8 +419,9 @@ class PointLoad:
 
 @dataclass
 class Damping:
-    """Damping model 'none' | 'rayleigh' | 'axial' with resolved ``alpha`` (1/s), ``beta``
-    (s); ``ratios`` and ``frequencies`` (rad/s) when given that way."""
+    """Damping model 'none' | 'rayleigh' (current tangent) | 'rayleigh_k0' (static tangent)
+    | 'axial', with resolved ``alpha`` (1/s), ``beta`` (s); ``ratios`` and ``frequencies``
+    (rad/s) when given that way."""
 
     model: str
     alpha: float
@@ -876,7 +881,7 @@ def _parse_time(r: _Reader | None, base_dir: Path) -> TimeFunction | None:
 def _parse_damping(r: _Reader | None) -> Damping | None:
     if r is None:
         return Damping("none", 0.0, 0.0)
-    model = r.string("model", choices=("rayleigh", "axial", "none"))
+    model = r.string("model", choices=("rayleigh", "rayleigh_k0", "axial", "none"))
     alpha, beta = r.number("alpha", ge=0), r.number("beta", ge=0)
     ratio = r.number("ratio", ge=0, lt=1)
     ratios = r.numbers("ratios", 2, ge=0, lt=1)
@@ -900,7 +905,7 @@ def _parse_damping(r: _Reader | None) -> Damping | None:
         if not direct:
             r.problems.append((r.path, "give alpha and/or beta, or ratio (or ratios) with "
                                        "frequencies"))
-        return Damping("rayleigh", alpha, beta) if direct and not _missing(alpha, beta) else None
+        return Damping(model, alpha, beta) if direct and not _missing(alpha, beta) else None
     if r.has("ratio") == r.has("ratios"):
         r.problems.append((r.path, "give exactly one of ratio and ratios"))
         return None
@@ -918,7 +923,7 @@ def _parse_damping(r: _Reader | None) -> Damping | None:
         r.problems.append((r.path, f"the ratios {list(zs)} at {list(freqs)} rad/s give a "
                                    f"negative coefficient (alpha = {a:g} 1/s, beta = {b:g} s)"))
         return None
-    return Damping("rayleigh", a, b, zs, freqs)
+    return Damping(model, a, b, zs, freqs)
 
 
 def _parse_dynamics(r: _Reader | None) -> DynamicsSpec | None:

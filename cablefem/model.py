@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import ufl
+from ufl.algorithms import expand_derivatives
 from dolfinx import fem, mesh as dmesh
 from mpi4py import MPI
 from petsc4py import PETSc
@@ -358,9 +359,15 @@ class CableModel:
         self.alpha = fem.Constant(self.mesh, PETSc.ScalarType(damp.alpha))
         self.beta = fem.Constant(self.mesh, PETSc.ScalarType(damp.beta))
         F_damp = None
-        if damp.model == "rayleigh" and (damp.alpha > 0 or damp.beta > 0):
+        if damp.model in ("rayleigh", "rayleigh_k0") and (damp.alpha > 0 or damp.beta > 0):
             F_damp = self.alpha * ufl.replace(F_inertia, {a: v})
-            if damp.beta > 0:  # K0: the tangent stiffness at the static state
+            if damp.beta > 0 and damp.model == "rayleigh":
+                # beta K_t(u) v = beta d/dt f_int(u): the current tangent, which turns with
+                # the cable (its Jacobian in u, a second derivative of F_int, is derived)
+                # (derivatives applied now: v must appear explicitly, or the Jacobian's
+                # derivative in v does not see through the nested Gateaux derivative)
+                F_damp = F_damp + self.beta * expand_derivatives(ufl.derivative(F_int, u, v))
+            elif damp.beta > 0:  # rayleigh_k0: the tangent at the static state
                 K0 = ufl.derivative(ufl.replace(F_int, {u: self.u_static}), self.u_static, dw)
                 F_damp = F_damp + self.beta * ufl.action(K0, v)
         elif damp.model == "axial" and damp.beta > 0:
