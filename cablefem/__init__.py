@@ -2,7 +2,7 @@
 
 The extensible string (outer solution) is solved with FEniCSx; the closed-form inner
 solution of a matched asymptotic expansion gives the bending moment in the boundary layer at
-every clamped anchor (see ``docs`` in the README and ``../shared/docs/physics.md``).
+every clamped anchor (see the README and ``docs/theory.md``).
 """
 
 __version__ = "0.1.0"

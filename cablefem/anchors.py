@@ -2,7 +2,7 @@
 
 The force that the span transmits at anchor ``a`` (pointing into the span) is
 ``N_a = −R_a``, where ``R_a`` is the assembled residual of the *unconstrained* weak form at
-the anchor's degrees of freedom (``../shared/docs/physics.md`` section 3, step 1). It holds
+the anchor's degrees of freedom (``docs/theory.md`` §3, step 1). It holds
 the inertia, damping and weight of the half element next to the anchor, which makes it more
 accurate than the first element's tension.
 

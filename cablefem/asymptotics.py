@@ -1,8 +1,8 @@
 """Inner (boundary-layer) and composite solutions at clamped cable anchors.
 
 Pure NumPy, no dolfinx: the functions post-process the anchor forces of any string solver.
-References: the paper ``../shared/paper/000_00e55630a62489f6.txt`` (Eq. numbers below) and
-``../shared/docs/physics.md`` (sections 3-4, "step n" = the numbered steps of section 3).
+References: ``docs/theory.md`` §3-4 ("step n" = the numbered steps of §3) and the paper it
+cites (Eq. numbers below).
 
 Conventions
 -----------
@@ -45,7 +45,7 @@ MAX_PERIOD_RATIO = 0.1
 
 @dataclass
 class AnchorLayer:
-    """Inner solution at clamped anchors (physics.md steps 2-8); arrays of shape ``(...)``.
+    """Inner solution at clamped anchors (docs/theory.md §3, steps 2-8); arrays of shape ``(...)``.
 
     Attributes
     ----------
@@ -127,7 +127,7 @@ def layer(N: ArrayLike, c: ArrayLike, EI: ArrayLike, EA: ArrayLike, *, form: str
           e1: ArrayLike | None = None, length: float | None = None,
           tension_floor: float = 0.0,
           quasi_static: tuple[float, float] | None = None) -> AnchorLayer:
-    """Boundary layer at clamped anchors from the anchor forces (physics.md steps 2-8).
+    """Boundary layer at clamped anchors from the anchor forces (docs/theory.md §3, steps 2-8).
 
     Parameters
     ----------
@@ -265,7 +265,7 @@ def exact_curvature_profile(sigma: ArrayLike, delta: ArrayLike, T: ArrayLike,
 
 def string_curvature(tangent: ArrayLike, tension: ArrayLike, mass: ArrayLike,
                      accel: ArrayLike, load: ArrayLike) -> np.ndarray:
-    """The string's own curvature vector kappa_s = t x dt/dsigma [1/m] (physics.md sec. 4).
+    """The string's own curvature vector kappa_s = t x dt/dsigma [1/m] (docs/theory.md §4).
 
     From the string's balance of forces (Eq. 16), dt/dsigma = (m a - f)_perp / T, so
     kappa_s = t x (m a - f) / T (the cross product removes the part along t).
@@ -293,7 +293,7 @@ def composite_curvature(kappa_string: ArrayLike, sigmas: ArrayLike, deltas: Arra
                         orientation: ArrayLike | None = None) -> np.ndarray:
     """Composite curvature kappa(s) = kappa_string(s) + sum_a o_a kappa_a(sigma_a(s)) b_a.
 
-    physics.md section 4 (the paper's Eq. 40, one B_a per anchor, NOTES.md item 2), with
+    docs/theory.md §4 (the paper's Eq. 40 with one B_a per anchor, see its §9), with
     the explicit layer profile (step 7). Vectors are in the direction of travel of the
     station coordinate s, the one ``kappa_string`` was computed in. An anchor's layer
     vector kappa_a b_a is in its own direction (away from the anchor), so it enters with
@@ -348,7 +348,7 @@ def far_field_offsets(delta: ArrayLike, T: ArrayLike, EI: ArrayLike,
     its centre line is ``r(sigma) = A + int_0^sigma lambda d3``, with ``d3 = cos(phi) t +
     sin(phi) n`` (``n`` normal to t in the bending plane, on the side of c) and the
     stretch ``lambda = 1 + (T/EA) cos(phi)`` of an unshearable rod whose internal force is
-    the constant N = T t (physics.md section 3). Far from the anchor it is the straight line
+    the constant N = T t (docs/theory.md §3, step 6). Far from the anchor it is the straight line
     ``A + D + lambda_inf sigma t``, ``lambda_inf = 1 + T/EA``, with the offset
     ``D = D_t t + D_n n = int_0^inf (lambda d3 - lambda_inf t) dsigma``. Changing the
     variable to phi with the exact first integral (Eq. 35),

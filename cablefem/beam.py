@@ -469,7 +469,7 @@ class BeamModel(CableModel):
     def initial_guess(self) -> np.ndarray:
         """Nodal (n, 6): the elastic catenary's positions, and rotations that turn the rod
         from the string's tangent towards each clamp over the layer, by the inner
-        solution's angle ``φ(σ) = 4 atan(tan(Δ/4) exp(−σ/ℓ))`` (physics.md section 3)."""
+        solution's angle ``φ(σ) = 4 atan(tan(Δ/4) exp(−σ/ℓ))`` (docs/theory.md §3, step 6)."""
         st = self.geometry.stations
         r = self.initial_shape
         tang = np.gradient(r, st, axis=0)

@@ -1,11 +1,11 @@
 """Elastic catenary of one cable: closed forms, solvers and verification oracles.
 
-Pure NumPy/SciPy (no dolfinx), see ``physics.md`` sections 2 and 6. 2D convention: anchor
+Pure NumPy/SciPy (no dolfinx), see ``docs/theory.md`` §2 and §8. 2D convention: anchor
 ``p`` at (0, 0), other end ``q`` at (``span``, ``rise``), ``span > 0`` horizontal, ``rise``
 vertical (up positive), ``s`` the stress-free arc length from ``p``. ``H > 0`` is the
 horizontal tension component, ``V(s) = V_q - w (l - s)`` the vertical one (up positive),
 ``T = sqrt(H^2 + V^2)``. With ``a = V(s)/H``, ``b = V(0)/H`` (so ``a - b = w s/H``) the
-closed forms of physics.md section 6 are evaluated without cancellation as
+closed forms of docs/theory.md §8 are evaluated without cancellation as
 
     x(s) = s Q asinh(D)/D + H s/EA,        z(s) = s (a + b)/(c_a + c_b) + (s/EA) (V(0) + w s/2),
 
@@ -77,7 +77,7 @@ def _terms(s, H, V_q, l, w):
 
 
 def _xz(s, H, V_q, l, w, EA):
-    """Elastic catenary coordinates ``x(s), z(s)`` (physics.md section 6)."""
+    """Elastic catenary coordinates ``x(s), z(s)`` (docs/theory.md §8)."""
     s = np.asarray(s, dtype=float)
     a, b, ca, cb, Q, D = _terms(s, H, V_q, l, w)
     x = s * Q * _asinhc(D) + H * s / EA
@@ -95,7 +95,7 @@ class Catenary2D:
 
     Attributes: ``span, rise`` [m] of q relative to p, stress-free ``length`` [m], weight
     ``w`` [N/m of stress-free length], axial stiffness ``EA`` [N], horizontal tension ``H``
-    [N] and vertical tension component at q ``V_q`` [N] (up positive, V_F of physics.md).
+    [N] and vertical tension component at q ``V_q`` [N] (up positive, V_F of docs/theory.md §8).
     """
 
     span: float
@@ -453,7 +453,7 @@ def catenary_between(p: ArrayLike, q: ArrayLike, length: float, w: float, EA: fl
 def irvine_lambda2(span: float, H: float, m: float, g: float, EA: float, sag: float) -> float:
     """Irvine's parameter ``lambda^2 = (m g L/H)^2 L / (H L_e/EA)`` [-] with
     ``L_e = L (1 + 8 (d/L)^2)``; span ``L`` [m], ``H`` [N], mass ``m`` [kg/m], ``g``
-    [m/s^2], ``EA`` [N], mid-span sag ``d`` [m] (physics.md section 6)."""
+    [m/s^2], ``EA`` [N], mid-span sag ``d`` [m] (docs/theory.md §8)."""
     L, H = _check("span", span, 0.0), _check("H", H, 0.0)
     m, g = _check("m", m, 0.0), _check("g", g, 0.0)
     EA, d = _check("EA", EA, 0.0, allow_inf=True), _check("sag", sag, 0.0, strict=False)

@@ -1,6 +1,6 @@
 """Fatigue at clamped anchors: stresses, rainflow counting, S-N curve, Miner's sum.
 
-Pure NumPy post-processing of ``anchors.csv`` (``../shared/docs/physics.md`` section 5):
+Pure NumPy post-processing of ``anchors.csv`` (``docs/theory.md`` §7):
 ``sigma = T/A + M/W``, rainflow counting (ASTM E1049-85, by the ``rainflow`` package), an
 EN 1993-1-9 style S-N curve, Miner's sum ``D = sum n_i / N_i``. Units are the user's,
 consistently (N and m: stresses in Pa); times are in the series' time unit.

@@ -127,7 +127,7 @@ class HarmonicMotion:
 class EllipseMotion:
     """Elliptic motion starting at rest position: ``u = a_s sin(w t) + a_c (cos(w t) - 1)``.
 
-    ``u(0) = 0``. Case B of ``physics.md`` section 7 is ``axis_sin = (0, 0, 1e-3)``,
+    ``u(0) = 0``. Case B of ``docs/theory.md`` §9 is ``axis_sin = (0, 0, 1e-3)``,
     ``axis_cos = (0, 5e-4, 0)``.
 
     Parameters

@@ -2,7 +2,7 @@
 
 A cable is a 1D interval mesh embedded in 3D. Its node coordinates are the stress-free
 reference configuration ``X(s)``: every element's length is its stress-free length, so
-``ufl.dx`` integrates over stress-free arc length (``../shared/docs/physics.md`` section 1).
+``ufl.dx`` integrates over stress-free arc length (``docs/theory.md`` §1).
 For a cable given by two anchors and a length (or a tension, or a sag) the reference is the
 straight segment of that length along the chord; for a polyline it is the polyline itself. A
 string has no bending stiffness, so the reference shape only matters through its

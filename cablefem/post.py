@@ -1,8 +1,8 @@
 """From anchor forces to anchor bending moments: the columns of ``anchors.csv``.
 
 Pure NumPy (no dolfinx), so that ``cablefem post`` can apply it to anchor-force histories
-from any string solver. For a clamped anchor at every time (``../shared/docs/physics.md``
-sections 3-4):
+from any string solver. For a clamped anchor at every time (``docs/theory.md``
+§3-4):
 
 * the layer's closed form from the anchor force ``N_a`` (:func:`cablefem.asymptotics.layer`),
 * plus the string's own curvature at the anchor, ``EI κ_string(0)`` with
@@ -114,7 +114,7 @@ def composite_field(node_s: np.ndarray, r: np.ndarray, a: np.ndarray, EA: float,
                     anchor_s: list[float], deltas: np.ndarray, ells: np.ndarray,
                     normals: np.ndarray, tension_only: bool = True
                     ) -> tuple[np.ndarray, np.ndarray]:
-    """Composite curvature along the cable at one time (physics.md section 4).
+    """Composite curvature along the cable at one time (docs/theory.md §4).
 
     ``node_s`` (n,), ``r`` (n, 3), ``a`` (n, 3): stations, positions and accelerations of
     the string's nodes; ``stations`` (P,): where to evaluate; ``anchor_s``, ``deltas``,

@@ -1,6 +1,6 @@
 """Cable cross-section properties and the paper's dimensionless groups.
 
-Pure Python: no dolfinx import. The symbols follow ``physics.md`` section 1: ``EA``, ``EI``,
+Pure Python: no dolfinx import. The symbols follow ``docs/theory.md`` §1: ``EA``, ``EI``,
 ``GJ`` are the axial, bending and torsional stiffnesses, ``m`` the mass per unit stress-free
 length and ``w = m g`` the weight per unit stress-free length.
 """
@@ -62,7 +62,7 @@ class Section:
 
 
 def dimensionless_groups(section: Section, length: float, g: float) -> dict[str, float | None]:
-    """The paper's dimensionless groups of one cable (``physics.md`` section 1).
+    """The paper's dimensionless groups of one cable (``docs/theory.md`` §1).
 
     Parameters
     ----------

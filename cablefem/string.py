@@ -1,4 +1,4 @@
-"""UFL forms of the 3D extensible string (``../shared/docs/physics.md`` section 2).
+"""UFL forms of the 3D extensible string (``docs/theory.md`` §2).
 
 Nothing else lives here: no meshes, no solvers. Every function takes UFL objects and returns
 UFL expressions or forms, so that users can add terms (drag, buoyancy, ...) to the residual
@@ -97,8 +97,8 @@ def strain_rate(u, v, t0, c=1.0):
 def axial_damping_work(u, v, du, t0, EA, beta, dx=ufl.dx, c=1.0):
     """Axial strain-rate damping ``N_d = β EA (dv3/dt) ∂s r / λ`` (model "axial").
 
-    This damps axial stretching only: taut transverse modes stay undamped (physics.md
-    section 2), which is why it is not the default.
+    This damps axial stretching only: taut transverse modes stay undamped (docs/theory.md
+    §2), which is why it is not the default.
     """
     g = stretch_vector(u, t0)
     nd = beta * EA * strain_rate(u, v, t0, c) * g / ufl.sqrt(ufl.dot(g, g))

@@ -1,6 +1,6 @@
 """Closed-form references for a two-anchor cable at rest, to check a run against.
 
-:func:`closed_form_anchor_moments` evaluates physics.md section 4's composite anchor moment
+:func:`closed_form_anchor_moments` evaluates the composite anchor moment of docs/theory.md §4
 (the layer's closed form plus the string-curvature correction) with the *exact* elastic
 catenary's anchor forces, so that a finite-element run can be checked to the accuracy of
 its reaction forces (O(h^2)). Pure NumPy.

@@ -23,7 +23,7 @@
 # $\Delta$ between clamp and string, the layer length
 # $\ell = \sqrt{EI/(T(1+T/EA))}$ and the moment
 # $M(0) = 2\sqrt{EI\,T}\,\sin(\Delta/2)\sqrt{1+(T/EA)\cos^2(\Delta/2)}$, plus the
-# string's own curvature $EI\,\kappa_s(0)$ (physics.md sections 3-4).
+# string's own curvature $EI\,\kappa_s(0)$ (docs/theory.md §3-4).
 #
 # Run: `python demos/demo_paper_inplane.py --output output/paper_inplane` (shorter when the
 # environment variable `CI` is set).

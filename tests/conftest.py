@@ -33,7 +33,7 @@ def mpi_tmp_path(tmp_path) -> Path:
 def level_case(EA=17857.14, EI=4e-4, mass=1.0, g=1.0, length=1.0, chord=1.0013333,
                elements=30, motion=None, damping=None, dynamics=None, **extra):
     """A level cable between p = (0,0,0) and q = (chord,0,0), clamped along the chord
-    (physics.md section 7 coordinates); keyword overrides for every table."""
+    (docs/theory.md §9 coordinates); keyword overrides for every table."""
     d = {"title": "test", "section": {"EA": EA, "EI": EI, "mass": mass},
          "gravity": {"g": g}, "geometry": {"length": length},
          "mesh": {"elements": elements},

@@ -1,4 +1,4 @@
-"""Tests of cablefem.asymptotics against mathematics, physics and physics.md section 6.
+"""Tests of cablefem.asymptotics against mathematics, physics and docs/theory.md §8.
 
 Every tolerance is justified where it is used. Notation: beta = T/EA, ell0 = sqrt(EI/T),
 ell = ell0/sqrt(1 + beta), s = sin(Delta/2), co = cos(Delta/2).
@@ -14,7 +14,7 @@ from cablefem import asymptotics as asy
 
 DELTAS_DEG = [1.0, 5.0, 10.0, 30.0, 60.0]
 BETAS = [0.0, 1e-3, 1e-2]
-EI_A, T_A = 4e-4, 25.0  # case A orders of magnitude (physics.md section 7)
+EI_A, T_A = 4e-4, 25.0  # case A orders of magnitude (docs/theory.md §9)
 
 
 def _ea(beta: float) -> float:
@@ -30,7 +30,7 @@ def _layer_at_angle(delta: float, beta: float, form: str = "exact") -> asy.Ancho
 def _solve_inner_bvp(delta: float, beta: float):
     """phi'' = sin(phi) (1 + beta cos(phi)), phi(0) = Delta, phi(X) = 0, x = sigma/ell0.
 
-    physics.md section 6, last item, in the variable x = sigma/ell0 (a change of variable
+    docs/theory.md §8, last item, in the variable x = sigma/ell0 (a change of variable
     only: then dphi/dsigma = dphi/dx / ell0 and M = EI |dphi/dsigma| = sqrt(EI T)|dphi/dx|).
     X = 30 ell / ell0. The initial guess is the linearised solution Delta exp(-x), which
     knows nothing of the module.
@@ -152,7 +152,7 @@ def test_explicit_vs_exact_profile_is_order_beta():
 # ------------------------------------------------------------------------- 2. small Delta
 
 def test_small_angle_and_nonlinear_ratio_table():
-    # physics.md section 6: 2 sin(Delta/2)/Delta printed to 5 decimals: half a unit of the
+    # docs/theory.md §8: 2 sin(Delta/2)/Delta printed to 5 decimals: half a unit of the
     # last digit, 5e-6.
     table = {5.0: 0.99968, 10.0: 0.99873, 30.0: 0.98862, 60.0: 0.95493}
     for deg, printed in table.items():
@@ -234,8 +234,8 @@ def test_vectorised_over_times_and_anchors():
 # -------------------------------------------------------------------------- 4. case A
 
 def test_case_A_static_anchor_moment_and_string_correction():
-    # physics.md section 7, case A: l = w = g = m = 1, EI = 4e-4, EA = 17857.14, chord
-    # L = 1.0013333 from the level elastic catenary. Section 6 with V_F = w l/2 (level):
+    # docs/theory.md §9, case A: l = w = g = m = 1, EI = 4e-4, EA = 17857.14, chord
+    # L = 1.0013333 from the level elastic catenary. §8 with V_F = w l/2 (level):
     # L = 2 (H/w) asinh(w l/(2H)) + H l/EA. dL/dH = 1/EA + ~1/(12 H^3) = 6.1e-5, so L's
     # rounding (5e-8) moves H by 8e-4: tolerance 2e-3 on "H ~ 25".
     l, w, EI, EA = 1.0, 1.0, 4e-4, 17857.14
@@ -259,7 +259,7 @@ def test_case_A_static_anchor_moment_and_string_correction():
     np.testing.assert_allclose(lay.normal, [[0, 1.0, 0], [0, -1.0, 0]], atol=1e-15)
     np.testing.assert_array_equal(lay.psi0, [np.pi, np.pi])
     # String curvature at p (static: a = 0, f = -w e_z): kappa_s = t x (w e_z)/T
-    # = -(w cos Delta / T) b (physics.md section 4); round-off only.
+    # = -(w cos Delta / T) b (docs/theory.md §4); round-off only.
     ks = asy.string_curvature(lay.tangent, lay.tension, 1.0, np.zeros(3), [0.0, 0.0, -w])
     np.testing.assert_allclose(ks, -(w * np.cos(d) / T) * lay.normal, atol=1e-16)
     # Its share of the anchor moment: EI w cos(Delta)/(T M). With T sin(Delta) = V =

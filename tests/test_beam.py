@@ -271,7 +271,7 @@ def _static_moments(path, refine):
 
 @pytest.mark.parametrize("name,tol", [("paper_inplane.toml", 2e-5), ("paper_spatial.toml", 3e-4)])
 def test_static_anchor_moment_converges_to_the_composite(name, tol):
-    """physics.md section 4: the rod's anchor moment -> the composite closed form evaluated
+    """docs/theory.md §4: the rod's anchor moment -> the composite closed form evaluated
     with the rod's own anchor force. Measured limits: case A -5.9e-6 (of which 4e-6 is the
     shear compliance T/GA), case B -1.5e-4 (the asymptotic expansion's own next order,
     O((l_a/l)^2...)); the issue's target is 0.1 %. Order 2 under uniform refinement."""

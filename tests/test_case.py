@@ -1,7 +1,7 @@
 """Tests of the case layer: properties, motions, TOML/dict case parsing and its errors.
 
 Pure Python/NumPy (no dolfinx), so they run anywhere. The paper's cases are those of
-``physics.md`` section 7 in its dimensionless units (l = w = g = 1, m = 1).
+``docs/theory.md`` §9 in its dimensionless units (l = w = g = 1, m = 1).
 """
 
 from __future__ import annotations
@@ -24,7 +24,7 @@ from cablefem.motion import (
 from cablefem.properties import Section, dimensionless_groups
 
 EPS = np.finfo(float).eps
-OMEGA1 = 16.407  # case A: first in-plane frequency (rad per time unit), physics.md section 7
+OMEGA1 = 16.407  # case A: first in-plane frequency (rad per time unit), docs/theory.md §9
 OMEGA2 = 9.9815  # case B
 
 CASE_A_TOML = """
@@ -132,7 +132,7 @@ def test_case_a_toml(tmp_path):
     assert (case.mesh.elements, case.mesh.grading) == (30, 1.0)
     p, q = case.anchors
     assert (p.name, q.name, p.kind, q.kind) == ("p", "q", "clamped", "clamped")
-    # physics.md section 7: clamped along the chord, c_p = +X, c_q = -X (exact: unit chord)
+    # docs/theory.md §9: clamped along the chord, c_p = +X, c_q = -X (exact: unit chord)
     np.testing.assert_array_equal(p.direction, [1.0, 0.0, 0.0])
     np.testing.assert_array_equal(q.direction, [-1.0, 0.0, 0.0])
     assert p.motion is None and isinstance(q.motion, HarmonicMotion)
@@ -169,7 +169,7 @@ def test_case_b_ellipse_motion():
     motion = parse_case(data).anchors[1].motion
     assert isinstance(motion, EllipseMotion)
     for t in (0.0, 0.3, 2.7, 29.9):
-        # physics.md section 7, case B: u_Z = 1e-3 sin(w2 t), u_Y = 5e-4 (cos(w2 t) - 1);
+        # docs/theory.md §9, case B: u_Z = 1e-3 sin(w2 t), u_Y = 5e-4 (cos(w2 t) - 1);
         # both sides evaluate the same expressions, so equality is to a few ulp of 1e-3
         expected = [0.0, 5e-4 * (math.cos(OMEGA2 * t) - 1), 1e-3 * math.sin(OMEGA2 * t)]
         np.testing.assert_allclose(motion.displacement(t), expected, rtol=0, atol=1e-18)
@@ -235,7 +235,7 @@ def test_rayleigh_equal_ratios_closed_form(omega):
     zeta, w1, w2 = 0.005, omega, 2 * omega
     data["damping"] = {"ratio": zeta, "frequencies": [w1, w2]}
     damping = parse_case(data).damping
-    # physics.md section 2 closed form for equal ratios; both sides are a handful of flops,
+    # docs/theory.md §2 closed form for equal ratios; both sides are a handful of flops,
     # so they agree to a few ulp: 1e-12 relative is far above round-off
     assert damping.alpha == pytest.approx(2 * zeta * w1 * w2 / (w1 + w2), rel=1e-12)
     assert damping.beta == pytest.approx(2 * zeta / (w1 + w2), rel=1e-12)
@@ -611,7 +611,7 @@ def test_case_reference_documents_every_key():
 def test_section_and_groups():
     section = Section(EA=17857.14, EI=4.0e-4, GJ=3.0e-4, mass=1.0)
     groups = dimensionless_groups(section, 1.0, 1.0)
-    # physics.md section 7, case A: eps = 0.02, eps_b = 5.6e-5 (printed to 2 digits)
+    # docs/theory.md §9, case A: eps = 0.02, eps_b = 5.6e-5 (printed to 2 digits)
     assert groups["eps"] == pytest.approx(0.02, rel=1e-12)  # sqrt(4e-4) = 0.02, round-off only
     assert groups["eps_b"] == pytest.approx(5.6e-5, rel=1e-6)  # 1/17857.14 = 5.6000002e-5
     assert groups["gamma"] == pytest.approx(0.75, rel=1e-15)  # 3e-4/4e-4: one division

@@ -1,8 +1,8 @@
-"""Tests of cablefem.catenary against closed forms (physics.md sections 6 and 7).
+"""Tests of cablefem.catenary against closed forms (docs/theory.md §8 and §9).
 
 Every tolerance is derived in a comment: solver tolerances, finite-difference truncation
 bounds computed from the exact third derivatives, neglected terms of asymptotic expansions,
-or half a unit in the last digit of a number printed in physics.md.
+or half a unit in the last digit of a number printed in docs/theory.md.
 """
 
 import math
@@ -277,7 +277,7 @@ def test_bad_inputs_raise(call, name):
         call()
 
 
-# ---------------------------------------------------------------- physics.md section 7
+# ------------------------------------------------------------------- docs/theory.md §9
 
 
 def chord_for_sag_ratio(ratio, EA, l=1.0, w=1.0):
@@ -288,7 +288,7 @@ def chord_for_sag_ratio(ratio, EA, l=1.0, w=1.0):
 
 
 def test_paper_case_A():
-    EA = 17857.14  # as printed in physics.md section 7
+    EA = 17857.14  # as printed in docs/theory.md §9
     L = chord_for_sag_ratio(0.005, EA)
     cat = solve_catenary(L, 0.0, 1.0, 1.0, EA)
     # printed values: half a unit in the last printed digit

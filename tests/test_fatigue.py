@@ -1,7 +1,7 @@
 """Tests of cablefem.fatigue against hand calculations and the ASTM E1049-85 example.
 
 Every expected number is worked out by hand in the comments from the formulas of
-physics.md section 5 / EN 1993-1-9: N = N_C (ds_C/ds)^m1 above the knee, N = N_D (ds_D/ds)^m2
+docs/theory.md §7 / EN 1993-1-9: N = N_C (ds_C/ds)^m1 above the knee, N = N_D (ds_D/ds)^m2
 between the knee and the cut-off, no damage below the cut-off; Miner D = sum n_i/N_i.
 Histories are sampled 40 times per period, so that cos/sin peaks are samples and the ranges are
 exact up to the rounding of cos/sin (relative 1e-15): tolerances of 1e-12 cover that rounding

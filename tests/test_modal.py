@@ -1,4 +1,4 @@
-"""Natural frequencies against closed forms (physics.md section 6): the taut string, exactly
+"""Natural frequencies against closed forms (docs/theory.md §8): the taut string, exactly
 in its discrete form and in the limit, and Irvine & Caughey's sagging cable."""
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Anchor moments from the string (physics.md sections 3-4): case A's static state against
+"""Anchor moments from the string (docs/theory.md §3-4): case A's static state against
 the composite closed form, mesh convergence with and without the string-curvature
 correction, rotation invariance, and anchor swapping."""
 
@@ -44,7 +44,7 @@ def test_case_A_static_moment():
     ref = _reference()
     assert p["moment"][0] == pytest.approx(q["moment"][0], rel=1e-12)
     assert p["moment"][0] == pytest.approx(ref["moment"][0], rel=3e-5)
-    # physics.md section 7: "M_p ~ 2.0e-3", Delta ~ 0.02 rad
+    # docs/theory.md §9: "M_p ~ 2.0e-3", Delta ~ 0.02 rad
     assert 1.95e-3 < p["moment"][0] < 2.05e-3 and abs(p["delta"][0] - 0.02) < 1e-3
     # the correction lowers the layer's value: the two moments are along +Y (bending down)
     assert p["My"][0] > 0 and p["moment"][0] < p["moment_layer"][0]

@@ -1,4 +1,4 @@
-"""Statics of the string against the elastic catenary (physics.md section 6) and global
+"""Statics of the string against the elastic catenary (docs/theory.md §8) and global
 equilibrium; run serially and under mpirun -n 2 (same numbers)."""
 
 from __future__ import annotations
