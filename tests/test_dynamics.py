@@ -124,7 +124,8 @@ def test_failure_is_reported_and_output_kept(mpi_tmp_path):
     """A Newton solve that cannot converge (1 iteration allowed and an unreachable
     tolerance, at every cut of the step) stops the run with a message naming the time and the Newton history; anchors.csv keeps
     the rows computed so far and summary.json says 'failed'."""
-    d = level_case(motion={"type": "harmonic", "amplitude": [2e-4, 0, 0], "omega": 32.814},
+    d = level_case(motion={"type": "harmonic", "amplitude": [2e-4, 0, 0], "omega": 32.814,
+                           "ramp": 0.0},  # case A's motion from t = 0: Newton fails at once
                    dynamics={"t_end": 1.0, "dt": 0.005},
                    solver={"petsc_options": {"snes_max_it": 1, "ts_max_reject": 0,
                                              "snes_rtol": 1e-14, "snes_atol": 1e-30}})
@@ -147,7 +148,8 @@ def test_step_cut_and_retry(mpi_tmp_path):
     dt/16 exactly (the failed attempts leave no trace: the acceleration is re-estimated from
     the restored state), to 1e-9 of the tension (Newton tolerances), and its outputs stay on
     the nominal grid."""
-    motion = {"type": "harmonic", "amplitude": [2e-4, 0, 0], "omega": 32.814}
+    motion = {"type": "harmonic", "amplitude": [2e-4, 0, 0], "omega": 32.814,
+              "ramp": 0.0}  # case A's motion from t = 0 (its jump makes the steps fail)
     cut = level_case(motion=motion, dynamics={"t_end": 0.3, "dt": 0.05},
                      solver={"petsc_options": {"snes_max_it": 2}})
     ref = level_case(motion=motion, dynamics={"t_end": 0.3, "dt": 0.05 / 16},
