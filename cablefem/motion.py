@@ -269,8 +269,9 @@ class EllipseMotion:
     """Elliptic motion from the rest position: ``u = r(t) (a_s sin(w t) + a_c (cos(w t) - 1))``.
 
     ``r`` is the smooth ramp over ``ramp`` s (:func:`ramp_factors`; 0, the default of this
-    class: none, then ``u(0) = 0`` but the velocity ``w a_s`` jumps at ``t = 0``). Case B of ``physics.md`` section 7 is ``axis_sin = (0, 0, 1e-3)``,
-    ``axis_cos = (0, 5e-4, 0)``.
+    class: none, then ``u(0) = 0`` but the velocity ``w a_s`` jumps at ``t = 0``). Case B of
+    ``physics.md`` section 7 is ``axis_sin = (0, 0, 1e-3)``, ``axis_cos = (0, 5e-4, 0)``,
+    ``ramp = 0``.
 
     Parameters
     ----------

@@ -15,7 +15,7 @@ import pytest
 
 from cablefem.case import (
     CASE_KEYS, CaseError, TableDoc, format_case_reference, load_case, parse_case,
-    rayleigh_coefficients, startup_time,
+    check_table_ends, rayleigh_coefficients, startup_time,
 )
 from cablefem.motion import (
     ACCELERATION_STEP_FRACTION, DEFAULT_RAMP_PERIODS, EllipseMotion, HarmonicMotion, Motion,
@@ -543,7 +543,11 @@ def test_table_ending_before_t_end_is_refused_unless_held(tmp_path, where, key):
                       base_dir=tmp_path)
     table = case.anchors[1].motion if where == "motion" else case.point_loads[0].time
     assert table.hold is True
-    parse_case(_table_case(tmp_path, SMOOTH, 0.01, 2.0, where=where), base_dir=tmp_path)
+    reaches = parse_case(_table_case(tmp_path, SMOOTH, 0.01, 2.0, where=where),
+                         base_dir=tmp_path)
+    # run_case checks a longer --t-end the same way, before any work
+    assert check_table_ends(reaches, 2.0) == []
+    assert [k for k, _ in check_table_ends(reaches, 2.5)] == [f"{key}.file"]
     data = _table_case(tmp_path, SMOOTH, 0.01, 2.0, hold=1, where=where)
     assert has_problem(problems_of(data, base_dir=tmp_path), f"{key}.hold", "boolean")
 
