@@ -26,7 +26,8 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from cablefem.motion import (
-    EllipseMotion, HarmonicMotion, Motion, TimeFunction, read_factor_csv, read_motion_csv,
+    DEFAULT_RAMP_PERIODS, EllipseMotion, HarmonicMotion, Motion, TableMotion, TimeFunction,
+    default_ramp, read_factor_csv, read_motion_csv, table_resolution,
 )
 from cablefem.properties import Section
 
@@ -34,7 +35,7 @@ __all__ = [
     "CaseError", "CASE_KEYS", "KeyDoc", "TableDoc", "REQUIRED", "format_case_reference",
     "load_case", "parse_case", "rayleigh_coefficients", "Gravity", "Geometry", "MeshSpec",
     "Anchor", "DistributedLoad", "PointMass", "PointLoad", "Damping", "DynamicsSpec",
-    "ModalSpec", "SolverSpec", "BeamSpec", "Case",
+    "ModalSpec", "SolverSpec", "BeamSpec", "Case", "check_table_ends", "startup_time",
 ]
 
 
@@ -94,15 +95,19 @@ class TableDoc(NamedTuple):
 
 _TIME_DOC = TableDoc("table", None, "", "Time factor of the load; default constant 1.", {
     "type": KeyDoc("string", "constant", "", "'constant' | 'harmonic' sin(omega t + phase) | "
-                   "'table' (piecewise linear from a CSV file, header time,factor)."),
+                   "'table' (C2 cubic spline, not-a-knot ends, through a CSV file's rows, "
+                   "header time,factor)."),
     "omega": KeyDoc("number", None, "rad/s", "harmonic: circular frequency, > 0."),
     "phase": KeyDoc("number", 0.0, "rad", "harmonic: phase."),
-    "file": KeyDoc("string", None, "", "table: CSV file, relative to the case file."),
+    "file": KeyDoc("string", None, "", "table: CSV file, relative to the case file; it must "
+                   "reach dynamics.t_end unless hold = true."),
+    "hold": KeyDoc("boolean", False, "", "table: hold the last row's factor after the table "
+                   "ends (false: a table ending before dynamics.t_end is an error)."),
 })
 _MOTION_KEYS = {
-    "harmonic": ("amplitude", "omega", "phase"),
-    "ellipse": ("omega", "axis_sin", "axis_cos"),
-    "table": ("file",),
+    "harmonic": ("amplitude", "omega", "phase", "ramp"),
+    "ellipse": ("omega", "axis_sin", "axis_cos", "ramp"),
+    "table": ("file", "hold"),
 }
 
 CASE_KEYS: dict[str, KeyDoc | TableDoc] = {
@@ -148,7 +153,8 @@ CASE_KEYS: dict[str, KeyDoc | TableDoc] = {
                            "position; default fixed.", {
             "type": KeyDoc("string", REQUIRED, "", "'harmonic' A sin(omega t + phase) | "
                            "'ellipse' axis_sin sin(omega t) + axis_cos (cos(omega t) - 1) | "
-                           "'table' (CSV file, header time,ux,uy,uz)."),
+                           "'table' (CSV file, header time,ux,uy,uz; C2 cubic spline, "
+                           "not-a-knot ends, velocity and acceleration its derivatives)."),
             "amplitude": KeyDoc("3-vector", None, "m", "harmonic: amplitude (required)."),
             "omega": KeyDoc("number or 3-vector", None, "rad/s", "harmonic/ellipse: circular "
                             "frequency, > 0 (required; a 3-vector for harmonic only)."),
@@ -156,7 +162,15 @@ CASE_KEYS: dict[str, KeyDoc | TableDoc] = {
             "axis_sin": KeyDoc("3-vector", [0.0, 0.0, 0.0], "m", "ellipse: sine axis."),
             "axis_cos": KeyDoc("3-vector", [0.0, 0.0, 0.0], "m", "ellipse: cosine axis (give "
                                "axis_sin and/or axis_cos)."),
-            "file": KeyDoc("string", None, "", "table: CSV file, relative to the case file."),
+            "ramp": KeyDoc("number", None, "s", "harmonic/ellipse: smooth start, the motion "
+                           "times r(t/ramp), r = 10x^3 - 15x^4 + 6x^5 (0 to 1, zero slope and "
+                           "curvature at both ends), >= 0; default "
+                           f"{DEFAULT_RAMP_PERIODS:g} periods 2 pi/omega (lowest omega of a "
+                           "moving component); 0: none, the velocity jumps at t = 0."),
+            "file": KeyDoc("string", None, "", "table: CSV file, relative to the case file; it "
+                           "must reach dynamics.t_end unless hold = true."),
+            "hold": KeyDoc("boolean", False, "", "table: hold the last row after the table "
+                           "ends (false: a table ending before dynamics.t_end is an error)."),
         }),
     }),
     "loads": TableDoc("array of tables", None, "", "Distributed loads per stress-free length "
@@ -218,7 +232,10 @@ CASE_KEYS: dict[str, KeyDoc | TableDoc] = {
                        "(strands, ropes); default: solid circle of section.diameter."),
         "modulus": KeyDoc("number", None, "m^3", "Effective section modulus for the bending "
                           "stress M/W, > 0; give with area."),
-        "window": KeyDoc("string", "all", "", "'all' the whole run | 'steady' its last third."),
+        "window": KeyDoc("string", "after_startup", "", "'after_startup' from the end of the "
+                         "longest anchor-motion ramp (a motion with ramp = 0 that jumps at "
+                         f"t = 0: {DEFAULT_RAMP_PERIODS:g} of its periods) to the end | 'all' "
+                         "the whole run | 'steady' its last third."),
         "fibres": KeyDoc("integer", 36, "-", "Fibres around the section where stresses are "
                          "evaluated, >= 4."),
         "units": KeyDoc("string", "Pa", "", "Name of the stress unit in the reports."),
@@ -847,18 +864,29 @@ def _parse_motion(r: _Reader | None, base_dir: Path) -> Motion | None:
     what = f"a {kind} motion"
     r.only(_MOTION_KEYS[kind], what)
     if kind == "table":
-        return r.csv("file", read_motion_csv, base_dir) if r.require("file", what) else None
+        hold = r.boolean("hold")
+        table = r.csv("file", read_motion_csv, base_dir) if r.require("file", what) else None
+        return None if table is None or hold is None else TableMotion(
+            table.times, table.values, table.source, hold)
     present = r.require("omega", what)
+    ramp = r.number("ramp", ge=0)  # None: not given (the default below) or bad (reported)
+    bad_ramp = r.has("ramp") and ramp is None
     if kind == "harmonic":
         present = r.require("amplitude", what) and present
         parts = (r.vector("amplitude"), r.number_or_vector("omega", gt=0),
                  r.number_or_vector("phase"))
-        return HarmonicMotion(*parts) if present and not _missing(*parts) else None
+        if not present or _missing(*parts) or bad_ramp:
+            return None
+        ramp = default_ramp(parts[1], parts[0]) if ramp is None else ramp
+        return HarmonicMotion(*parts, ramp=ramp)
     if not (r.has("axis_sin") or r.has("axis_cos")):
         r.problems.append((r.path, "an ellipse motion needs axis_sin and/or axis_cos"))
         present = False
     parts = (r.number("omega", gt=0), r.vector("axis_sin"), r.vector("axis_cos"))
-    return EllipseMotion(*parts) if present and not _missing(*parts) else None
+    if not present or _missing(*parts) or bad_ramp:
+        return None
+    ramp = default_ramp(parts[0]) if ramp is None else ramp
+    return EllipseMotion(*parts, ramp=ramp)
 
 
 def _parse_time(r: _Reader | None, base_dir: Path) -> TimeFunction | None:
@@ -868,11 +896,15 @@ def _parse_time(r: _Reader | None, base_dir: Path) -> TimeFunction | None:
     if kind is None:
         return None
     what = f"a {kind} time function"
-    r.only({"constant": (), "harmonic": ("omega", "phase"), "table": ("file",)}[kind], what)
+    r.only({"constant": (), "harmonic": ("omega", "phase"), "table": ("file", "hold")}[kind],
+           what)
     if kind == "constant":
         return TimeFunction.constant()
     if kind == "table":
-        return r.csv("file", read_factor_csv, base_dir) if r.require("file", what) else None
+        hold = r.boolean("hold")
+        table = r.csv("file", read_factor_csv, base_dir) if r.require("file", what) else None
+        return None if table is None or hold is None else TimeFunction.table(
+            table.times, table.factors, table.source, hold)
     present = r.require("omega", what)
     omega, phase = r.number("omega", gt=0), r.number("phase")
     return TimeFunction.harmonic(omega, phase) if present and not _missing(omega, phase) else None
@@ -1004,6 +1036,103 @@ def _check_positions_on_cable(items: list, readers: list[_Reader], length: float
             r.add("s", f"must be < l = {length:g} (m), the stress-free length")
 
 
+def _tables(case: Case) -> list[tuple[str, Any]]:
+    """(key path, motion or time function) of every table of the case."""
+    out: list[tuple[str, Any]] = [(f"anchors[{i}].motion", a.motion)
+                                  for i, a in enumerate(case.anchors)
+                                  if isinstance(a.motion, TableMotion)]
+    for name in ("loads", "point_loads"):
+        out += [(f"{name}[{i}].time", item.time) for i, item in enumerate(getattr(case, name))
+                if isinstance(item.time, TimeFunction) and item.time.kind == "table"]
+    return out
+
+
+def check_table_ends(case: Case, t_end: float) -> list[tuple[str, str]]:
+    """Problems ``(key, message)`` of the tables (anchor motions, load factors) that end
+    before ``t_end`` (s) without ``hold = true``: they would be held silently."""
+    problems = []
+    for key, table in _tables(case):
+        last = float(table.times[-1])
+        if not table.hold and last < t_end * (1 - 1e-12) - 1e-12:
+            problems.append((f"{key}.file", f"the table ends at t = {last:g} s, before the "
+                                            f"end of the run t = {t_end:g} s: extend it, or "
+                                            f"set {key}.hold = true to hold its last row"))
+    return problems
+
+
+#: a table motion "starts at rest" when its displacement at t = 0 is below this fraction of
+#: its largest row and its velocity below this fraction of its largest velocity at the rows
+_START_FRACTION = 1e-3
+
+
+def _table_warnings(case: Case, dt: float, t_end: float) -> list[tuple[str, str]]:
+    """Valid but suspicious tables: what the time step cannot resolve
+    (:func:`cablefem.motion.table_resolution`), a motion table that does not start at the
+    static position and at rest, and a held end where the velocity jumps to 0."""
+    out = []
+    for key, table in _tables(case):
+        motion = isinstance(table, TableMotion)
+        values = table.values if motion else table.factors
+        out += [(f"{key}.file", m) for m in table_resolution(table.times, values, dt)]
+        if not motion:
+            continue
+        scale_u = float(np.max(np.linalg.norm(values, axis=1)))
+        scale_v = max(float(np.linalg.norm(table.velocity(float(t)))) for t in table.times)
+        u0 = table.displacement(0.0)
+        v0 = table.velocity(0.0)
+        if np.linalg.norm(u0) > _START_FRACTION * scale_u:
+            out.append((f"{key}.file", f"the anchor's displacement at t = 0 is "
+                                       f"{np.round(u0, 12).tolist()} m, not 0 (the static "
+                                       f"position): it jumps there at the first step"))
+        if np.linalg.norm(v0) > _START_FRACTION * scale_v:
+            out.append((f"{key}.file", f"the anchor's velocity at t = 0 is "
+                                       f"{np.round(v0, 12).tolist()} m/s, not 0: the run "
+                                       f"starts with a velocity jump (start the table at "
+                                       f"rest)"))
+        for edge, name in ((float(table.times[0]), "starts"), (float(table.times[-1]), "ends")):
+            inside = 0.0 < edge < t_end
+            v = table.velocity(edge)  # the spline's (held only strictly outside)
+            if inside and np.linalg.norm(v) > _START_FRACTION * scale_v:
+                out.append((f"{key}.file", f"the table {name} at t = {edge:g} s with a velocity "
+                                           f"{np.round(v, 12).tolist()} m/s and is held "
+                                           f"constant beyond: the velocity jumps to 0 there"))
+    return out
+
+
+def startup_time(case: Case) -> tuple[float, str]:
+    """End of the start-up of the anchor motions (s) and why: the longest ramp of a
+    harmonic or elliptic motion; a motion with ``ramp = 0`` that jumps at ``t = 0``
+    (displacement or velocity not zero) counts :data:`DEFAULT_RAMP_PERIODS` of its
+    periods, as long as its default ramp. 0 without such motions (tables start as given)."""
+    best, why = 0.0, "no anchor motion with a ramp or a jump at t = 0"
+    for i, a in enumerate(case.anchors):
+        m = a.motion
+        if not isinstance(m, (HarmonicMotion, EllipseMotion)):
+            continue
+        if m.ramp > 0:
+            t, reason = m.ramp, f"the end of the ramp anchors[{i}].motion.ramp = {m.ramp:g} s"
+        elif np.any(m.displacement(0.0) != 0) or np.any(m.velocity(0.0) != 0):
+            t = (default_ramp(m.omega, m.amplitude) if isinstance(m, HarmonicMotion)
+                 else default_ramp(m.omega))
+            reason = (f"anchors[{i}].motion jumps at t = 0 (ramp = 0): "
+                      f"{DEFAULT_RAMP_PERIODS:g} of its periods, {t:g} s")
+        else:
+            continue
+        if t > best:
+            best, why = t, reason
+    return best, why
+
+
+def _finish(case: Case) -> Case:
+    """Cross-checks of the tables against the run's time range (a problem, or warnings)."""
+    if case.dynamics is not None:
+        problems = check_table_ends(case, case.dynamics.t_end)
+        if problems:
+            raise CaseError(problems, case.source)
+        case.warnings.extend(_table_warnings(case, case.dynamics.dt, case.dynamics.t_end))
+    return case
+
+
 def parse_case(data: dict, base_dir: str | os.PathLike = Path("."),
                source: str = "<dict>") -> Case:
     """Validate a case given as a dict of the TOML file's shape (see :data:`CASE_KEYS`).
@@ -1091,9 +1220,9 @@ def parse_case(data: dict, base_dir: str | os.PathLike = Path("."),
         raise RuntimeError("cablefem internal error: a case value failed without a message")
     if _missing(beam.layer_elements, beam.growth, beam.span_elements):
         raise RuntimeError("cablefem internal error: a case value failed without a message")
-    return Case(title, section, gravity, geometry, mesh, anchors, loads, masses, point_loads,
-                damping, dynamics, modal, solver, source, fatigue, beam=beam,
-                units=units or "SI")
+    return _finish(Case(title, section, gravity, geometry, mesh, anchors, loads, masses,
+                        point_loads, damping, dynamics, modal, solver, source, fatigue,
+                        beam=beam, units=units or "SI"))
 
 
 def _parse_network_case(data: dict, base_dir: Path, source: str) -> Case:
@@ -1165,9 +1294,10 @@ def _parse_network_case(data: dict, base_dir: Path, source: str) -> Case:
         raise CaseError(problems, source)
     if _missing(title, gravity, mesh_path, first, damping, modal.modes, solver.tension_only):
         raise RuntimeError("cablefem internal error: a case value failed without a message")
-    return Case(title, first, gravity, None, MeshSpec(1, 1.0), anchors, loads, masses,
-                point_loads, damping, dynamics, modal, solver, source, fatigue,
-                NetworkSpec(mesh_path, sections, cables), units=units or "SI")
+    return _finish(Case(title, first, gravity, None, MeshSpec(1, 1.0), anchors, loads,
+                        masses, point_loads, damping, dynamics, modal, solver, source,
+                        fatigue, NetworkSpec(mesh_path, sections, cables),
+                        units=units or "SI"))
 
 
 def _parse_fatigue(r: _Reader | None, section: Section | None) -> FatigueSpec | None:
@@ -1177,7 +1307,7 @@ def _parse_fatigue(r: _Reader | None, section: Section | None) -> FatigueSpec | 
                 m2=r.number("m2", ge=1), knee=r.boolean("knee"), N_C=r.number("N_C", gt=0),
                 N_knee=r.number("N_knee", gt=0), N_cutoff=r.number("N_cutoff", gt=0),
                 area=r.number("area", gt=0), modulus=r.number("modulus", gt=0),
-                window=r.string("window", ("all", "steady")),
+                window=r.string("window", ("after_startup", "all", "steady")),
                 fibres=r.integer("fibres", ge=4), units=r.string("units"))
     if None not in (vals["N_C"], vals["N_knee"], vals["N_cutoff"]) and vals["knee"] and not (
             vals["N_C"] < vals["N_knee"] < vals["N_cutoff"]):

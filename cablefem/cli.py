@@ -113,8 +113,9 @@ def _parser() -> argparse.ArgumentParser:
     fat.add_argument("rundir", type=Path, help="folder of a run (with anchors.csv)")
     fat.add_argument("--case", type=Path, required=True, help="case file (TOML) with [fatigue]")
     fat.add_argument("--output", "-o", type=Path, help="output folder (default: rundir)")
-    fat.add_argument("--window", choices=["all", "steady"],
-                     help="whole run or its last third (default: fatigue.window)")
+    fat.add_argument("--window", choices=["after_startup", "all", "steady"],
+                     help="after the motions' start-up, the whole run or its last third "
+                          "(default: fatigue.window)")
     fat.add_argument("--invalid", choices=["raise", "drop"], default="raise",
                      help="samples without a valid moment (slack anchor): stop (default) or "
                           "leave them out")

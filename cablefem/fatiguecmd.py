@@ -10,12 +10,13 @@ a moment that changes sign or turns, and underestimate the damage. No dolfinx.
 from __future__ import annotations
 
 import logging
+import math
 from pathlib import Path
 
 import numpy as np
 from mpi4py import MPI
 
-from .case import Case, CaseError
+from .case import Case, CaseError, startup_time
 from .units import unit
 from .fatigue import SNCurve, StressSection, fatigue_report, read_anchor_csv, write_report
 
@@ -50,13 +51,31 @@ def _anchor_sections(case: Case, rundir: Path, names: list[str]) -> dict:
     return out
 
 
+def fatigue_window(case: Case, rule: str) -> tuple[str | tuple[float, float] | None, dict]:
+    """The window argument of :func:`cablefem.fatigue.fatigue_report` for a window rule
+    ('after_startup', 'all', 'steady'), and its description for fatigue.json."""
+    if rule == "all":
+        return None, {"rule": "all", "reason": "the whole run"}
+    if rule == "steady":
+        return "steady", {"rule": "steady", "reason": "the last third of the run"}
+    if rule != "after_startup":
+        raise ValueError(f"window must be 'after_startup', 'all' or 'steady', got {rule!r}")
+    t0, why = startup_time(case)
+    return ((t0, math.inf) if t0 > 0 else None), {"rule": "after_startup", "start": t0,
+                                                  "reason": why}
+
+
 def run_fatigue(case: Case, rundir: Path, outdir: Path | None = None, *,
                 window: str | None = None, invalid: str = "raise",
                 comm: MPI.Comm = MPI.COMM_WORLD) -> dict:
     """Fatigue reports of every clamped anchor in ``rundir/anchors.csv``; rank 0 computes
     and writes, the reports are returned on every rank. Raises CaseError without a
     ``[fatigue]`` table and ValueError on bad data (invalid samples with
-    ``invalid="raise"``: the message names the anchor and the first bad time)."""
+    ``invalid="raise"``: the message names the anchor and the first bad time).
+
+    ``window`` (default ``fatigue.window``): 'after_startup' from the end of the anchor
+    motions' start-up (:func:`cablefem.case.startup_time`), 'all' or 'steady'; every
+    report says which under ``window_rule``."""
     spec = case.fatigue
     if spec is None:
         raise CaseError([("fatigue", "the case has no [fatigue] table (detail_category, ...): "
@@ -78,6 +97,13 @@ def run_fatigue(case: Case, rundir: Path, outdir: Path | None = None, *,
             else:  # network anchors are "group:k"
                 clamped = [n for n in data if n.split(":")[0] in groups]
             sections = _anchor_sections(case, Path(rundir), clamped)
+            win, rule = fatigue_window(case, window or spec.window)
+            t_last = max((float(data[n]["time"][-1]) for n in clamped), default=0.0)
+            if isinstance(win, tuple) and win[0] >= t_last:
+                raise ValueError(f"the run ends at t = {t_last:g}, before the end of the "
+                                 f"start-up at t = {win[0]:g} ({rule['reason']}) that the "
+                                 "fatigue window 'after_startup' leaves out: run longer, or "
+                                 "set fatigue.window = 'all'")
             reports = {}
             for name in clamped:
                 d = data[name]
@@ -85,8 +111,8 @@ def run_fatigue(case: Case, rundir: Path, outdir: Path | None = None, *,
                 reports[name] = fatigue_report(
                     d["time"], d["tension"], M, d["valid"], _stress_section(spec,
                                                                             sections[name]),
-                    curve, invalid=invalid, window=None if (window or spec.window) == "all"
-                    else "steady", fibres=spec.fibres, anchor=name)
+                    curve, invalid=invalid, window=win, fibres=spec.fibres, anchor=name)
+                reports[name]["window_rule"] = rule
             outdir.mkdir(parents=True, exist_ok=True)
             first = _stress_section(spec, sections[clamped[0]]) if clamped else None
             write_report(outdir, reports, curve, first, spec.units)

@@ -30,6 +30,14 @@ __all__ = ["CableModel", "AnchorBC"]
 
 log = logging.getLogger(__name__)
 
+#: largest plausible strain T/EA of the static catenary: steel wires and strands yield below
+#: 1 %, fibre ropes break at 10-20 % and are far from linear beyond a few percent; a linear
+#: law (T = EA strain) above this is outside what any cable material does
+MAX_PLAUSIBLE_STRAIN = 0.05
+#: plausible range of stress-free length / chord: a cable shorter than 0.9 chord must stretch
+#: by more than 10 % to span it; one longer than 3 chords hangs deeper than the chord is long
+PLAUSIBLE_LENGTH_RATIO = (0.9, 3.0)
+
 
 @dataclass
 class AnchorBC:
@@ -93,6 +101,26 @@ def _chord_frame(p: np.ndarray, q: np.ndarray, gdir: np.ndarray) -> tuple[float,
     return span, rise
 
 
+def _plausibility(key: str, length: float, chord: float, max_tension: float,
+                  EA: float) -> list[tuple[str, str]]:
+    """Warnings for a static catenary that no real cable has: a strain above
+    :data:`MAX_PLAUSIBLE_STRAIN`, a stress-free length outside
+    :data:`PLAUSIBLE_LENGTH_RATIO` of the chord."""
+    out = []
+    strain = max_tension / EA
+    if strain > MAX_PLAUSIBLE_STRAIN:
+        out.append((key, f"the static cable's largest strain T/EA is {100 * strain:.3g} % "
+                         f"(tension {max_tension:.4g} N, EA {EA:.4g} N), above the "
+                         f"{100 * MAX_PLAUSIBLE_STRAIN:g} % that any cable material stays "
+                         "linear to: check the value and the section"))
+    lo, hi = PLAUSIBLE_LENGTH_RATIO
+    ratio = length / chord
+    if not lo <= ratio <= hi:
+        out.append((key, f"the stress-free length {length:.4g} m is {ratio:.3g} times the "
+                         f"chord {chord:.4g} m (plausible: {lo:g} to {hi:g})"))
+    return out
+
+
 class CableModel:
     """The extensible string of one cable, ready to be solved.
 
@@ -111,6 +139,9 @@ class CableModel:
         self.case = case
         self.comm = comm
         self.prefix = prefix
+        #: (key, message) pairs for derived quantities that are physically implausible
+        #: (run_case logs them and lists them in summary.json; --strict makes them fatal)
+        self.warnings: list[tuple[str, str]] = []
         sec = case.section
         self.g_vec = np.asarray(case.gravity.direction, dtype=float) * case.gravity.g
         self.weight = sec.mass * case.gravity.g  # N/m
@@ -223,12 +254,14 @@ class CableModel:
             shape = catenary.catenary_between(p, q, length, self.weight, sec.EA, gdir)
             self.catenary_shape = shape
             r0 = shape.position(g.stations)
-            self.force_scale = float(max(self.weight * length,
-                                         np.max(shape.tension(g.stations))))
+            max_tension = float(np.max(shape.tension(g.stations)))
+            self.force_scale = float(max(self.weight * length, max_tension))
         except ValueError as err:
             raise CaseError([("geometry", f"no static equilibrium of the bare cable: {err}")],
                             case.source) from None
         self._anchor_positions = (p, q)
+        self.warnings += _plausibility(f"geometry.{geo.kind}", length,
+                                       float(np.linalg.norm(q - p)), max_tension, sec.EA)
         return g, r0
 
     def _locate_node(self, k: int) -> np.ndarray:

@@ -1,15 +1,25 @@
 """Prescribed anchor motions and time functions of loads.
 
-Pure Python/NumPy: no dolfinx import. An anchor motion is the displacement (m) of an anchor
-from its static position, with its velocity (m/s) and acceleration (m/s^2) in closed form, so
-that a time integrator can impose all three consistently. A :class:`TimeFunction` is the
-dimensionless factor that multiplies a load.
+Pure Python/NumPy/SciPy: no dolfinx import. An anchor motion is the displacement (m) of an
+anchor from its static position, with its velocity (m/s) and acceleration (m/s^2) in closed
+form, so that a time integrator can impose all three consistently. A :class:`TimeFunction` is
+the dimensionless factor that multiplies a load.
 
-Tables (:class:`TableMotion`, ``TimeFunction.table``) interpolate linearly and are held
-constant outside their time range. Their velocity is the slope of the current segment (taken
-on the right at a breakpoint) and their acceleration is zero: the velocity jumps at every
-breakpoint, so a table should sample a smooth motion finely enough (many points per period of
-the highest frequency of interest) for those jumps to stay small.
+Harmonic and elliptic motions can start with a smooth ramp of their amplitude
+(:func:`ramp_factors`): ``u(t) = r(t) u0(t)`` with ``r`` rising from 0 to 1 over ``ramp``
+seconds as ``10 x^3 - 15 x^4 + 6 x^5`` (``x = t/ramp``), whose value, first and second
+derivatives are continuous at both ends; velocity and acceleration follow by the product rule
+(``r' u0 + r u0'`` and ``r'' u0 + 2 r' u0' + r u0''``), so a ramped motion starts with zero
+displacement, velocity and acceleration. ``ramp = 0`` is the motion itself from ``t = 0``
+(a velocity jump there, and a displacement jump with a phase).
+
+Tables (:class:`TableMotion`, ``TimeFunction.table``) are C2 cubic splines through their rows
+with not-a-knot end conditions (the first two and the last two segments are one cubic each;
+2 rows: the straight line, 3 rows: the parabola): velocity and acceleration are the spline's
+own first and second derivatives, continuous everywhere inside the table. Outside their time
+range tables are held at their first and last values (velocity and acceleration zero); a case
+refuses a table that ends before ``dynamics.t_end`` unless it says ``hold = true``
+(:mod:`cablefem.case`). :func:`table_resolution` says what a time step cannot resolve.
 """
 
 from __future__ import annotations
@@ -24,8 +34,19 @@ import numpy as np
 
 __all__ = [
     "Motion", "HarmonicMotion", "EllipseMotion", "TableMotion", "TimeFunction",
-    "read_motion_csv", "read_factor_csv",
+    "read_motion_csv", "read_factor_csv", "ramp_factors", "default_ramp", "table_resolution",
+    "DEFAULT_RAMP_PERIODS", "ACCELERATION_STEP_FRACTION",
 ]
+
+#: default ramp of harmonic and elliptic anchor motions in a case file: this many periods of
+#: the motion's lowest circular frequency (``2 pi / omega`` each)
+DEFAULT_RAMP_PERIODS = 3.0
+
+#: a table's acceleration may change by at most this fraction of its range within one time
+#: step; above it the case warns. For ``A sin(omega t)`` the range is ``2 A omega^2`` and the
+#: largest change in a step ``A omega^3 dt``: the limit is ``omega dt <= 0.2``, about 31
+#: steps per period
+ACCELERATION_STEP_FRACTION = 0.1
 
 
 @runtime_checkable
@@ -75,17 +96,119 @@ def _check_table(times: Any, values: Any, columns: int | None) -> tuple[np.ndarr
     return times, values
 
 
-def _segment(times: np.ndarray, t: float) -> int | None:
-    """Index ``i`` with ``times[i] <= t < times[i+1]``, or None outside the table."""
-    i = int(np.searchsorted(times, t, side="right")) - 1
-    return i if 0 <= i < times.size - 1 else None
+def ramp_factors(t: float, ramp: float) -> tuple[float, float, float]:
+    """The ramp ``r(t)`` and its first two time derivatives, for a ramp of ``ramp`` s.
+
+    ``r = 10 x^3 - 15 x^4 + 6 x^5`` with ``x = t/ramp`` on ``0 <= t <= ramp``, 0 before and
+    1 after: ``r(0) = 0``, ``r(ramp) = 1``, and ``r'``, ``r''`` vanish at both ends, so ``r``
+    is C2 everywhere. ``ramp = 0``: 1 at all times (no ramp).
+    """
+    if ramp <= 0.0 or t >= ramp:
+        return 1.0, 0.0, 0.0
+    if t <= 0.0:
+        return 0.0, 0.0, 0.0
+    x = t / ramp
+    r = x**3 * (10.0 + x * (-15.0 + 6.0 * x))
+    dr = 30.0 * x**2 * (1.0 - x) ** 2 / ramp
+    ddr = 60.0 * x * (1.0 - x) * (1.0 - 2.0 * x) / ramp**2
+    return r, dr, ddr
+
+
+def default_ramp(omega: Any, amplitude: Any = None) -> float:
+    """:data:`DEFAULT_RAMP_PERIODS` periods of the lowest circular frequency (rad/s) among the
+    components of non-zero ``amplitude`` (all components without one, or if all are zero)."""
+    w = np.broadcast_to(np.asarray(omega, dtype=float), (3,))
+    if amplitude is not None:
+        moving = np.asarray(amplitude, dtype=float) != 0
+        if np.any(moving):
+            w = w[moving]
+    return float(DEFAULT_RAMP_PERIODS * 2.0 * math.pi / np.min(w))
+
+
+def _check_ramp(ramp: Any) -> float:
+    ramp = float(ramp)
+    if not (math.isfinite(ramp) and ramp >= 0.0):
+        raise ValueError(f"ramp must be finite and >= 0 (s), got {ramp!r}")
+    return ramp
+
+
+def _ramped(kind: str, ramp: float, t: float, u0, v0, a0) -> np.ndarray:
+    """Displacement, velocity or acceleration of ``r(t) u0(t)`` (product rule); u0, v0, a0
+    are callables of the unramped motion, evaluated only when needed."""
+    r, dr, ddr = ramp_factors(t, ramp)
+    if kind == "displacement":
+        return r * u0()
+    if kind == "velocity":
+        return dr * u0() + r * v0() if dr else r * v0()
+    return ddr * u0() + 2.0 * dr * v0() + r * a0() if (dr or ddr) else r * a0()
+
+
+class _Spline:
+    """C2 cubic spline (not-a-knot ends) through a table, held constant outside it."""
+
+    def __init__(self, times: np.ndarray, values: np.ndarray) -> None:
+        from scipy.interpolate import CubicSpline
+
+        self.t0, self.t1 = float(times[0]), float(times[-1])
+        self.first, self.last = values[0].copy(), values[-1].copy()
+        self.spline = CubicSpline(times, values, axis=0, bc_type="not-a-knot")
+
+    def __call__(self, t: float, nu: int = 0) -> np.ndarray:
+        if t < self.t0 or t > self.t1:
+            edge = self.first if t < self.t0 else self.last
+            return edge.copy() if nu == 0 else np.zeros_like(edge)
+        return np.asarray(self.spline(t, nu))
+
+
+def table_resolution(times: np.ndarray, values: np.ndarray, dt: float) -> list[str]:
+    """What a time step ``dt`` (s) cannot resolve of a table's spline: rows closer than
+    ``dt`` (what happens between two steps is lost), and an acceleration (second derivative,
+    piecewise linear in the spline) that changes within one step by more than
+    :data:`ACCELERATION_STEP_FRACTION` of its range over the table. Messages, [] if none."""
+    times = np.asarray(times, float)
+    values = np.asarray(values, float).reshape(times.size, -1)
+    out = []
+    h = np.diff(times)
+    if np.min(h) < dt * (1 - 1e-9):
+        i = int(np.argmin(h))
+        n_close = int(np.count_nonzero(h < dt * (1 - 1e-9)))
+        out.append(f"{n_close} of its {h.size} row intervals are shorter than dynamics.dt = "
+                   f"{dt:g} s (the shortest {h[i]:g} s, after t = {times[i]:g} s): what the "
+                   "table does between two time steps is lost; resample it at >= dt or "
+                   "reduce dt")
+    if times.size >= 3:
+        spline = _Spline(times, values).spline
+        acc = spline(times, 2).reshape(times.size, -1)  # the second derivative at the rows
+        span = np.ptp(acc, axis=0)
+        # on a segment the acceleration is linear: its change over one step is at most the
+        # largest slope (jerk) times dt (exact when the step lies in one segment), and at
+        # most its range
+        change = np.minimum(np.abs(np.diff(acc, axis=0)) / h[:, None] * dt, span)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            frac = np.where(span > 0, change / span, 0.0)
+        worst = float(np.max(frac))
+        if worst > ACCELERATION_STEP_FRACTION:
+            i, k = np.unravel_index(int(np.argmax(frac)), frac.shape)
+            jerk = np.max(np.abs(np.diff(acc, axis=0)) / h[:, None], axis=0)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                dt_ok = float(np.min(np.where(jerk > 0, ACCELERATION_STEP_FRACTION * span
+                                              / jerk, np.inf)))
+            col = f" (column {k + 1})" if values.shape[1] > 1 else ""
+            out.append(f"its spline's acceleration{col} changes by {100 * worst:.3g} % of its "
+                       f"range within one time step (dt = {dt:g} s, between t = "
+                       f"{times[i]:g} and {times[i + 1]:g} s; limit "
+                       f"{100 * ACCELERATION_STEP_FRACTION:g} %): the integrator cannot "
+                       f"follow it; use dt <= {dt_ok:.3g} s or a smoother table")
+    return out
 
 
 @dataclass(frozen=True, eq=False)
 class HarmonicMotion:
-    """Harmonic motion ``u_k(t) = A_k sin(omega_k t + phi_k)`` per component ``k``.
+    """Harmonic motion ``u_k(t) = r(t) A_k sin(omega_k t + phi_k)`` per component ``k``.
 
-    Not zero at ``t = 0`` unless every ``A_k sin(phi_k)`` is.
+    ``r`` is the smooth ramp over ``ramp`` s (:func:`ramp_factors`); with ``ramp = 0`` (the
+    default of this class; a case file's default is :func:`default_ramp`) the motion is not
+    zero at ``t = 0`` unless every ``A_k sin(phi_k)`` is, and its velocity jumps there.
 
     Parameters
     ----------
@@ -95,40 +218,60 @@ class HarmonicMotion:
         Circular frequencies (rad/s); a scalar applies to all components.
     phase : float or array_like, shape (3,)
         Phases ``phi`` (rad), default 0.
+    ramp : float
+        Duration (s) of the smooth start, >= 0; 0: none.
     """
 
     amplitude: np.ndarray
     omega: np.ndarray
     phase: np.ndarray = 0.0  # type: ignore[assignment]
+    ramp: float = 0.0
 
     def __post_init__(self) -> None:
         for name in ("amplitude", "omega", "phase"):
             object.__setattr__(self, name, _frozen_array(getattr(self, name), (3,), name))
+        object.__setattr__(self, "ramp", _check_ramp(self.ramp))
+
+    def _u0(self, t: float) -> np.ndarray:
+        return self.amplitude * np.sin(self.omega * t + self.phase)
+
+    def _v0(self, t: float) -> np.ndarray:
+        return self.amplitude * self.omega * np.cos(self.omega * t + self.phase)
+
+    def _a0(self, t: float) -> np.ndarray:
+        return -self.amplitude * self.omega**2 * np.sin(self.omega * t + self.phase)
+
+    def _eval(self, kind: str, t: float) -> np.ndarray:
+        return _ramped(kind, self.ramp, t, lambda: self._u0(t), lambda: self._v0(t),
+                       lambda: self._a0(t))
 
     def displacement(self, t: float) -> np.ndarray:
         """Displacement (m), shape (3,)."""
-        return self.amplitude * np.sin(self.omega * t + self.phase)
+        return self._eval("displacement", t)
 
     def velocity(self, t: float) -> np.ndarray:
         """Velocity (m/s), shape (3,)."""
-        return self.amplitude * self.omega * np.cos(self.omega * t + self.phase)
+        return self._eval("velocity", t)
 
     def acceleration(self, t: float) -> np.ndarray:
         """Acceleration (m/s^2), shape (3,)."""
-        return -self.amplitude * self.omega**2 * np.sin(self.omega * t + self.phase)
+        return self._eval("acceleration", t)
 
     def describe(self) -> dict:
         """JSON-serialisable description."""
         return {"type": "harmonic", "amplitude": self.amplitude.tolist(),
-                "omega": self.omega.tolist(), "phase": self.phase.tolist()}
+                "omega": self.omega.tolist(), "phase": self.phase.tolist(),
+                "ramp": self.ramp}
 
 
 @dataclass(frozen=True, eq=False)
 class EllipseMotion:
-    """Elliptic motion starting at rest position: ``u = a_s sin(w t) + a_c (cos(w t) - 1)``.
+    """Elliptic motion from the rest position: ``u = r(t) (a_s sin(w t) + a_c (cos(w t) - 1))``.
 
-    ``u(0) = 0``. Case B of ``docs/theory.md`` §9 is ``axis_sin = (0, 0, 1e-3)``,
-    ``axis_cos = (0, 5e-4, 0)``.
+    ``r`` is the smooth ramp over ``ramp`` s (:func:`ramp_factors`; 0, the default of this
+    class: none, then ``u(0) = 0`` but the velocity ``w a_s`` jumps at ``t = 0``). Case B of
+    ``docs/theory.md`` §9 is ``axis_sin = (0, 0, 1e-3)``, ``axis_cos = (0, 5e-4, 0)``,
+    ``ramp = 0``.
 
     Parameters
     ----------
@@ -136,11 +279,14 @@ class EllipseMotion:
         Circular frequency ``w`` (rad/s).
     axis_sin, axis_cos : array_like, shape (3,)
         Semi-axes (m) multiplying ``sin(w t)`` and ``cos(w t) - 1``.
+    ramp : float
+        Duration (s) of the smooth start, >= 0; 0: none.
     """
 
     omega: float
     axis_sin: np.ndarray
     axis_cos: np.ndarray
+    ramp: float = 0.0
 
     def __post_init__(self) -> None:
         omega = float(self.omega)
@@ -149,34 +295,48 @@ class EllipseMotion:
         object.__setattr__(self, "omega", omega)
         for name in ("axis_sin", "axis_cos"):
             object.__setattr__(self, name, _frozen_array(getattr(self, name), (3,), name))
+        object.__setattr__(self, "ramp", _check_ramp(self.ramp))
 
-    def displacement(self, t: float) -> np.ndarray:
-        """Displacement (m), shape (3,)."""
+    def _u0(self, t: float) -> np.ndarray:
         wt = self.omega * t
         return self.axis_sin * math.sin(wt) + self.axis_cos * (math.cos(wt) - 1.0)
 
-    def velocity(self, t: float) -> np.ndarray:
-        """Velocity (m/s), shape (3,)."""
+    def _v0(self, t: float) -> np.ndarray:
         wt = self.omega * t
         return self.omega * (self.axis_sin * math.cos(wt) - self.axis_cos * math.sin(wt))
 
-    def acceleration(self, t: float) -> np.ndarray:
-        """Acceleration (m/s^2), shape (3,)."""
+    def _a0(self, t: float) -> np.ndarray:
         wt = self.omega * t
         return -self.omega**2 * (self.axis_sin * math.sin(wt) + self.axis_cos * math.cos(wt))
+
+    def _eval(self, kind: str, t: float) -> np.ndarray:
+        return _ramped(kind, self.ramp, t, lambda: self._u0(t), lambda: self._v0(t),
+                       lambda: self._a0(t))
+
+    def displacement(self, t: float) -> np.ndarray:
+        """Displacement (m), shape (3,)."""
+        return self._eval("displacement", t)
+
+    def velocity(self, t: float) -> np.ndarray:
+        """Velocity (m/s), shape (3,)."""
+        return self._eval("velocity", t)
+
+    def acceleration(self, t: float) -> np.ndarray:
+        """Acceleration (m/s^2), shape (3,)."""
+        return self._eval("acceleration", t)
 
     def describe(self) -> dict:
         """JSON-serialisable description."""
         return {"type": "ellipse", "omega": self.omega, "axis_sin": self.axis_sin.tolist(),
-                "axis_cos": self.axis_cos.tolist()}
+                "axis_cos": self.axis_cos.tolist(), "ramp": self.ramp}
 
 
 @dataclass(frozen=True, eq=False)
 class TableMotion:
-    """Piecewise-linear displacement through tabulated points, constant outside the table.
+    """Displacement through tabulated points: a C2 cubic spline (not-a-knot ends), held at
+    the first and last rows outside the table (see the module docstring).
 
-    The velocity is the slope of the current segment and the acceleration is zero (see the
-    module docstring: sample finely enough).
+    The velocity and acceleration are the spline's first and second derivatives.
 
     Parameters
     ----------
@@ -186,36 +346,40 @@ class TableMotion:
         Displacements (m) at those times.
     source : str or None
         The file the table came from, for :meth:`describe`.
+    hold : bool
+        The case accepts that the table ends before ``dynamics.t_end`` (held at its last
+        row); evaluation holds the end values either way.
     """
 
     times: np.ndarray
     values: np.ndarray
     source: str | None = None
+    hold: bool = False
 
     def __post_init__(self) -> None:
         times, values = _check_table(self.times, self.values, 3)
         object.__setattr__(self, "times", times)
         object.__setattr__(self, "values", values)
+        object.__setattr__(self, "hold", bool(self.hold))
+        object.__setattr__(self, "_spline", _Spline(times, values))
 
     def displacement(self, t: float) -> np.ndarray:
-        """Displacement (m), shape (3,)."""
-        return np.array([np.interp(t, self.times, self.values[:, k]) for k in range(3)])
+        """Displacement (m), shape (3,): the spline, or the first/last row outside."""
+        return self._spline(t)
 
     def velocity(self, t: float) -> np.ndarray:
-        """Velocity (m/s): slope of the segment ``[t_i, t_i+1)`` holding ``t``, else 0."""
-        i = _segment(self.times, t)
-        if i is None:
-            return np.zeros(3)
-        return (self.values[i + 1] - self.values[i]) / (self.times[i + 1] - self.times[i])
+        """Velocity (m/s): the spline's first derivative, 0 outside the table."""
+        return self._spline(t, 1)
 
     def acceleration(self, t: float) -> np.ndarray:
-        """Acceleration (m/s^2): zero (piecewise-linear displacement)."""
-        return np.zeros(3)
+        """Acceleration (m/s^2): the spline's second derivative, 0 outside the table."""
+        return self._spline(t, 2)
 
     def describe(self) -> dict:
         """JSON-serialisable description (the data itself only when there is no file)."""
         out: dict = {"type": "table", "file": self.source, "rows": int(self.times.size),
-                     "t_first": float(self.times[0]), "t_last": float(self.times[-1])}
+                     "t_first": float(self.times[0]), "t_last": float(self.times[-1]),
+                     "interpolation": "cubic spline, not-a-knot", "hold": self.hold}
         if self.source is None:
             out.update(times=self.times.tolist(), values=self.values.tolist())
         return out
@@ -235,9 +399,11 @@ class TimeFunction:
     phase : float
         Phase (rad) for ``harmonic``.
     times, factors : ndarray or None
-        Table (s, -) for ``table``: piecewise linear, constant outside.
+        Table (s, -) for ``table``: C2 cubic spline (not-a-knot ends), constant outside.
     source : str or None
         The file a table came from.
+    hold : bool
+        ``table``: the case accepts that it ends before ``dynamics.t_end`` (held).
     """
 
     kind: str = "constant"
@@ -246,6 +412,7 @@ class TimeFunction:
     times: np.ndarray | None = None
     factors: np.ndarray | None = None
     source: str | None = None
+    hold: bool = False
 
     def __post_init__(self) -> None:
         if self.kind not in ("constant", "harmonic", "table"):
@@ -258,6 +425,8 @@ class TimeFunction:
             times, factors = _check_table(self.times, self.factors, None)
             object.__setattr__(self, "times", times)
             object.__setattr__(self, "factors", factors)
+            object.__setattr__(self, "_spline", _Spline(times, factors))
+        object.__setattr__(self, "hold", bool(self.hold))
 
     @classmethod
     def constant(cls) -> TimeFunction:
@@ -270,16 +439,17 @@ class TimeFunction:
         return cls("harmonic", float(omega), float(phase))
 
     @classmethod
-    def table(cls, times: Any, factors: Any, source: str | None = None) -> TimeFunction:
-        """Piecewise-linear factor through ``(times, factors)``, constant outside."""
-        return cls("table", times=times, factors=factors, source=source)
+    def table(cls, times: Any, factors: Any, source: str | None = None,
+              hold: bool = False) -> TimeFunction:
+        """C2 cubic spline (not-a-knot) through ``(times, factors)``, constant outside."""
+        return cls("table", times=times, factors=factors, source=source, hold=hold)
 
     def value(self, t: float) -> float:
         """The factor at time ``t`` (s)."""
         if self.kind == "harmonic":
             return math.sin(self.omega * t + self.phase)
         if self.kind == "table":
-            return float(np.interp(t, self.times, self.factors))
+            return float(self._spline(t))
         return 1.0
 
     def describe(self) -> dict:
@@ -287,7 +457,8 @@ class TimeFunction:
         if self.kind == "harmonic":
             return {"type": "harmonic", "omega": self.omega, "phase": self.phase}
         if self.kind == "table":
-            out: dict = {"type": "table", "file": self.source, "rows": int(self.times.size)}
+            out: dict = {"type": "table", "file": self.source, "rows": int(self.times.size),
+                         "interpolation": "cubic spline, not-a-knot", "hold": self.hold}
             if self.source is None:
                 out.update(times=self.times.tolist(), factors=self.factors.tolist())
             return out

@@ -19,7 +19,7 @@ from dolfinx import fem, mesh as dmesh
 from petsc4py import PETSc
 
 from .case import CaseError
-from .model import AnchorBC, CableModel
+from .model import MAX_PLAUSIBLE_STRAIN, AnchorBC, CableModel
 from .network import MeshError, NetworkMesh, connected_components, read_network_mesh
 
 __all__ = ["NetworkModel", "NetworkGeometry"]
@@ -91,6 +91,13 @@ class NetworkModel(CableModel):
         if problems:
             raise CaseError(problems, case.source)
         secs = spec.sections
+        for i, c in enumerate(spec.cables):
+            strain = c.pretension / secs[c.section].EA
+            if strain > MAX_PLAUSIBLE_STRAIN:
+                self.warnings.append((f"cables[{i}].pretension", (
+                    f"pretension / EA is a strain of {100 * strain:.3g} %, above the "
+                    f"{100 * MAX_PLAUSIBLE_STRAIN:g} % that any cable material stays linear "
+                    "to: check the value and the section")))
         cell_section = [by_group[net.groups[g]].section for g in net.cell_group]
         EA = np.array([secs[n].EA for n in cell_section])
         m = np.array([secs[n].mass for n in cell_section])

@@ -17,7 +17,7 @@ from mpi4py import MPI
 
 from . import __version__, asymptotics
 from .case import Case
-from .case import CaseError
+from .case import CaseError, check_table_ends
 from .checkpoint import (case_digest, read_checkpoint, truncate_csv, write_checkpoint,
                          xdmf_times)
 from .dynamics import DynamicsError, DynamicsStats, Interrupted, integrate
@@ -366,6 +366,10 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
     """
     wall0 = time.perf_counter()
     outdir = Path(outdir)
+    if t_end is not None and case.dynamics is not None and dynamics:  # --t-end: the tables
+        ends = check_table_ends(case, t_end)  # must reach it too (before any work)
+        if ends:
+            raise CaseError(ends, case.source)
     if comm.rank == 0:
         outdir.mkdir(parents=True, exist_ok=True)
     comm.Barrier()

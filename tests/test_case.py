@@ -15,11 +15,11 @@ import pytest
 
 from cablefem.case import (
     CASE_KEYS, CaseError, TableDoc, format_case_reference, load_case, parse_case,
-    rayleigh_coefficients,
+    check_table_ends, rayleigh_coefficients, startup_time,
 )
 from cablefem.motion import (
-    EllipseMotion, HarmonicMotion, Motion, TableMotion, TimeFunction, read_factor_csv,
-    read_motion_csv,
+    ACCELERATION_STEP_FRACTION, DEFAULT_RAMP_PERIODS, EllipseMotion, HarmonicMotion, Motion,
+    TableMotion, TimeFunction, ramp_factors, read_factor_csv, read_motion_csv,
 )
 from cablefem.properties import Section, dimensionless_groups
 
@@ -146,8 +146,11 @@ def test_case_a_toml(tmp_path):
                                          "ts_adapt_monitor": False}
     assert case.loads == [] and case.point_masses == [] and case.point_loads == []
     echo = json.loads(json.dumps(case.to_dict()))
+    # no ramp given: the documented default, DEFAULT_RAMP_PERIODS periods 2 pi/omega (the
+    # same expression as in the code: equal to the last bit)
     assert echo["anchors"][1]["motion"] == {"type": "harmonic", "amplitude": [2e-4, 0.0, 0.0],
-                                            "omega": [32.814] * 3, "phase": [0.0] * 3}
+                                            "omega": [32.814] * 3, "phase": [0.0] * 3,
+                                            "ramp": DEFAULT_RAMP_PERIODS * 2 * math.pi / 32.814}
     assert echo["damping"]["alpha"] == case.damping.alpha
 
 
@@ -159,12 +162,13 @@ def test_parse_case_equals_load_case(tmp_path):
     for d in (from_file, from_dict):
         d.pop("source"), d.pop("solver")
         d["anchors"][1]["motion"].pop("omega")  # 2 * 16.407 differs from 32.814 in the last bit
+        d["anchors"][1]["motion"].pop("ramp")  # the default ramp, 2 pi/omega: the same
     assert from_file == from_dict
 
 
 def test_case_b_ellipse_motion():
     data = case_a()
-    set_key(data, "anchors[1].motion", {"type": "ellipse", "omega": OMEGA2,
+    set_key(data, "anchors[1].motion", {"type": "ellipse", "omega": OMEGA2, "ramp": 0.0,
                                         "axis_sin": [0, 0, 1e-3], "axis_cos": [0, 5e-4, 0]})
     motion = parse_case(data).anchors[1].motion
     assert isinstance(motion, EllipseMotion)
@@ -199,7 +203,8 @@ def test_optional_sections_and_normalisation(tmp_path):
                {"value": [0, 0, 1], "time": {"type": "harmonic", "omega": 2.0, "phase": 0.5}}],
         point_masses=[{"s": 0.5, "mass": 2.0}],
         point_loads=[{"s": 0.25, "value": [0, 0, -10.0], "time": {"type": "table",
-                                                                   "file": "f.csv"}}],
+                                                                   "file": "f.csv",
+                                                                   "hold": True}}],
         modal={"modes": 3}, solver={"tension_only": False})
     data["anchors"][0].update(type="pinned")
     data["anchors"][1].update(direction=[-3, 0, 4])
@@ -211,7 +216,9 @@ def test_optional_sections_and_normalisation(tmp_path):
     assert (case.mesh.elements, case.mesh.grading) == (40, 3.0)
     assert case.loads[0].time.value(123.0) == 1.0
     assert case.loads[1].time.value(0.25) == math.sin(2.0 * 0.25 + 0.5)
-    assert case.point_loads[0].time.value(0.5) == 0.5  # exact: linear table 0 -> 1 on [0, 1]
+    # a spline through 2 rows is their straight line: 0.5 up to a few ulp
+    assert case.point_loads[0].time.value(0.5) == pytest.approx(0.5, rel=4 * EPS)
+    assert case.point_loads[0].time.value(7.0) == 1.0  # held after the end (hold = true)
     assert (case.point_masses[0].s, case.point_masses[0].mass) == (0.5, 2.0)
     assert case.modal.modes == 3 and case.solver.tension_only is False
     json.dumps(case.to_dict())
@@ -313,35 +320,271 @@ def test_ellipse_derivatives():
     assert_derivatives(motion, TIMES, 1e-4, bound * OMEGA2**3, bound * OMEGA2**4, 2 * bound)
 
 
-def test_table_motion_derivatives_and_hold():
-    times = np.array([0.0, 0.1, 0.25, 0.4])
-    values = np.array([[0, 0, 0], [1e-3, 0, -2e-3], [0, 5e-4, 1e-3], [2e-3, 0, 0]])
+def test_table_motion_is_a_c2_spline():
+    """A table motion is the C2 cubic spline through its rows with not-a-knot ends: it passes
+    through every row, its velocity and acceleration are its own derivatives (central
+    differences), continuous across the rows (the linear interpolation before had a velocity
+    jump at every row and zero acceleration), the third derivative is the same on the first
+    two and on the last two segments (not-a-knot), and the motion is held outside."""
+    times = np.array([0.0, 0.1, 0.25, 0.4, 0.5, 0.8])
+    values = np.array([[0, 0, 0], [1e-3, 0, -2e-3], [0, 5e-4, 1e-3], [2e-3, 0, 0],
+                       [1e-3, 1e-3, 0], [0, 0, 2e-3]])
     motion = TableMotion(times, values)
+    for t, u in zip(times, values):  # through the rows, to round-off of |u| <= 2e-3
+        np.testing.assert_allclose(motion.displacement(t), u, rtol=0, atol=64 * EPS * 2e-3)
+    # the third derivative (jerk) of each segment's cubic: the slope of its acceleration
+    jerks = [(motion.acceleration(b - 1e-12) - motion.acceleration(a + 1e-12)) / (b - a)
+             for a, b in zip(times[:-1], times[1:])]
+    jerk = float(np.max(np.abs(jerks)))
+    acc_max = max(float(np.max(np.abs(motion.acceleration(t)))) for t in times)
+    # inside a segment the spline is a cubic: central differences are exact but for the
+    # velocity's truncation h^2/6 |u'''| and round-off (|u| <= 1e-2 here, amplified by 1/h
+    # and 1/h^2; the acceleration's truncation is h^2/12 |u''''| = 0)
     h = 1e-4
-    for t in (0.05, 0.17, 0.3):
-        i = np.searchsorted(times, t) - 1
-        slope = (values[i + 1] - values[i]) / (times[i + 1] - times[i])
-        np.testing.assert_array_equal(motion.velocity(t), slope)
-        # linear interpolation is exact inside a segment: only round-off of |u| <= 2e-3 in
-        # a few flops remains, amplified by 1/h (velocity) and 1/h^2 (acceleration)
+    for t in (0.05, 0.17, 0.3, 0.45, 0.7):
         v_fd = (motion.displacement(t + h) - motion.displacement(t - h)) / (2 * h)
         a_fd = (motion.displacement(t + h) - 2 * motion.displacement(t)
                 + motion.displacement(t - h)) / h**2
-        np.testing.assert_allclose(motion.velocity(t), v_fd, rtol=0, atol=16 * EPS * 2e-3 / h)
+        np.testing.assert_allclose(motion.velocity(t), v_fd, rtol=0,
+                                   atol=h**2 / 6 * jerk + 16 * EPS * 1e-2 / h)
         np.testing.assert_allclose(motion.acceleration(t), a_fd, rtol=0,
-                                   atol=16 * EPS * 2e-3 / h**2)
-    # held constant outside the table, with zero velocity
+                                   atol=64 * EPS * 1e-2 / h**2)
+    # continuity across the interior rows: left and right limits at distance d differ by at
+    # most 2 d times the bound of the next derivative (plus round-off)
+    d = 1e-9
+    v_max = max(float(np.max(np.abs(motion.velocity(t)))) for t in np.linspace(0, 0.8, 801))
+    for t in times[1:-1]:
+        np.testing.assert_allclose(motion.displacement(t - d), motion.displacement(t + d),
+                                   rtol=0, atol=2 * d * v_max + 64 * EPS * 2e-3)
+        np.testing.assert_allclose(motion.velocity(t - d), motion.velocity(t + d), rtol=0,
+                                   atol=2 * d * acc_max + 64 * EPS * v_max)
+        np.testing.assert_allclose(motion.acceleration(t - d), motion.acceleration(t + d),
+                                   rtol=0, atol=2 * d * jerk + 64 * EPS * acc_max)
+    # not-a-knot: one cubic on the first two segments, one on the last two (same jerk; the
+    # jerks above are differences over 1e-12 of accelerations: 1e-6 relative covers that)
+    np.testing.assert_allclose(jerks[0], jerks[1], rtol=0, atol=1e-6 * jerk)
+    np.testing.assert_allclose(jerks[-2], jerks[-1], rtol=0, atol=1e-6 * jerk)
+    assert not np.allclose(jerks[1], jerks[2], rtol=0, atol=1e-3 * jerk)  # a knot there
+    # held outside the table, with zero velocity and acceleration
     np.testing.assert_array_equal(motion.displacement(-1.0), values[0])
     np.testing.assert_array_equal(motion.displacement(5.0), values[-1])
-    np.testing.assert_array_equal(motion.velocity(5.0), np.zeros(3))
-    np.testing.assert_array_equal(motion.velocity(-1.0), np.zeros(3))
+    for t in (-1.0, 5.0):
+        np.testing.assert_array_equal(motion.velocity(t), np.zeros(3))
+        np.testing.assert_array_equal(motion.acceleration(t), np.zeros(3))
+
+
+def test_table_of_a_smooth_motion_matches_it():
+    """A table sampled from a sine every dh. Away from the ends (5 rows: the influence of
+    the end conditions decays by about 2 - sqrt(3) = 0.27 per row, to 1e-3) the error is
+    within the complete cubic spline's bounds (constants 5/384, 1/24, 3/8 (Hall and Meyer
+    1976) times the sine's 4th derivative A w^4); over the whole table, not-a-knot ends
+    included, it converges as dh^4, dh^3, dh^2 (observed orders from dh and dh/2, within
+    0.5). Linear interpolation missed the velocity by up to A w^2 dh/2 and had no
+    acceleration."""
+    A, w = 2e-4, 32.814
+    exact = HarmonicMotion([A, 0, 0], w)
+    kinds = ("displacement", "velocity", "acceleration")
+    grid = np.linspace(0.0, 1.0, 4001)
+    errs = []
+    for dh in (0.01, 0.005):
+        t = np.arange(0.0, 1.0 + dh / 2, dh)
+        table = TableMotion(t, np.array([exact.displacement(x) for x in t]))
+        e = {k: np.array([abs(getattr(table, k)(x)[0] - getattr(exact, k)(x)[0])
+                          for x in grid]) for k in kinds}
+        inner = (grid >= 5 * dh) & (grid <= 1 - 5 * dh)
+        d4 = A * w**4
+        for k, c in zip(kinds, (5 / 384 * dh**4, dh**3 / 24, 3 / 8 * dh**2)):
+            assert np.max(e[k][inner]) <= c * d4, k
+        errs.append({k: np.max(e[k]) for k in kinds})
+    for k, order in zip(kinds, (4, 3, 2)):
+        assert abs(np.log2(errs[0][k] / errs[1][k]) - order) < 0.5, (k, errs)
+    assert 3 / 8 * 0.01**2 * A * w**4 < 0.1 * A * w**2  # dh = 0.01: 10 % of the amplitude
+
+
+def test_ramp_function():
+    """r = 10 x^3 - 15 x^4 + 6 x^5 over the ramp: 0 -> 1, first and second derivatives zero
+    at both ends (continuous with the constants outside), derivatives equal to central
+    differences of r inside (truncation h^2/6 |r'''| <= h^2/6 60/T^3 and h^2/12 |r''''| <=
+    h^2/12 360/T^4; round-off 4 eps/h and 16 eps/h^2), monotonic."""
+    T = 0.7
+    assert ramp_factors(0.0, T) == (0.0, 0.0, 0.0) and ramp_factors(T, T) == (1.0, 0.0, 0.0)
+    assert ramp_factors(-1.0, T) == (0.0, 0.0, 0.0) and ramp_factors(5.0, T) == (1.0, 0.0, 0.0)
+    assert ramp_factors(0.3, 0.0) == (1.0, 0.0, 0.0)  # no ramp
+    d = 1e-7  # just inside: r <= 10 (d/T)^3, r' <= 30 d^2/T^3, |r''| <= 60 d/T^3 (and at T - d)
+    r, dr, ddr = ramp_factors(d, T)
+    assert r <= 10 * (d / T) ** 3 and dr <= 30 * d**2 / T**3 and ddr <= 60 * d / T**3
+    r, dr, ddr = ramp_factors(T - d, T)
+    assert 1 - r <= 10 * (d / T) ** 3 + EPS and dr <= 30 * d**2 / T**3 and \
+        abs(ddr) <= 60 * d / T**3
+    h = 1e-4
+    for t in np.linspace(0.01, T - 0.01, 13):
+        rm, r0, rp = (ramp_factors(x, T)[0] for x in (t - h, t, t + h))
+        _, dr, ddr = ramp_factors(t, T)
+        assert abs((rp - rm) / (2 * h) - dr) <= h**2 / 6 * 60 / T**3 + 4 * EPS / h
+        assert abs((rp - 2 * r0 + rm) / h**2 - ddr) <= h**2 / 12 * 360 / T**4 + 16 * EPS / h**2
+    rs = [ramp_factors(x * T, T)[0] for x in np.linspace(0, 1, 101)]
+    assert np.all(np.diff(rs) >= 0)
+
+
+@pytest.mark.parametrize("kind", ["harmonic", "ellipse"])
+def test_ramped_motion_starts_at_rest_and_is_smooth(kind):
+    """A ramped motion starts at zero displacement, velocity and acceleration (even with a
+    phase); its velocity and acceleration (product rule) are the derivatives of its
+    displacement (central differences; bounds of the product's 3rd and 4th derivatives by
+    Leibniz from |r'| <= 1.875/T, |r''| <= 5.78/T^2, |r'''| <= 60/T^3, |r''''| <= 360/T^4
+    and |u0^(k)| <= amp w^k); they are continuous at the end of the ramp; after it the
+    motion is the unramped one."""
+    T, w = 0.5, 20.0
+    if kind == "harmonic":
+        amp = np.array([2e-4, 1e-3, 5e-4])
+        ramped = HarmonicMotion(amp, w, [0.0, 0.7, -1.0], ramp=T)
+        plain = HarmonicMotion(amp, w, [0.0, 0.7, -1.0])
+    else:
+        ramped = EllipseMotion(w, [0, 0, 1e-3], [0, 5e-4, 0], ramp=T)
+        plain = EllipseMotion(w, [0, 0, 1e-3], [0, 5e-4, 0])
+        amp = np.array([0.0, 1e-3, 1e-3])  # |a_s sin + a_c (cos - 1)| <= |a_s| + 2 |a_c|
+    for f in ("displacement", "velocity", "acceleration"):
+        np.testing.assert_array_equal(getattr(ramped, f)(0.0), np.zeros(3))
+    assert np.any(plain.velocity(0.0) != 0)  # what the ramp removes: the jump at t = 0
+    b = [1.0, 1.875 / T, 5.78 / T**2, 60 / T**3, 360 / T**4]
+    d3 = amp * sum(math.comb(3, k) * b[k] * w ** (3 - k) for k in range(4))
+    d4 = amp * sum(math.comb(4, k) * b[k] * w ** (4 - k) for k in range(5))
+    h = 1e-4  # times at least 100 h away from t = T, where the 3rd derivative jumps
+    assert_derivatives(ramped, [0.013, 0.1, 0.25, 0.37, T - 0.01, T + 0.01, 0.9, 1.7], h,
+                       d3, d4, amp)
+    d = 1e-9
+    d1 = amp * (w + b[1])
+    d2 = amp * (w**2 + 2 * b[1] * w + b[2])
+    for f, nxt in (("displacement", d1), ("velocity", d2), ("acceleration", d3)):
+        np.testing.assert_allclose(getattr(ramped, f)(T - d), getattr(ramped, f)(T + d),
+                                   rtol=0, atol=2 * d * float(np.max(nxt)) + 1e-15)
+    for t in (T, T + 0.3, 2.0):
+        for f in ("displacement", "velocity", "acceleration"):
+            np.testing.assert_array_equal(getattr(ramped, f)(t), getattr(plain, f)(t))
+
+
+def test_case_ramp_default_and_explicit():
+    """No ramp key: DEFAULT_RAMP_PERIODS periods of the lowest omega of a moving component;
+    ramp = 0 keeps the motion itself (the paper's definition); the ramp is echoed."""
+    data = case_a()
+    set_key(data, "anchors[1].motion.omega", [32.814, 5.0, 1.0])  # uy, uz do not move
+    motion = parse_case(data).anchors[1].motion
+    assert motion.ramp == DEFAULT_RAMP_PERIODS * 2 * math.pi / 32.814
+    set_key(data, "anchors[1].motion.amplitude", [2e-4, 1e-4, 0.0])
+    assert parse_case(data).anchors[1].motion.ramp == DEFAULT_RAMP_PERIODS * 2 * math.pi / 5.0
+    set_key(data, "anchors[1].motion.ramp", 0)
+    motion = parse_case(data).anchors[1].motion
+    assert motion.ramp == 0.0
+    np.testing.assert_array_equal(motion.velocity(0.0), [2e-4 * 32.814, 1e-4 * 5.0, 0.0])
+    set_key(data, "anchors[1].motion", {"type": "ellipse", "omega": OMEGA2,
+                                        "axis_sin": [0, 0, 1e-3]})
+    case = parse_case(data)
+    assert case.anchors[1].motion.ramp == DEFAULT_RAMP_PERIODS * 2 * math.pi / OMEGA2
+    assert case.to_dict()["anchors"][1]["motion"]["ramp"] == case.anchors[1].motion.ramp
+    for bad, fragment in ((-1.0, "must be >= 0"), ("x", "expected a number")):
+        set_key(data, "anchors[1].motion.ramp", bad)
+        assert has_problem(problems_of(data), "anchors[1].motion.ramp", fragment)
+    set_key(data, "anchors[1].motion", {"type": "table", "file": "m.csv", "ramp": 1.0})
+    assert has_problem(problems_of(data), "anchors[1].motion.ramp", "does not apply")
+
+
+def test_startup_time_rules():
+    """The end of the start-up (the default fatigue window's start): the longest ramp; a
+    motion that jumps at t = 0 (ramp = 0) counts DEFAULT_RAMP_PERIODS of its periods; none
+    without such a motion (no motion, or ramp = 0 with a motion starting at rest)."""
+    data = case_a()
+    assert startup_time(parse_case(data))[0] == DEFAULT_RAMP_PERIODS * 2 * math.pi / (
+        2 * OMEGA1)
+    set_key(data, "anchors[1].motion.ramp", 2.5)
+    t0, why = startup_time(parse_case(data))
+    assert t0 == 2.5 and "anchors[1].motion.ramp" in why
+    set_key(data, "anchors[1].motion.ramp", 0.0)
+    t0, why = startup_time(parse_case(data))
+    assert t0 == DEFAULT_RAMP_PERIODS * 2 * math.pi / (2 * OMEGA1) and "jumps" in why
+    set_key(data, "anchors[1].motion", {"type": "ellipse", "omega": OMEGA2, "ramp": 0.0,
+                                        "axis_cos": [0, 5e-4, 0]})  # u = v = 0 at t = 0
+    assert startup_time(parse_case(data))[0] == 0.0
+    set_key(data, "anchors[1].motion", DELETE)
+    assert startup_time(parse_case(data))[0] == 0.0
+
+
+def _table_case(tmp_path, rows: np.ndarray, dt: float, t_end: float, hold=None,
+                where: str = "motion") -> dict:
+    """case_a with a table (an anchor motion, or a point load's factor) of ``rows``."""
+    data = case_a()
+    data["dynamics"] = {"t_end": t_end, "dt": dt}
+    table = {"type": "table", "file": "m.csv"}
+    if where == "motion":
+        text = "time,ux,uy,uz\n" + "".join(f"{r[0]!r},{r[1]!r},0,0\n" for r in rows)
+        set_key(data, "anchors[1].motion", table)
+    else:
+        text = "time,factor\n" + "".join(f"{r[0]!r},{r[1]!r}\n" for r in rows)
+        data["point_loads"] = [{"s": 0.5, "value": [0, 0, -1.0], "time": table}]
+    if hold is not None:
+        table["hold"] = hold
+    (tmp_path / "m.csv").write_text(text)
+    return data
+
+
+SMOOTH_T = np.linspace(0.0, 2.0, 201)
+SMOOTH = np.column_stack([SMOOTH_T, 1e-3 * (1 - np.cos(SMOOTH_T))**2])  # at rest at t = 0
+
+
+@pytest.mark.parametrize("where,key", [("motion", "anchors[1].motion"),
+                                       ("load", "point_loads[0].time")])
+def test_table_ending_before_t_end_is_refused_unless_held(tmp_path, where, key):
+    """A table that ends before dynamics.t_end was held silently: now a problem naming the
+    table's file key (and pointing to hold), unless hold = true."""
+    problems = problems_of(_table_case(tmp_path, SMOOTH, 0.01, 3.0, where=where),
+                           base_dir=tmp_path)
+    assert has_problem(problems, f"{key}.file", "ends at t = 2 s") and \
+        has_problem(problems, f"{key}.file", f"{key}.hold = true")
+    case = parse_case(_table_case(tmp_path, SMOOTH, 0.01, 3.0, hold=True, where=where),
+                      base_dir=tmp_path)
+    table = case.anchors[1].motion if where == "motion" else case.point_loads[0].time
+    assert table.hold is True
+    reaches = parse_case(_table_case(tmp_path, SMOOTH, 0.01, 2.0, where=where),
+                         base_dir=tmp_path)
+    # run_case checks a longer --t-end the same way, before any work
+    assert check_table_ends(reaches, 2.0) == []
+    assert [k for k, _ in check_table_ends(reaches, 2.5)] == [f"{key}.file"]
+    data = _table_case(tmp_path, SMOOTH, 0.01, 2.0, hold=1, where=where)
+    assert has_problem(problems_of(data, base_dir=tmp_path), f"{key}.hold", "boolean")
+
+
+def test_table_resolution_warnings(tmp_path):
+    """A smooth table, rows every 0.01 s, at rest at t = 0: no warning with dt = 0.01. With
+    dt = 0.02 its rows are closer than dt. A fast table (w = 30 rad/s: its acceleration
+    changes by ~ w dt/2 of its range in a step) with dt = 0.05 > 0.2/w: the spline's
+    acceleration changes by more than ACCELERATION_STEP_FRACTION of its range in a step. A
+    motion table that starts away from zero or moving warns too; all name the file key."""
+    assert parse_case(_table_case(tmp_path, SMOOTH, 0.01, 2.0),
+                      base_dir=tmp_path).warnings == []
+    warned = parse_case(_table_case(tmp_path, SMOOTH, 0.02, 2.0), base_dir=tmp_path).warnings
+    assert [k for k, _ in warned] == ["anchors[1].motion.file"]
+    assert "shorter than dynamics.dt = 0.02 s" in warned[0][1]
+    w = 30.0
+    coarse = np.linspace(0.0, 2.0, 41)  # rows every 0.05 = dt: no spacing warning
+    fast = np.column_stack([coarse, 1e-3 * (1 - np.cos(w * coarse))])
+    assert w * 0.05 / 2 > ACCELERATION_STEP_FRACTION
+    for where, key in (("motion", "anchors[1].motion.file"),
+                       ("load", "point_loads[0].time.file")):
+        warned = parse_case(_table_case(tmp_path, fast, 0.05, 2.0, where=where),
+                            base_dir=tmp_path).warnings
+        assert any(k == key and "acceleration" in m and "dt <=" in m for k, m in warned), warned
+        assert not any("shorter than" in m for _, m in warned)
+    moved = np.column_stack([SMOOTH_T, 1e-3 + 1e-3 * np.sin(SMOOTH_T)])  # u(0), v(0) != 0
+    warned = parse_case(_table_case(tmp_path, moved, 0.01, 2.0), base_dir=tmp_path).warnings
+    assert any("displacement at t = 0" in m for _, m in warned)
+    assert any("velocity at t = 0" in m for _, m in warned)
 
 
 def test_time_functions():
     assert TimeFunction.constant().value(7.0) == 1.0
     assert TimeFunction.harmonic(3.0, 0.2).value(1.5) == math.sin(3.0 * 1.5 + 0.2)
-    table = TimeFunction.table([0.0, 2.0], [1.0, 3.0])
-    assert (table.value(-1.0), table.value(1.0), table.value(9.0)) == (1.0, 2.0, 3.0)
+    table = TimeFunction.table([0.0, 2.0], [1.0, 3.0])  # 2 rows: the straight line
+    assert (table.value(-1.0), table.value(9.0)) == (1.0, 3.0)
+    assert table.value(1.0) == pytest.approx(2.0, rel=4 * EPS)
     with pytest.raises(ValueError):
         TimeFunction.harmonic(0.0)
     with pytest.raises(ValueError):
@@ -353,12 +596,13 @@ def test_motion_csv_roundtrip(tmp_path):
     path.write_text("# anchor q\n time , ux,uy , uz \n0,0,0,0\n\n0.5, 1e-3, 0, -1e-3\n1,0,0,0\n")
     motion = read_motion_csv(path)
     np.testing.assert_array_equal(motion.times, [0.0, 0.5, 1.0])
-    # exact: halfway along the first segment
-    np.testing.assert_array_equal(motion.displacement(0.25), [5e-4, 0.0, -5e-4])
+    # 3 rows: the not-a-knot spline is their parabola, 4e-3 t (1 - t) at 0.25: 7.5e-4
+    np.testing.assert_allclose(motion.displacement(0.25), [7.5e-4, 0.0, -7.5e-4], rtol=1e-14,
+                               atol=0)
     assert motion.describe()["rows"] == 3 and motion.describe()["file"] == str(path)
     factor = tmp_path / "f.csv"
     factor.write_text("time,factor\n0,0\n2,1\n")
-    assert read_factor_csv(factor).value(1.0) == 0.5
+    assert read_factor_csv(factor).value(1.0) == pytest.approx(0.5, rel=4 * EPS)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -524,7 +768,7 @@ def test_unknown_key_without_match_lists_known():
 
 def write_table_case(tmp_path, csv_text: str | None):
     text = CASE_A_TOML.replace('type = "harmonic"\namplitude = [2e-4, 0, 0]\nomega = 32.814',
-                               'type = "table"\nfile = "data/motion.csv"')
+                               'type = "table"\nfile = "data/motion.csv"\nhold = true')
     case_path = tmp_path / "case.toml"
     case_path.write_text(text)
     if csv_text is not None:

@@ -156,7 +156,8 @@ def test_fatigue_after_run_and_command(tmp_path):
     without a [fatigue] table the command exits 2 naming it."""
     case = write_case(tmp_path)
     text = case.read_text().replace("mass = 1.0", "mass = 1.0\ndiameter = 0.05")
-    case.write_text(text + '\n[fatigue]\ndetail_category = 1.0e3\nm1 = 4.0\nknee = false\n')
+    case.write_text(text + '\n[fatigue]\ndetail_category = 1.0e3\nm1 = 4.0\nknee = false\n'
+                    'window = "all"\n')  # the whole 0.1 s run lies within the motion's ramp
     out = tmp_path / "out"
     res = cablefem("run", case, "--output", out, "--no-figures")
     assert res.returncode == 0, res.stderr

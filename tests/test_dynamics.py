@@ -127,7 +127,8 @@ def test_failure_is_reported_and_output_kept(mpi_tmp_path):
     """A Newton solve that cannot converge (1 iteration allowed and an unreachable
     tolerance, at every cut of the step) stops the run with a message naming the time and the Newton history; anchors.csv keeps
     the rows computed so far and summary.json says 'failed'."""
-    d = level_case(motion={"type": "harmonic", "amplitude": [2e-4, 0, 0], "omega": 32.814},
+    d = level_case(motion={"type": "harmonic", "amplitude": [2e-4, 0, 0], "omega": 32.814,
+                           "ramp": 0.0},  # case A's motion from t = 0: Newton fails at once
                    dynamics={"t_end": 1.0, "dt": 0.005},
                    solver={"petsc_options": {"snes_max_it": 1, "ts_max_reject": 0,
                                              "snes_rtol": 1e-14, "snes_atol": 1e-30}})
@@ -150,7 +151,8 @@ def test_step_cut_and_retry(mpi_tmp_path):
     dt/16 exactly (the failed attempts leave no trace: the acceleration is re-estimated from
     the restored state), to 1e-9 of the tension (Newton tolerances), and its outputs stay on
     the nominal grid."""
-    motion = {"type": "harmonic", "amplitude": [2e-4, 0, 0], "omega": 32.814}
+    motion = {"type": "harmonic", "amplitude": [2e-4, 0, 0], "omega": 32.814,
+              "ramp": 0.0}  # case A's motion from t = 0 (its jump makes the steps fail)
     cut = level_case(motion=motion, dynamics={"t_end": 0.3, "dt": 0.05},
                      solver={"petsc_options": {"snes_max_it": 2}})
     ref = level_case(motion=motion, dynamics={"t_end": 0.3, "dt": 0.05 / 16},
@@ -183,7 +185,7 @@ def test_rayleigh_current_tangent_is_frame_independent():
     def forces(rot):
         d = level_case(EA=1e4, EI=1e-4, chord=0.99366, elements=20,
                        motion={"type": "harmonic", "amplitude": list(rot @ [0, 5e-4, 1e-3]),
-                               "omega": 10.0},
+                               "omega": 10.0, "ramp": 0.0},  # moving from the start
                        damping={"ratio": 0.05, "frequencies": [10.0, 20.0]},
                        dynamics={"t_end": 0.3, "dt": 0.005})
         d["gravity"] = {"g": 1.0, "direction": list(rot @ [0, 0, -1.0])}
@@ -202,3 +204,112 @@ def test_rayleigh_current_tangent_is_frame_independent():
     T0 = np.linalg.norm(F0[0, 0, :3])
     assert F0.shape[0] == 61
     np.testing.assert_allclose(F1[..., :3], F0[..., :3] @ R.T, atol=1e-7 * T0)
+
+
+# ----------------------------------------------------------------------- anchor motions
+def _anchor_tension(case, motion, outdir, comm=MPI.COMM_WORLD):
+    """Tension histories (t, {anchor: |N|}) of ``case`` with ``motion`` at anchor q."""
+    import dataclasses
+
+    q = dataclasses.replace(case.anchors[1], motion=motion)
+    c = dataclasses.replace(case, anchors=[case.anchors[0], q])
+    r = run_case(c, outdir, comm, figures=False, progress=False, modes=0)
+    return r.times, {n: np.linalg.norm(f, axis=1) for n, f in r.forces.items()}
+
+
+class _LinearTable:
+    """The piecewise-linear table motion that cablefem used before (velocity: the slope of
+    the segment, acceleration zero): what a coarse table gave."""
+
+    def __init__(self, times, values):
+        self.times, self.values = times, values
+
+    def displacement(self, t):
+        return np.array([np.interp(t, self.times, self.values[:, k]) for k in range(3)])
+
+    def velocity(self, t):
+        i = min(max(int(np.searchsorted(self.times, t, side="right")) - 1, 0),
+                self.times.size - 2)
+        return (self.values[i + 1] - self.values[i]) / (self.times[i + 1] - self.times[i])
+
+    def acceleration(self, t):
+        return np.zeros(3)
+
+    def describe(self):
+        return {"type": "linear table (test)"}
+
+
+def test_coarse_table_matches_the_closed_form_motion(mpi_tmp_path):
+    """Case A's anchor motion u = A sin(w t) as a table with a row every 2 dt (dt = 0.005,
+    about 19 rows per period) gives the anchor-tension history of the closed form, where
+    linear interpolation (a velocity jump at every row) did not.
+
+    Tolerance: the force that the table's interpolation error can cause, from the error of
+    the not-a-knot cubic spline through these rows (du, dv, da: its largest errors on a fine
+    grid, computed here with SciPy's spline independently of cablefem) through the stiffest
+    paths: the straight chord's axial stiffness EA/l (du), the axial wave impedance
+    sqrt(EA m) (dv) and the whole cable's mass m l (da), doubled for dynamic amplification
+    (a linear system loaded from rest responds by at most twice the static value). Both runs
+    share the time discretisation, which cancels in the difference."""
+    from scipy.interpolate import CubicSpline
+
+    from cablefem.motion import HarmonicMotion, TableMotion
+
+    A, w, dt, t_end = 2e-4, 32.814, 0.005, 0.6
+    EA, m, length = 17857.14, 1.0, 1.0
+    case = parse_case(level_case(EA=EA, mass=m, length=length,
+                                 damping={"ratio": 0.005, "frequencies": [16.407, 32.814]},
+                                 dynamics={"t_end": t_end, "dt": dt}))
+    closed = HarmonicMotion([A, 0, 0], w)
+    rows = np.arange(0.0, t_end + dt / 2, 2 * dt)
+    values = np.array([closed.displacement(t) for t in rows])
+    ref = CubicSpline(rows, values[:, 0], bc_type="not-a-knot")
+    grid = np.linspace(0.0, t_end, 6001)
+    du, dv, da = (float(np.max(np.abs(ref(grid, k)
+                                      - A * w**k * np.sin(w * grid + k * np.pi / 2))))
+                  for k in range(3))
+    tol = 2 * (EA / length * du + np.sqrt(EA * m) * dv + m * length * da)
+    t_c, closed_T = _anchor_tension(case, closed, mpi_tmp_path / "closed")
+    t_t, table_T = _anchor_tension(case, TableMotion(rows, values), mpi_tmp_path / "table")
+    np.testing.assert_allclose(t_t, t_c, rtol=0, atol=1e-12)
+    for name in ("p", "q"):
+        np.testing.assert_allclose(table_T[name], closed_T[name], rtol=0, atol=tol)
+    assert tol < 0.01 * np.ptp(closed_T["q"])  # a meaningful test: 1 % of the tension swing
+    # the same rows interpolated linearly miss it by far more than the tolerance
+    _, lin_T = _anchor_tension(case, _LinearTable(rows, values), mpi_tmp_path / "linear")
+    assert np.max(np.abs(lin_T["q"] - closed_T["q"])) > 10 * tol
+
+
+def test_default_ramp_starts_from_the_static_state(mpi_tmp_path):
+    """Case A's harmonic anchor motion without a ramp key gets the documented default smooth
+    start, u = r(t/T) A sin(w t) with r = 10 x^3 - 15 x^4 + 6 x^5 over T = 3 periods: the
+    t = 0 rows are the static anchor forces (to Newton's tolerance, 1e-9 of the tension) and
+    over the first tenth of the ramp the tension departs from the static one by at most
+    twice (dynamic amplification of a load applied from rest) the straight chord's axial
+    stiffness EA/l times the largest anchor displacement so far. Without the ramp the
+    velocity jump A w sends an axial wave of sqrt(EA m) A w = 0.88 through these rows."""
+    A, w, dt, EA = 2e-4, 32.814, 0.005, 17857.14
+    ramp = 3 * 2 * np.pi / w  # the documented default: 3 periods
+
+    def u(t):  # the documented ramped motion
+        x = min(t / ramp, 1.0)
+        return (10 * x**3 - 15 * x**4 + 6 * x**5) * A * np.sin(w * t)
+
+    case = parse_case(level_case(EA=EA, motion={"type": "harmonic", "amplitude": [A, 0, 0],
+                                                "omega": w},
+                                 dynamics={"t_end": 0.06, "dt": dt}))
+    res = run_case(case, mpi_tmp_path, figures=False, progress=False, modes=0)
+    static = {n: np.asarray(f, float) for n, f in res.summary["static"]["anchor_forces"].items()}
+    T0 = {n: float(np.linalg.norm(f)) for n, f in static.items()}
+    for name in ("p", "q"):
+        np.testing.assert_allclose(res.forces[name][0], static[name], rtol=0,
+                                   atol=1e-9 * T0[name])
+    sel = res.times <= 0.1 * ramp
+    assert np.count_nonzero(sel) >= 10
+    u_max = np.maximum.accumulate([abs(u(t)) for t in res.times[sel]])
+    for name in ("p", "q"):
+        dT = np.abs(np.linalg.norm(res.forces[name][sel], axis=1) - T0[name])
+        assert np.all(dT <= 2 * EA / 1.0 * u_max + 1e-9 * T0[name]), (name, dT, u_max)
+    motion = case.anchors[1].motion  # and it is the documented motion
+    for t in (0.0, 0.01, 0.3, ramp, 1.0):
+        assert motion.displacement(t)[0] == pytest.approx(u(t), rel=1e-12, abs=1e-20)

@@ -434,3 +434,62 @@ def test_rainflow_properties(k, f, shift, scale):
     assert fat.miner_damage(*fat.rainflow_cycles(x + shift)[::2], c) == D
     Dc = fat.miner_damage(*fat.rainflow_cycles(scale * x)[::2], c)
     assert Dc == pytest.approx(scale**3 * D, rel=1e-13, abs=0)
+
+
+# ------------------------------------------------------------------ window after the start-up
+
+def test_default_window_leaves_out_the_start_up(mpi_tmp_path):
+    """A case whose anchor motion has the default ramp (3 periods = 19.99 s here) and an
+    anchors.csv of test_report_numbers_and_window's history: 20 periods of 100 cos during
+    the start-up, then 10 of a2 cos. The default fatigue window ('after_startup') starts at
+    the first sample after the ramp, t = 20: the same hand rainflow as that test's steady
+    window, D = 9.5/1e7 + 0.5/N(100 + a2) over 10 time units; fatigue.json says which
+    window and why. window = 'all' counts the start-up: D = 20/2.5e5 + ... A run that ends
+    within the start-up is refused with a message naming the window."""
+    from mpi4py import MPI
+
+    from cablefem.case import parse_case
+    from cablefem.fatiguecmd import run_fatigue
+
+    from conftest import level_case
+
+    comm = MPI.COMM_WORLD
+    ramp = 19.99
+    w = 3 * 2 * np.pi / ramp  # the default ramp: 3 periods of the motion
+    a2 = DS_MID / 2
+    M = np.r_[cos_history(100.0, 20), cos_history(a2, 10)[1:]]
+    t = np.arange(M.size) / 40
+
+    def write(folder, n):
+        if comm.rank == 0:
+            folder.mkdir(parents=True, exist_ok=True)
+            lines = ["time,anchor,tension,moment,valid"]
+            lines += [f"{t[i]!r},{a},10.0,{M[i]!r},1" for i in range(n) for a in ("p", "q")]
+            (folder / "anchors.csv").write_text("\n".join(lines) + "\n")
+        comm.Barrier()
+
+    def case(**fatigue):
+        return parse_case(level_case(
+            motion={"type": "harmonic", "amplitude": [2e-4, 0, 0], "omega": w},
+            dynamics={"t_end": 30.0, "dt": 0.025},
+            fatigue={"detail_category": DS_C, "area": 1.0, "modulus": 1.0, **fatigue}))
+
+    write(mpi_tmp_path / "run", t.size)
+    reps = run_fatigue(case(), mpi_tmp_path / "run", comm=comm)
+    tail = 9.5 / 1e7 + 0.5 / (2e6 * (DS_C / (DS_C + a2)) ** 3)
+    whole = 20 / 2.5e5 + tail
+    for name in ("p", "q"):
+        assert reps[name]["window"] == [20.0, 30.0]
+        assert reps[name]["damage"] == pytest.approx(tail, rel=RTOL)
+        assert reps[name]["window_rule"]["rule"] == "after_startup"
+        assert reps[name]["window_rule"]["start"] == pytest.approx(ramp, rel=1e-15)
+    saved = json.loads((mpi_tmp_path / "run" / "fatigue.json").read_text())
+    assert saved["anchors"]["q"]["window_rule"]["rule"] == "after_startup"
+    assert "ramp" in saved["anchors"]["q"]["window_rule"]["reason"]
+    reps = run_fatigue(case(window="all"), mpi_tmp_path / "run", mpi_tmp_path / "all",
+                       comm=comm)
+    assert reps["q"]["damage"] == pytest.approx(whole, rel=RTOL)
+    assert reps["q"]["window_rule"]["rule"] == "all"
+    write(mpi_tmp_path / "short", 400)  # t <= 9.975: within the start-up
+    with pytest.raises(ValueError, match="after_startup"):
+        run_fatigue(case(), mpi_tmp_path / "short", comm=comm)
