@@ -196,7 +196,7 @@ def initial_velocity(model, V: PETSc.Vec, t: float = 0.0, quasi_static: bool = T
         V.array[rows] = vals  # exactly the prescribed values
     elif model.comm.rank == 0:
         log.warning("the quasi-static initial velocity could not be solved for (KSP reason "
-                    "%d): the cable starts at rest, its anchors moving", 
+                    "%d): the cable starts at rest, its anchors moving",
                     ksp.getConvergedReason())
     for obj in (ksp, K, b, x):
         obj.destroy()
