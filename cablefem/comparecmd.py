@@ -5,8 +5,11 @@ rod (``cablefem run CASE --model beam --output B``). For every anchor clamped in
 static moment and tension (from ``summary.json``), steady-state peak and RMS of the moment
 magnitude ``|M|`` (from ``anchors.csv``, over the last third of the time range the two runs
 have in common, so that both use the same window), and the relative differences
-``(b - a) / a``; also the first natural frequency and the wall times (ratio ``b / a``).
-Writes ``compare.json``, ``compare.md`` and ``compare_<anchor>.png`` (default: into
+``(b - a) / a``; the history error ``RMS(|M|_b - |M|_a) / RMS(|M|_a)``, the pointwise
+difference of the two histories over the same window (:func:`history_error`); also the first
+natural frequency and the wall times (ratio ``b / a``). Warns (log and ``warnings`` in
+``compare.json``) when a run's first output row is not its static state (:func:`start_warnings`):
+such a run did not start clean. Writes ``compare.json``, ``compare.md`` and ``compare_<anchor>.png`` (default: into
 ``DIR_B``). No dolfinx objects: rank 0 reads, computes and writes; every rank gets the
 result (and the same ValueError on bad input).
 """
@@ -28,12 +31,21 @@ from .io import jsonable, write_json
 from .plots import MAX_PANELS
 from .run import steady_state_stats
 
-__all__ = ["compare_runs", "format_table", "FRACTION"]
+__all__ = ["compare_runs", "format_table", "history_error", "start_warnings", "FRACTION",
+           "START_TOLERANCE"]
 
 log = logging.getLogger(__name__)
 
 #: the steady state: the last third of the common time range (as run.steady_state_stats)
 FRACTION = 1 / 3
+#: a run's first output row may differ from its static state by this fraction of the
+#: quantity's scale (the static value, or the run's peak if larger) before compare warns.
+#: A clean start (the quasi-static initial velocity, docs/rod.md) differs by the damping
+#: force of the quasi-static motion, beta dR/dt <= 2 zeta(omega) times the quasi-static
+#: amplitude: 0.09 % of the tension and 0.04 % of the moment on case A (zeta = 0.5 %); an
+#: impulsive start (the cable at rest, its anchor moving) by beta EA v0/h: 3.6 % of the
+#: tension on the string of case A, 230 % on the rod.
+START_TOLERANCE = 0.01
 
 
 def compare_runs(dir_a: str | Path, dir_b: str | Path, outdir: str | Path | None = None,
@@ -141,6 +153,77 @@ def _window_stats(times: np.ndarray, values: np.ndarray, t_lo: float, t_hi: floa
     return steady_state_stats(t, v, FRACTION)
 
 
+def _trapezoid(t: np.ndarray, y: np.ndarray) -> float:
+    return float(np.sum(0.5 * (y[1:] + y[:-1]) * np.diff(t))) if t.size > 1 else 0.0
+
+
+def history_error(ta: np.ndarray, ma: np.ndarray, tb: np.ndarray, mb: np.ndarray,
+                  window: tuple[float, float]) -> dict:
+    """``RMS(m_b - m_a) / RMS(m_a)`` over ``window``: the pointwise difference of two
+    histories, relative to run a's (the reference of every relative difference here).
+
+    The samples are run a's output times in the window (NaN samples of either run dropped);
+    run b is linearly interpolated onto them when its times differ (error at most
+    ``(omega dt_b)^2/8`` of the amplitude of a harmonic of frequency ``omega``; none when the
+    grids agree, the usual case of two runs of the same case). Both mean squares are time
+    integrals by the trapezoidal rule, ``RMS(f)^2 = (1/T) int f^2 dt``, exact for a harmonic
+    history sampled uniformly over whole periods: a pure sinusoid shifted by a phase ``phi``
+    gives ``2 |sin(phi/2)|``. Returns ``{"value", "samples", "interpolated"}`` (value NaN
+    when undefined: fewer than 2 samples or a zero reference)."""
+    fa, fb = np.isfinite(ma), np.isfinite(mb)
+    ta, ma, tb, mb = ta[fa], ma[fa], tb[fb], mb[fb]
+    lo, hi = window
+    sel = (ta >= lo) & (ta <= hi)
+    t, a = ta[sel], ma[sel]
+    # b must cover the samples (no extrapolation)
+    if tb.size:
+        inside = (t >= tb[0]) & (t <= tb[-1])
+        t, a = t[inside], a[inside]
+    if t.size < 2 or tb.size < 1:
+        return {"value": math.nan, "samples": int(t.size), "interpolated": False}
+    same = np.isin(t, tb)
+    interpolated = not bool(np.all(same))
+    b = np.interp(t, tb, mb)
+    ref = _trapezoid(t, a * a)
+    val = math.sqrt(_trapezoid(t, (b - a) ** 2) / ref) if ref > 0 else math.nan
+    return {"value": val, "samples": int(t.size), "interpolated": interpolated}
+
+
+def start_warnings(run: dict, key: str, tol: float = START_TOLERANCE) -> list[dict]:
+    """Warnings for the anchors whose first ``anchors.csv`` row differs from the static
+    state in ``summary.json`` (tension, and the moment of a clamped anchor) by more than
+    ``tol`` times the quantity's scale: the static value or, if larger, the run's peak.
+    Only runs with more than one output time (a dynamic run)."""
+    out = []
+    for name, d in sorted(run["data"].items()):
+        if d["time"].size < 2:
+            continue
+        entry = run["anchors"].get(name, {})
+        checks = [("tension", "static_tension")]
+        if _has_moments(run, name):
+            checks.append(("moment", "static_moment"))
+        for col, skey in checks:
+            static, first = _num(entry.get(skey)), float(d[col][0])
+            if not (math.isfinite(static) and math.isfinite(first)):
+                continue
+            vals = d[col][np.isfinite(d[col])]
+            scale = max(abs(static), float(np.max(np.abs(vals))) if vals.size else 0.0)
+            diff = first - static
+            if scale > 0 and abs(diff) > tol * scale:
+                rel = diff / static if static != 0 else math.nan
+                out.append({
+                    "run": key, "dir": str(run["dir"]), "anchor": name, "quantity": col,
+                    "static": static, "first_row": first, "time": float(d["time"][0]),
+                    "rel_diff": rel,
+                    "message": (f"run {key} ({run['dir']}): anchor {name}: the first output "
+                                f"row's {col} {first:.6g} (t = {d['time'][0]:.6g}) differs "
+                                f"from the static {col} {static:.6g} by "
+                                f"{abs(diff) / scale:.3g} of its scale (> {tol:g}): the run "
+                                "did not start clean (an impulsive start?), its peaks and "
+                                "early history include that start")})
+    return out
+
+
 # the comparison ------------------------------------------------------------------------------
 def _compare(dir_a: Path, dir_b: Path, outdir: Path) -> dict:
     ra, rb = _read_run(dir_a), _read_run(dir_b)
@@ -176,12 +259,16 @@ def _compare(dir_a: Path, dir_b: Path, outdir: Path) -> dict:
         entry = {"static_moment": _pair(sa.get("static_moment"), sb.get("static_moment")),
                  "static_tension": _pair(sa.get("static_tension"), sb.get("static_tension"))}
         window = None
+        entry["history_error"] = {"value": math.nan, "samples": 0, "interpolated": False}
         if steady:
             st = [_window_stats(r["data"][n]["time"], r["data"][n]["moment"], t_lo, t_hi)
                   for r in (ra, rb)]
             window = st[0]["window"]
             for key in ("peak", "rms", "mean"):
                 entry[f"steady_{key}"] = _pair(st[0].get(key), st[1].get(key))
+            da, db = ra["data"][n], rb["data"][n]
+            entry["history_error"] = history_error(da["time"], da["moment"], db["time"],
+                                                   db["moment"], tuple(window))
         else:
             for key in ("peak", "rms", "mean"):
                 entry[f"steady_{key}"] = _pair(None, None)
@@ -192,6 +279,10 @@ def _compare(dir_a: Path, dir_b: Path, outdir: Path) -> dict:
         modes = run["summary"].get("modes")
         return modes[0].get("omega") if isinstance(modes, list) and modes and isinstance(
             modes[0], dict) else None
+
+    warnings = start_warnings(ra, "a") + start_warnings(rb, "b")
+    for w in warnings:
+        log.warning("%s", w["message"])
 
     wall_a = ra["summary"].get("wall_time") or {}
     wall_b = rb["summary"].get("wall_time") or {}
@@ -209,7 +300,7 @@ def _compare(dir_a: Path, dir_b: Path, outdir: Path) -> dict:
         "steady_fraction": FRACTION,
         "anchors": anchors, "skipped_anchors": skipped,
         "first_frequency": {"omega": _pair(omega1(ra), omega1(rb))},
-        "wall_time": wall}
+        "wall_time": wall, "start_tolerance": START_TOLERANCE, "warnings": warnings}
 
     outdir.mkdir(parents=True, exist_ok=True)
     result["figures"] = _figures(outdir, ra, rb, anchors, t_lo, t_hi if steady else None)
@@ -240,6 +331,10 @@ def _table_rows(res: dict) -> list[list[str]]:
         for key, text in _ROWS:
             p = entry[key]
             rows.append([f"{name}: {text}", _fmt(p["a"]), _fmt(p["b"]), _pct(p["rel_diff"])])
+        h = entry.get("history_error") or {}
+        v = h.get("value")
+        rows.append([f"{name}: history error RMS(b-a)/RMS(a)", "", "",
+                     "n/a" if v is None or not math.isfinite(v) else f"{100 * v:.2f} %"])
     p = res["first_frequency"]["omega"]
     rows.append(["first natural frequency omega (rad/s)", _fmt(p["a"]), _fmt(p["b"]),
                  _pct(p["rel_diff"])])
@@ -258,6 +353,15 @@ def _window_text(res: dict) -> str:
             f"time range [{res['common_time_range'][0]:.6g}, {res['common_time_range'][1]:.6g}]")
 
 
+def _history_text(res: dict) -> str:
+    interp = any((e.get("history_error") or {}).get("interpolated")
+                 for e in res["anchors"].values())
+    how = ("b interpolated linearly onto a's output times" if interp
+           else "at a's output times (b has the same)")
+    return ("history error: RMS of the pointwise difference |M|_b - |M|_a over the "
+            f"steady-state window over the RMS of |M|_a, {how}")
+
+
 def format_table(res: dict) -> str:
     """The comparison as an aligned plain-text table (what ``cablefem compare`` prints)."""
     rows = _table_rows(res)
@@ -266,6 +370,10 @@ def format_table(res: dict) -> str:
                                for i, (c, w) in enumerate(zip(r, width))).rstrip()
     out = [line(rows[0]), "  ".join("-" * w for w in width)] + [line(r) for r in rows[1:]]
     out.append(_window_text(res))
+    out.append(_history_text(res))
+    if res.get("warnings"):
+        out.append(f"warning: {len(res['warnings'])} first output row(s) differ from the "
+                   "static state (the runs did not start clean): see compare.json 'warnings'")
     if res["skipped_anchors"]:
         out.append(f"not compared (not clamped with moments in both runs): "
                    f"{', '.join(res['skipped_anchors'])}")
@@ -279,11 +387,14 @@ def _markdown(res: dict) -> str:
           f"- a: `{a['dir']}` (model {a['model']}, status {a['status']})",
           f"- b: `{b['dir']}` (model {b['model']}, status {b['status']})",
           f"- {_window_text(res)}; moments are magnitudes |M|",
+          f"- {_history_text(res)}",
           "- last column: relative difference (b-a)/a; wall times: ratio b/a", ""]
     if not res["same_case"]:
         md.insert(-1, "- **the runs echo different case files**")
     cells = lambda r: "| " + " | ".join(c.replace("|", "\\|") for c in r) + " |"  # noqa
     md += [cells(rows[0]), "|---|---:|---:|---:|"] + [cells(r) for r in rows[1:]]
+    if res.get("warnings"):
+        md += ["", "## Warnings", ""] + [f"- {w['message']}" for w in res["warnings"]]
     if res["skipped_anchors"]:
         md += ["", f"Not compared (not clamped with moments in both runs): "
                    f"{', '.join(res['skipped_anchors'])}."]

@@ -38,9 +38,10 @@ from .anchors import AnchorForces
 from .hinge import HingeError
 from .petsc_utils import (SNESHistory, assemble_jacobian_rows, assemble_residual_rows,
                           case_options, copy_in, default_options,
-                          linear_solver_options)
+                          linear_solver_options, lu_options)
 
-__all__ = ["Checkpoint", "DynamicsError", "DynamicsStats", "Interrupted", "integrate"]
+__all__ = ["Checkpoint", "DynamicsError", "DynamicsStats", "Interrupted", "integrate",
+           "initial_velocity"]
 
 log = logging.getLogger(__name__)
 
@@ -140,10 +141,73 @@ def _make_ts(model, dt: float, rho_inf: float, history: SNESHistory):
     return ts, (F_vec, J_mat)
 
 
+def initial_velocity(model, V: PETSc.Vec, t: float = 0.0, quasi_static: bool = True) -> bool:
+    """Fill ``V`` with the velocity the dynamics starts from at time ``t``.
+
+    The anchors' rows get their prescribed velocity ``ġ(t)`` (a clamp's rotation rows 0: a
+    clamp translates). With ``quasi_static`` the free rows get the velocity with which the
+    cable follows that motion quasi-statically, the solution of the tangent problem at the
+    current state ``model.u`` (normally the static equilibrium)::
+
+        K_ff v_f = −K_fb ġ(t),        K = ∂f_int/∂u (the static Jacobian)
+
+    so that no element is strained at a rate: the anchor does not tear away from a cable at
+    rest (a velocity jump across the first element, whose strain rate ``|ġ|/h`` grows without
+    bound as the element shrinks and which a stiffness-proportional damping turns into a
+    reaction ``β EA |ġ|/h``; the rod, graded to ``ℓ/8`` at a clamp, has elements 10-100 times
+    shorter than the string's). Without ``quasi_static``, or when every anchor is at rest,
+    the free rows are 0 (the cable at rest). Returns whether a quasi-static field was
+    solved for (False when nothing moves). Collective."""
+    V.set(0.0)
+    n_owned = model.V.dofmap.index_map.size_local
+    rows, vals = [], []
+    for anc in model.anchors:
+        r = anc.flat_dofs
+        keep = r < model.bs * n_owned
+        rows.append(r[keep])
+        vals.append(np.asarray(anc.prescribed("velocity", t), float)[keep])
+    rows = np.concatenate(rows).astype(np.int32) if rows else np.zeros(0, np.int32)
+    vals = np.concatenate(vals) if vals else np.zeros(0)
+    V.array[rows] = vals
+    moving = model.comm.allreduce(bool(np.any(vals != 0.0)), op=MPI.LOR)
+    if not (quasi_static and moving):
+        return False
+    # K at model.u, unconstrained: b = -K v_b; the anchor rows of b hold v_b
+    K = fpetsc.assemble_matrix(model.j_static)
+    K.assemble()
+    b = V.duplicate()
+    K.mult(V, b)
+    b.scale(-1.0)
+    b.array[rows] = vals
+    # the tangent with identity rows and zero columns at the anchors: K_ff v_f = -K_fb v_b
+    K.zeroRowsColumnsLocal(rows, diag=1.0)
+    ksp = PETSc.KSP().create(model.comm)
+    prefix = model.prefix + "static_"
+    ksp.setOptionsPrefix(prefix)
+    ksp.setOperators(K)
+    with default_options(prefix, lu_options(model.comm.size), case_options(model, "static")):
+        ksp.setFromOptions()
+    x = V.duplicate()
+    ksp.solve(b, x)
+    ok = ksp.getConvergedReason() > 0 and np.all(np.isfinite(x.array_r))
+    ok = model.comm.allreduce(bool(ok), op=MPI.LAND)
+    if ok:
+        x.copy(V)
+        V.array[rows] = vals  # exactly the prescribed values
+    elif model.comm.rank == 0:
+        log.warning("the quasi-static initial velocity could not be solved for (KSP reason "
+                    "%d): the cable starts at rest, its anchors moving",
+                    ksp.getConvergedReason())
+    for obj in (ksp, K, b, x):
+        obj.destroy()
+    return ok
+
+
 def integrate(model, t_end: float, dt: float, rho_inf: float = 0.9, output_every: int = 1,
               stats: DynamicsStats | None = None, max_cuts: int = 6, cooldown: int = 8,
               start: Checkpoint | None = None, checkpoint_every: int = 0,
-              on_checkpoint=None, should_stop=None) -> Iterator[tuple[float, np.ndarray]]:
+              on_checkpoint=None, should_stop=None, initial: str = "quasi-static"
+              ) -> Iterator[tuple[float, np.ndarray]]:
     """Integrate from the current state to ``t_end``; yields ``(t, anchor_forces)`` at the
     start (not when resuming from ``start``), every ``output_every`` steps and at ``t_end``,
     with ``model.u``, ``model.v`` and ``model.a`` at that time.
@@ -151,7 +215,10 @@ def integrate(model, t_end: float, dt: float, rho_inf: float = 0.9, output_every
     ``anchor_forces`` is ``(n_anchors, 3)``, the force of the span at each anchor (N).
 
     Without ``start`` the run begins at ``t = 0`` from ``model.u`` (normally the static
-    equilibrium) at rest, the anchors with their prescribed velocity. With ``start`` it
+    equilibrium) with the initial velocity ``initial`` (:func:`initial_velocity`):
+    "quasi-static" (default), the velocity field with which the cable follows its anchors'
+    velocity at ``t = 0`` quasi-statically, or "rest", the cable at rest and only the
+    anchors moving (a velocity jump at a moving anchor, an impulse). With ``start`` it
     resumes from a checkpoint (``model.u``, ``model.v`` must hold its state). Every
     ``checkpoint_every`` steps ``on_checkpoint(Checkpoint)`` is called; at that step the
     integrator re-estimates its acceleration from ``(u, v)`` as a resumed run does, so that a
@@ -159,6 +226,8 @@ def integrate(model, t_end: float, dt: float, rho_inf: float = 0.9, output_every
     every step (collectively); when it returns True on any rank, :class:`Interrupted` is
     raised on all ranks, after the last output.
     """
+    if initial not in ("quasi-static", "rest"):
+        raise ValueError(f"initial must be 'quasi-static' or 'rest', got {initial!r}")
     stats = stats if stats is not None else DynamicsStats()
     wall0 = time.perf_counter()
     history = SNESHistory()
@@ -170,12 +239,7 @@ def integrate(model, t_end: float, dt: float, rho_inf: float = 0.9, output_every
     U = model.u.vector.copy()
     V = model.v.vector.copy()
     if start is None:
-        V.set(0.0)
-        n_owned = model.V.dofmap.index_map.size_local
-        for anc in model.anchors:  # the anchors start with their prescribed velocity
-            rows = anc.flat_dofs
-            keep = rows < model.bs * n_owned
-            V.array[rows[keep]] = anc.prescribed("velocity", 0.0)[keep]
+        initial_velocity(model, V, t, quasi_static=initial == "quasi-static")
         copy_in(V, model.v)
     ts.setTime(t)
     ts.setMaxTime(t_end)

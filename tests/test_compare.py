@@ -7,6 +7,7 @@ folders); the subprocess tests are serial."""
 from __future__ import annotations
 
 import json
+import logging
 import math
 import subprocess
 import sys
@@ -17,7 +18,7 @@ import pytest
 from mpi4py import MPI
 
 from cablefem.cli import main
-from cablefem.comparecmd import compare_runs
+from cablefem.comparecmd import compare_runs, format_table
 
 COLUMNS = ["time", "anchor", "Nx", "Ny", "Nz", "tension", "delta", "moment", "Mx", "My", "Mz",
            "psi0", "layer_length", "moment_layer", "valid"]
@@ -33,22 +34,27 @@ def _cell(x) -> str:
 def write_run(folder: Path, *, model: str | None, scale: float, t_end: float,
               after: float = 1.0, anchors=(("p", "clamped"), ("q", "pinned")),
               omega: float | None = 10.0, wall: dict | None = None,
-              static_moment: float = 0.5) -> Path:
+              static_moment: float | None = None, mean: float = M0, phase: float = 0.0,
+              per_period: int = PER_PERIOD, first_tension: float = 100.0) -> Path:
     """A run folder as cablefem writes it: summary.json and anchors.csv. Clamped anchors
     have ``moment = scale (M0 + A sin(W t))`` for ``t <= 3`` and ``after`` times that
     beyond (what a window over the run's own range, not the common one, would see);
     pinned anchors have empty moment columns. ``model=None``: an old run without the key.
+    ``mean`` and ``phase``: ``moment = scale (mean + A sin(W t + phase))``; ``per_period``
+    samples per period; the static moment defaults to the first row's (a run that starts
+    clean), the static tension is 100 and the first row's ``first_tension``.
     Rank 0 writes; collective."""
     if MPI.COMM_WORLD.rank == 0:
         folder.mkdir(parents=True)
-        times = np.arange(round(t_end * PER_PERIOD) + 1) / PER_PERIOD
+        times = np.arange(round(t_end * per_period) + 1) / per_period
         lines = [",".join(COLUMNS)]
         for t in times:
             for name, kind in anchors:
-                row = {"time": t, "anchor": name, "Nx": 100.0, "Ny": 0.0, "Nz": 0.0,
-                       "tension": 100.0}
+                tension = first_tension if t == 0 else 100.0
+                row = {"time": t, "anchor": name, "Nx": tension, "Ny": 0.0, "Nz": 0.0,
+                       "tension": tension}
                 if kind == "clamped":
-                    m = scale * (M0 + A * np.sin(W * t)) * (after if t > 3.0 else 1.0)
+                    m = scale * (mean + A * np.sin(W * t + phase)) * (after if t > 3.0 else 1.0)
                     row.update({"delta": 0.1, "moment": m, "Mx": 0.0, "My": m, "Mz": 0.0,
                                 "psi0": 0.0, "layer_length": 0.01, "moment_layer": m,
                                 "valid": "1"})
@@ -58,7 +64,8 @@ def write_run(folder: Path, *, model: str | None, scale: float, t_end: float,
         for name, kind in anchors:
             e = {"kind": kind, "static_tension": 100.0}
             if kind == "clamped":
-                e.update({"static_moment": static_moment * scale,
+                e.update({"static_moment": scale * (mean + A * np.sin(phase))
+                          if static_moment is None else static_moment * scale,
                           "steady_state_moment": {"peak": 0.0, "rms": 0.0, "mean": 0.0,
                                                   "window": [0.0, 0.0]}})
             entries[name] = e
@@ -223,3 +230,101 @@ def test_cli_prints_table(runs, tmp_path):
     assert res.returncode == 2 and "--bogus" in res.stderr
     help_ = cablefem("--help").stdout
     assert "compare" in help_ and "two runs" in help_
+
+
+# ----------------------------------------------------------------------------- history error
+def test_history_error_of_identical_runs_is_zero(mpi_tmp_path):
+    a = write_run(mpi_tmp_path / "a", model="string", scale=1.0, t_end=3.0)
+    b = write_run(mpi_tmp_path / "b", model="beam", scale=1.0, t_end=3.0)
+    res = compare_runs(a, b)
+    h = res["anchors"]["p"]["history_error"]
+    assert h["value"] == 0.0  # the same samples: the difference is 0 exactly
+    assert h["interpolated"] is False and h["samples"] == PER_PERIOD + 1  # window [2, 3]
+    assert res["warnings"] == []  # both start clean
+    md = (b / "compare.md").read_text()
+    assert "| p: history error RMS(b-a)/RMS(a) |  |  | 0.00 % |" in md
+    assert "history error" in format_table(res)
+
+
+@pytest.mark.parametrize("phi", [np.pi, np.pi / 3, 0.1])
+@pytest.mark.parametrize("mean", [0.0, M0])
+def test_history_error_of_a_phase_shift(mpi_tmp_path, phi, mean):
+    """Run b = run a shifted by the phase phi: m_a = mean + A sin(W t), m_b = mean +
+    A sin(W t + phi). Over whole periods m_b - m_a = 2 A sin(phi/2) cos(W t + phi/2), whose
+    mean square is 2 A^2 sin^2(phi/2), against mean^2 + A^2/2 for run a:
+        history error = sqrt(2) A |sin(phi/2)| / sqrt(mean^2 + A^2/2),
+    2 |sin(phi/2)| for a pure sinusoid (mean = 0): 2 for half a period. The window [2, 3] is
+    one whole period sampled uniformly: the trapezoidal rule integrates these
+    trigonometric polynomials exactly, so the only error is round-off (1e-12)."""
+    a = write_run(mpi_tmp_path / "a", model="string", scale=1.0, t_end=3.0, mean=mean)
+    b = write_run(mpi_tmp_path / "b", model="beam", scale=1.0, t_end=3.0, mean=mean,
+                  phase=phi)
+    res = compare_runs(a, b)
+    h = res["anchors"]["p"]["history_error"]
+    exact = np.sqrt(2.0) * A * abs(np.sin(phi / 2)) / np.sqrt(mean**2 + A**2 / 2)
+    if mean == 0.0:
+        assert exact == pytest.approx(2 * abs(np.sin(phi / 2)), rel=1e-15)
+    assert h["value"] == pytest.approx(exact, rel=1e-12)
+    assert h["interpolated"] is False
+
+
+def test_history_error_interpolates_a_different_output_grid(mpi_tmp_path):
+    """Run b written at 250 samples per period (run a: 600): b is interpolated linearly
+    onto a's times; the interpolation error is at most (W dt_b)^2/8 A = 7.9e-5 A pointwise,
+    so the history error of half a period's shift (2 for a pure sinusoid) is within
+    7.9e-5 A / RMS_a = 1.1e-4 of 2."""
+    a = write_run(mpi_tmp_path / "a", model="string", scale=1.0, t_end=3.0, mean=0.0)
+    b = write_run(mpi_tmp_path / "b", model="beam", scale=1.0, t_end=3.0, mean=0.0,
+                  phase=np.pi, per_period=250)
+    h = compare_runs(a, b)["anchors"]["p"]["history_error"]
+    assert h["interpolated"] is True
+    bound = (W / 250) ** 2 / 8 * A / (A / np.sqrt(2))
+    assert abs(h["value"] - 2.0) < bound
+    assert h["value"] != 2.0  # interpolation did change the samples
+
+
+class _Collect(logging.Handler):
+    def __init__(self):
+        super().__init__(logging.WARNING)
+        self.messages = []
+
+    def emit(self, record):
+        self.messages.append(record.getMessage())
+
+
+@pytest.mark.parametrize("spoil", [None, "moment", "tension"])
+def test_first_row_warning(mpi_tmp_path, spoil):
+    """A run whose first anchors.csv row is not its static state (here: the static moment
+    0.5 against a first row of M0 = 2, or a first-row tension 1.5 times the static 100,
+    what an impulsive start gives) makes compare warn: on the console (rank 0's log) and
+    under compare.json 'warnings'; a clean run (first row = static state) does not. The
+    tolerance (1 % of the larger of the static value and the run's peak) lies between a
+    clean start's difference (0.09 %) and the impulsive starts' (3.6 % and more)."""
+    a = write_run(mpi_tmp_path / "a", model="string", scale=1.0, t_end=3.0)
+    kw = {"moment": {"static_moment": 0.5}, "tension": {"first_tension": 150.0}}.get(spoil, {})
+    b = write_run(mpi_tmp_path / "b", model="beam", scale=1.0, t_end=3.0, **kw)
+    handler = _Collect()
+    logger = logging.getLogger("cablefem.comparecmd")
+    logger.addHandler(handler)
+    try:
+        res = compare_runs(a, b)
+    finally:
+        logger.removeHandler(handler)
+    saved = json.loads((b / "compare.json").read_text())
+    assert saved["warnings"] == res["warnings"]
+    if spoil is None:
+        assert res["warnings"] == []
+        assert not any("start clean" in m for m in handler.messages)
+        return
+    # the moment: b's clamped p only; the tension: b's p and q (both first rows spoiled)
+    names = ["p"] if spoil == "moment" else ["p", "q"]
+    assert [(w["run"], w["anchor"], w["quantity"]) for w in res["warnings"]] == [
+        ("b", n, spoil) for n in names]
+    for w in res["warnings"]:
+        assert w["static"] == (0.5 if spoil == "moment" else 100.0)
+        assert w["first_row"] == (M0 if spoil == "moment" else 150.0)
+        assert "did not start clean" in w["message"]
+        if MPI.COMM_WORLD.rank == 0:  # rank 0 computes and logs
+            assert w["message"] in handler.messages
+    assert "did not start clean" in (b / "compare.md").read_text()
+    assert f"warning: {len(names)} first output row" in format_table(res)

@@ -1,0 +1,155 @@
+"""The start of the dynamics at a moving anchor (cablefem.dynamics.initial_velocity): the
+cable starts from its static state with the quasi-static velocity field of its anchors'
+motion, so the first output row is the static state plus the damping force of that
+quasi-static motion (docs/rod.md, "The rod's start-up") and nothing else: no impulse.
+
+Runs serially and on 2 MPI ranks (every model is built on COMM_WORLD; the anchor forces are
+the same on every rank)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from mpi4py import MPI
+
+from cablefem.beam import BeamModel
+from cablefem.case import load_case, parse_case
+from cablefem.dynamics import integrate
+from cablefem.model import CableModel
+from cablefem.statics import solve_static
+
+DEMOS = Path(__file__).resolve().parents[1] / "demos"
+
+
+def _taut_rod(EA, EI, m, L0, e, beta, A, omega):
+    """A weightless rod of stress-free length L0 clamped along its chord L0 (1 + e) (tension
+    T = EA e), its end q moving across the chord, u = A sin(omega t) e_z; damping beta K0."""
+    return parse_case({
+        "title": "taut rod, end moving across", "section": {"EA": EA, "EI": EI, "mass": m},
+        "gravity": {"g": 0.0}, "geometry": {"length": L0},
+        "damping": {"alpha": 0.0, "beta": beta},
+        "anchors": [{"name": "p", "position": [0, 0, 0], "direction": [1.0, 0, 0]},
+                    {"name": "q", "position": [L0 * (1 + e), 0, 0], "direction": [-1.0, 0, 0],
+                     "motion": {"type": "harmonic", "amplitude": [0, 0, A], "omega": omega}}]})
+
+
+def test_rod_first_rows_are_static_plus_the_quasi_static_damping_force():
+    """Taut weightless rod, end q moving across the chord with velocity v0 = A omega at t = 0.
+
+    Quasi-static start: the rod is at its static state (straight, tension T = EA e, no
+    moment) and moves with the velocity of the clamped-clamped rod under tension whose end
+    q is displaced across the chord. Along the stress-free arc length s (w_s = (1+e) theta,
+    M = EI theta_s, transverse force C constant) theta solves
+    EI theta_ss - (1+e) T theta = -(1+e) C with theta(0) = theta(L0) = 0, so with
+    k^2 = (1+e) T/EI:
+        theta = (C/T) (1 - cosh(k (s - L0/2))/cosh(k L0/2)),
+        delta = (1+e) (C/T) (L0 - (2/k) tanh(k L0/2))      (the end's displacement),
+        M(0) = EI k tanh(k L0/2) C/T.
+    The first row is then the static reaction plus the damping force of that motion,
+    beta K0 v: a transverse force beta C v0/delta and a moment beta M(0) v0/delta at each
+    anchor (opposite forces, equal moments), no change of tension (a transverse motion
+    changes it at second order); the acceleration at t = 0 is 0 (a sine's; beta K0 v and
+    the static residual vanish in the free rows). The old start (rod at rest, its end
+    moving) gave at q a transverse force of 1e3 T, decaying by rho_inf per step.
+
+    Tolerances: the jump to 1e-4 (the rod's shear compliance T/GA = 1e-5; the mesh: the
+    jump is the same to 6 digits at refine 0.5, 1, 2); the other components to 1e-9 T
+    (Newton's tolerances)."""
+    EA, EI, m, L0, e, beta, A, omega = 1e4, 1e-2, 1.0, 1.0, 0.01, 1e-3, 1e-3, 10.0
+    T = EA * e
+    model = BeamModel(_taut_rod(EA, EI, m, L0, e, beta, A, omega), MPI.COMM_WORLD)
+    static = solve_static(model).anchor_forces
+    # the static state: straight, tension T, no moment
+    np.testing.assert_allclose(static[0], [T, 0, 0, 0, 0, 0], atol=1e-9 * T)
+    np.testing.assert_allclose(static[1], [-T, 0, 0, 0, 0, 0], atol=1e-9 * T)
+
+    k = np.sqrt((1 + e) * T / EI)
+    C = T / ((1 + e) * (L0 - 2 / k * np.tanh(k * L0 / 2)))  # transverse force per delta
+    M0 = EI * k * np.tanh(k * L0 / 2) * C / T  # anchor moment per delta
+    v0 = A * omega
+    dt = 0.002
+    rows = [(t, f.copy()) for t, f in integrate(model, 5 * dt, dt, 0.9, 1)]
+    t0, f0 = rows[0]
+    assert t0 == 0.0
+    jump = f0 - static
+    # p is pulled towards +z, q towards -z (the force of the span at the anchor)
+    assert jump[0, 2] == pytest.approx(beta * C * v0, rel=1e-4)
+    assert jump[1, 2] == pytest.approx(-beta * C * v0, rel=1e-4)
+    for i in range(2):
+        assert np.linalg.norm(jump[i, 3:]) == pytest.approx(beta * M0 * v0, rel=1e-4)
+        np.testing.assert_allclose(jump[i, :2], 0.0, atol=1e-9 * T)
+    # both moments turn the same way (the rod's S shape is antisymmetric)
+    assert jump[0, 3:] @ jump[1, 3:] > 0
+    # the next rows follow the motion smoothly: the tension changes at second order in the
+    # end's displacement w <= A omega t, by EA w^2/(2 L0^2) (the chord's stretch) plus
+    # inertia's share, inside EA w^2/L0^2; no component changes by more than twice the
+    # quasi-static increment over a step (stiffness per delta times A omega dt): inertia's
+    # share is inside the factor 2 (the rod's first frequency ~ 31 rad/s, omega = 10)
+    step_force = 2 * C * v0 * dt
+    step_moment = 2 * M0 * v0 * dt
+    prev = f0
+    for t, f in rows[1:]:
+        dT = EA * (A * omega * t / L0) ** 2 + 1e-9 * T
+        assert np.all(np.abs(np.abs(f[:, 0]) - T) < dT)
+        assert np.all(np.abs(f[:, 2] - prev[:, 2]) < step_force)
+        assert np.all(np.linalg.norm(f[:, 3:] - prev[:, 3:], axis=1) < step_moment)
+        prev = f
+
+
+def _static_forces(model, anc, position):
+    """Static anchor forces with ``anc`` moved to ``position`` (the same mesh)."""
+    anc.position = position
+    model.invalidate_time()
+    return solve_static(model).anchor_forces
+
+
+@pytest.mark.parametrize("kind", ["string", "beam"])
+def test_first_row_on_case_a_is_static_plus_damping_of_the_quasi_static_motion(kind):
+    """Case A (anchor q moving along the chord, 2e-4 sin(32.814 t)), string and rod.
+
+    At t = 0 the cable is in its static state and moves quasi-statically with q's
+    velocity v0 = 2e-4 * 32.814: the first row is the static reaction R_s plus the Rayleigh
+    damping force beta K0 v (K0 v is the quasi-static reaction rate, dR/dg v0, computed here
+    by central differences of two static solutions with q moved by -+eps along the chord)
+    plus the mass-proportional part alpha (M v)_anchor - the mass at the anchor moves with
+    v0 -, at most alpha m h1 v0 (h1 the first element), below 1e-8 w l here. So:
+        R(0) = R_s + beta v0 dR/dg        to 1e-3 of the jump + alpha m h1 v0
+    (1e-3: central differences, error (eps dT/dg / T)^2 ~ 1e-7 with eps = 1e-5 l, and the
+    static solutions' Newton tolerance, 1e-10 of the tension, divided by 2 eps). The jump is
+    0.09 % of the tension. The old start (cable at rest, q moving) added beta EA v0/h1: 3.6 %
+    of the tension on the string (h1 = l/30), 230 % on the rod (h1 = l_a/8), and 77 % of
+    the rod's moment at q."""
+    case = load_case(DEMOS / "paper_inplane.toml")
+    model = (BeamModel(case, MPI.COMM_WORLD, refine=0.5) if kind == "beam"
+             else CableModel(case, MPI.COMM_WORLD))
+    q = model.anchors[1]
+    pos0 = q.position.copy()
+    chord = pos0 - model.anchors[0].position
+    chord /= np.linalg.norm(chord)
+    eps = 1e-5
+    plus = _static_forces(model, q, pos0 + eps * chord)
+    minus = _static_forces(model, q, pos0 - eps * chord)
+    static = _static_forces(model, q, pos0)
+    motion = case.anchors[1].motion
+    v0 = float(np.asarray(motion.velocity(0.0)) @ chord)
+    assert v0 == pytest.approx(2e-4 * 32.814, rel=1e-12)
+    damping = case.damping
+    expected = static + damping.beta * v0 * (plus - minus) / (2 * eps)
+    jump = expected - static
+    h_max = float(np.diff(model.geometry.stations).max())  # >= h1
+    slack = damping.alpha * case.section.mass * h_max * v0  # the mass-proportional part
+    dt = case.dynamics.dt
+    t0, f0 = next(iter(integrate(model, dt, dt, case.dynamics.rho_inf, 1)))
+    assert t0 == 0.0
+    T = np.linalg.norm(static[:, :3], axis=1)
+    assert np.all(np.linalg.norm(jump[:, :3], axis=1) > 5e-4 * T)  # a jump is tested
+    for i in range(2):
+        tol = 1e-3 * np.linalg.norm(jump[i, :3]) + slack
+        np.testing.assert_allclose(f0[i, :3], expected[i, :3], rtol=0, atol=tol)
+        if kind == "beam":  # the moment, jump ~ -beta v0 M/(2 T) dT/dg: 4e-4 M
+            # (the clamp does not turn: the rotation rows carry no mass-proportional part)
+            Mj = np.linalg.norm(jump[i, 3:])
+            assert Mj > 1e-4 * np.linalg.norm(static[i, 3:])
+            np.testing.assert_allclose(f0[i, 3:], expected[i, 3:], rtol=0, atol=1e-3 * Mj)
