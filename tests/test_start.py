@@ -25,14 +25,15 @@ DEMOS = Path(__file__).resolve().parents[1] / "demos"
 
 def _taut_rod(EA, EI, m, L0, e, beta, A, omega):
     """A weightless rod of stress-free length L0 clamped along its chord L0 (1 + e) (tension
-    T = EA e), its end q moving across the chord, u = A sin(omega t) e_z; damping beta K0."""
+    T = EA e), its end q moving across the chord, u = A sin(omega t) e_z; damping beta K_t (= K0 at the static state, t = 0)."""
     return parse_case({
         "title": "taut rod, end moving across", "section": {"EA": EA, "EI": EI, "mass": m},
         "gravity": {"g": 0.0}, "geometry": {"length": L0},
         "damping": {"alpha": 0.0, "beta": beta},
         "anchors": [{"name": "p", "position": [0, 0, 0], "direction": [1.0, 0, 0]},
                     {"name": "q", "position": [L0 * (1 + e), 0, 0], "direction": [-1.0, 0, 0],
-                     "motion": {"type": "harmonic", "amplitude": [0, 0, A], "omega": omega}}]})
+                     "motion": {"type": "harmonic", "amplitude": [0, 0, A], "omega": omega,
+                                "ramp": 0.0}}]})  # a velocity jump at t = 0, tested
 
 
 def test_rod_first_rows_are_static_plus_the_quasi_static_damping_force():
