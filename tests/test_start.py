@@ -25,7 +25,8 @@ DEMOS = Path(__file__).resolve().parents[1] / "demos"
 
 def _taut_rod(EA, EI, m, L0, e, beta, A, omega):
     """A weightless rod of stress-free length L0 clamped along its chord L0 (1 + e) (tension
-    T = EA e), its end q moving across the chord, u = A sin(omega t) e_z; damping beta K_t (= K0 at the static state, t = 0)."""
+    T = EA e), its end q moving across the chord, u = A sin(omega t) e_z; damping beta K_t
+    (= K0 at the static state, where the start is)."""
     return parse_case({
         "title": "taut rod, end moving across", "section": {"EA": EA, "EI": EI, "mass": m},
         "gravity": {"g": 0.0}, "geometry": {"length": L0},
