@@ -25,7 +25,7 @@ from slepc4py import SLEPc
 
 from .petsc_utils import case_options, default_options, lu_options
 
-__all__ = ["ModalResult", "solve_modes", "classify_mode"]
+__all__ = ["ModalResult", "solve_modes", "classify_mode", "free_dofs"]
 
 log = logging.getLogger(__name__)
 
@@ -67,6 +67,17 @@ def classify_mode(stations: np.ndarray, shape: np.ndarray, chord: np.ndarray,
         elif corr < -0.5:
             out["symmetry"] = "antisymmetric"
     return out
+
+
+def free_dofs(model) -> int:
+    """Number of degrees of freedom not fixed by the model's Dirichlet conditions (global,
+    collective): how many natural modes there are at most."""
+    x = fpetsc.create_vector(model.f_static)
+    x.set(1.0)
+    fpetsc.set_bc(x, model.bcs, scale=0.0)  # the fixed entries become 0 * g = 0
+    n = x.sum()
+    x.destroy()
+    return int(round(n))
 
 
 def solve_modes(model, n: int = 6) -> ModalResult:
