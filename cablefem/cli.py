@@ -5,8 +5,11 @@ Exit codes: 0 success; 1 a solve failed (the files written so far are valid and
 problem before any expensive work, without a traceback; 3 with ``--strict``, the run finished
 but warned (its warnings are listed under ``warnings`` in ``summary.json``); 128 + the
 signal's number (130 for
-Ctrl-C, 143 for SIGTERM) when a run was stopped by a signal: every file is valid and
-``cablefem run --restart DIR`` continues it from its last checkpoint.
+Ctrl-C, 143 for SIGTERM) when a run was stopped by a signal: in the dynamics every file is
+valid and ``cablefem run --restart DIR`` continues it from its last checkpoint; before them
+(build, statics, modes) there is nothing to resume. The output folder is checked (a
+writable directory) and locked against a second run before any work (exit 2 otherwise);
+see docs/running.md.
 
 PETSc options go after the other arguments, e.g. ``cablefem run case.toml --output out
 -cable_ts_type alpha2 -cable_snes_monitor``; every solver has the ``cable_`` prefix

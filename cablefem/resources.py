@@ -30,13 +30,31 @@ __all__ = ["BASE_BYTES", "BYTES_PER_ELEMENT", "SAFETY", "estimate_memory", "chec
 
 log = logging.getLogger(__name__)
 
-BASE_BYTES = 140e6  #: per rank: interpreter, dolfinx, PETSc, compiled forms
+BASE_BYTES = 139e6  #: per rank: interpreter, dolfinx, PETSc, compiled forms
 BYTES_PER_ELEMENT = 4.73e3  #: measured on one rank, see the module's docstring
 SAFETY = 1.5
 
-#: below this many degrees of freedom per rank, a second rank costs more in communication
-#: than it gains (see :func:`note_small_problem`)
-MIN_DOFS_PER_RANK = 20_000
+#: below this many degrees of freedom per rank, more ranks cost more in communication than
+#: they gain. Time per step of the dynamics (level cable, 50 steps, summary.json's
+#: wall_time) on the development machine (2 cores, shared: load 1.2-2.6 from other work,
+#: so +-20 % noise), 1 rank -> 2 ranks:
+#:
+#: ======  ==========  ===================  ==============
+#: dofs    per rank    ms/step 1 -> 2       2 ranks
+#: ======  ==========  ===================  ==============
+#:    198          99  2.8 -> 3.3, 3.8      1.2-1.4 x slower (demos/fan.toml)
+#:  6 003       3 002  9.8 -> 13.9          1.4 x slower
+#: 15 003       7 502  18.7 -> 71.2         3.8 x slower
+#: 30 003      15 002  45.5 -> 37.4         1.2 x faster
+#: 60 003      30 002  67.8 -> 62.9         1.08 x faster
+#: 120 003     60 002  200 -> 393, 144 -> 324  2-2.2 x slower (*)
+#: ======  ==========  ===================  ==============
+#:
+#: (*) with the other work using the second core: on this machine a second rank pays off
+#: only when a core is free, and then little. Hence the note below about 10 000 per rank,
+#: where a second rank did not pay off in any measurement; above it the note stays silent
+#: (whether a rank pays off there depends on the machine, not on the problem alone).
+MIN_DOFS_PER_RANK = 10_000
 
 
 def estimate_memory(elements: int, ranks: int = 1) -> float:
