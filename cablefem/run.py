@@ -26,9 +26,9 @@ from .log import Progress
 from .modal import free_dofs, solve_modes
 from .model import CableModel
 from .netmodel import NetworkModel
-from .resources import note_small_problem
 from .post import (ANCHOR_COLUMNS, MAX_ANCHOR_ANGLE, MOMENT_COLUMNS, anchor_moments,
                    composite_field)
+from .resources import note_small_problem
 from .statics import solve_static
 
 __all__ = ["RunResult", "RunError", "RunInterrupted", "run_case", "steady_state_stats", "warn",
@@ -366,9 +366,10 @@ def run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, **
             if stop.signal is None:
                 raise
             raise RunInterrupted(
-                f"stopped by {signal.Signals(stop.signal).name} before the dynamics "
-                f"(nothing to resume: run again); {outdir} holds no complete result",
-                stop.signal) from err
+                f"stopped by {signal.Signals(stop.signal).name} outside the time integration "
+                f"(build, statics, modes or the final output): {outdir} holds no complete "
+                "result; run again ('--restart' continues from a checkpoint of the "
+                "dynamics only)", stop.signal) from err
 
 
 class _Stopped(BaseException):
