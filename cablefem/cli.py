@@ -5,8 +5,11 @@ Exit codes: 0 success; 1 a solve failed (the files written so far are valid and
 problem before any expensive work, without a traceback; 3 with ``--strict``, the run finished
 but warned (its warnings are listed under ``warnings`` in ``summary.json``); 128 + the
 signal's number (130 for
-Ctrl-C, 143 for SIGTERM) when a run was stopped by a signal: every file is valid and
-``cablefem run --restart DIR`` continues it from its last checkpoint.
+Ctrl-C, 143 for SIGTERM) when a run was stopped by a signal: in the dynamics every file is
+valid and ``cablefem run --restart DIR`` continues it from its last checkpoint; before them
+(build, statics, modes) there is nothing to resume. The output folder is checked (a
+writable directory) and locked against a second run before any work (exit 2 otherwise);
+see docs/running.md.
 
 PETSc options go after the other arguments, e.g. ``cablefem run case.toml --output out
 -cable_ts_type alpha2 -cable_snes_monitor``; every solver has the ``cable_`` prefix
@@ -95,11 +98,25 @@ def _parser() -> argparse.ArgumentParser:
                        help="override solver.outer_correction")
 
     post = sub.add_parser("post", help="anchor moments from another solver's anchor forces",
+                          formatter_class=argparse.RawDescriptionHelpFormatter,
                           description="Apply the inner (boundary-layer) solution to "
-                          "anchor-force histories from any string solver: a CSV with columns "
-                          "time, anchor, Nx, Ny, Nz (force of the span at the anchor, into the "
-                          "span), one row per time and anchor; anchor names as in the case.")
+                          "anchor-force histories from any string solver.\n\n"
+                          "CSV: columns time, anchor, Nx, Ny, Nz (others ignored), one row "
+                          "per time and anchor;\nanchor names as in the case. Sign "
+                          "convention: N is the force that the SPAN exerts on\nthe ANCHOR, "
+                          "i.e. the cable tension times the unit tangent pointing from the\n"
+                          "anchor into the span (what 'cablefem run' writes). Solvers that "
+                          "export the\nreaction, the force of the anchor on the cable, "
+                          "give the opposite sign: use\n--sign anchor (multiplies N by -1). "
+                          "A force pointing more than 90 degrees away\nfrom the clamp "
+                          "direction is no boundary layer the method describes: such rows\n"
+                          "get valid = 0; when most rows of an anchor are like that, the "
+                          "file is refused\n(exit 2). See docs/post.md.")
     post.add_argument("forces", type=Path, help="anchor-force CSV")
+    post.add_argument("--sign", choices=["span", "anchor"], default="span",
+                      help="whose force the CSV holds: 'span' (default), the force of the "
+                           "span on the anchor, pointing into the span; 'anchor', the force "
+                           "of the anchor on the cable (a reaction): flipped before use")
     post.add_argument("--case", type=Path, required=True, help="case file (TOML)")
     post.add_argument("--output", "-o", type=Path, required=True, help="output folder")
     post.add_argument("--moment-form", choices=["exact", "explicit"], default="exact")
@@ -195,7 +212,10 @@ def main(argv: list[str] | None = None) -> int:
     traceback) and exit code 1."""
     try:
         return _main(argv)
-    except (KeyboardInterrupt, SystemExit):
+    except KeyboardInterrupt:  # outside a run's own handling (e.g. while reading input)
+        sys.stderr.write("cablefem: interrupted (SIGINT)\n")
+        return 128 + 2
+    except SystemExit:
         raise
     except Exception as err:  # noqa: BLE001 - the last guard of the command line
         import os
@@ -274,26 +294,36 @@ def _main(argv: list[str] | None = None) -> int:
         return _input_error(f"--n must be >= 1, got {args.n}")
 
     from .log import setup_logging
+    from .outdir import OutdirError, output_lock
 
     setup_logging(logging.WARNING if args.quiet else logging.INFO)
     if args.command == "fatigue":
         from .fatiguecmd import run_fatigue
 
+        if not (args.rundir / "anchors.csv").is_file():
+            return _input_error(f"{args.rundir}: no anchors.csv there (not a run folder)")
+        if case.fatigue is None:  # before the output folder is touched
+            sys.stderr.write(f"{case.source}: fatigue: the case has no [fatigue] table "
+                             "(detail_category, ...): see 'cablefem keys'\n")
+            return EXIT_INPUT
         try:
-            run_fatigue(case, args.rundir, args.output, window=args.window,
-                        invalid=args.invalid)
+            with output_lock(args.output or args.rundir):
+                run_fatigue(case, args.rundir, args.output, window=args.window,
+                            invalid=args.invalid)
         except CaseError as err:
             sys.stderr.write(str(err) + "\n")
             return EXIT_INPUT
-        except ValueError as err:
+        except ValueError as err:  # OutdirError included
             return _input_error(str(err))
         return EXIT_OK
     if args.command == "post":
         from .postcmd import run_post
 
         try:
-            run_post(case, args.forces, args.output, form=args.moment_form)
-        except ValueError as err:
+            with output_lock(args.output):
+                run_post(case, args.forces, args.output, form=args.moment_form,
+                         sign=args.sign)
+        except ValueError as err:  # OutdirError included
             return _input_error(str(err))
         return EXIT_OK
 
@@ -313,6 +343,8 @@ def _main(argv: list[str] | None = None) -> int:
     except CaseError as err:
         sys.stderr.write(str(err) + "\n")
         return EXIT_INPUT
+    except OutdirError as err:
+        return _input_error(str(err))
     except (RunError, StaticError) as err:
         sys.stderr.write(f"cablefem: run failed: {err}\n")
         return EXIT_FAILED

@@ -34,17 +34,26 @@ def _stress_section(spec, section) -> StressSection:
     return StressSection.solid_circle(section.diameter)
 
 
-def _anchor_sections(case: Case, rundir: Path, names: list[str]) -> dict:
+def _anchor_sections(case: Case, rundir: Path, names: list[str],
+                     given: dict[str, str] | None = None) -> dict:
     """The Section of every anchor: the case's for a single cable; for a network the one
-    that the run's summary.json names for the anchor."""
+    named for the anchor by ``given`` (anchor -> section name; a run that is still writing
+    its summary passes them) or else by the run's summary.json."""
     if case.network is None:
         return {n: case.section for n in names}
-    import json
+    if given is None:
+        import json
 
-    summary = json.loads((rundir / "summary.json").read_text())
+        path = rundir / "summary.json"
+        try:
+            given = {n: e.get("section") for n, e in
+                     json.loads(path.read_text()).get("anchors", {}).items()}
+        except (OSError, ValueError) as err:
+            raise ValueError(f"{path}: cannot read the anchors' sections of the network "
+                             f"run ({err})") from None
     out = {}
     for n in names:
-        sec = summary.get("anchors", {}).get(n, {}).get("section")
+        sec = given.get(n)
         if sec not in case.network.sections:
             raise ValueError(f"{rundir}/summary.json names no known section for anchor {n}")
         out[n] = case.network.sections[sec]
@@ -67,7 +76,8 @@ def fatigue_window(case: Case, rule: str) -> tuple[str | tuple[float, float] | N
 
 def run_fatigue(case: Case, rundir: Path, outdir: Path | None = None, *,
                 window: str | None = None, invalid: str = "raise",
-                comm: MPI.Comm = MPI.COMM_WORLD) -> dict:
+                comm: MPI.Comm = MPI.COMM_WORLD, sections: dict[str, str] | None = None
+                ) -> dict:
     """Fatigue reports of every clamped anchor in ``rundir/anchors.csv``; rank 0 computes
     and writes, the reports are returned on every rank. Raises CaseError without a
     ``[fatigue]`` table and ValueError on bad data (invalid samples with
@@ -75,7 +85,8 @@ def run_fatigue(case: Case, rundir: Path, outdir: Path | None = None, *,
 
     ``window`` (default ``fatigue.window``): 'after_startup' from the end of the anchor
     motions' start-up (:func:`cablefem.case.startup_time`), 'all' or 'steady'; every
-    report says which under ``window_rule``."""
+    report says which under ``window_rule``.
+    ``sections``: a network's anchor -> section name (default: from rundir/summary.json)."""
     spec = case.fatigue
     if spec is None:
         raise CaseError([("fatigue", "the case has no [fatigue] table (detail_category, ...): "
@@ -96,7 +107,7 @@ def run_fatigue(case: Case, rundir: Path, outdir: Path | None = None, *,
                                      f"anchors {missing}")
             else:  # network anchors are "group:k"
                 clamped = [n for n in data if n.split(":")[0] in groups]
-            sections = _anchor_sections(case, Path(rundir), clamped)
+            sections = _anchor_sections(case, Path(rundir), clamped, sections)
             win, rule = fatigue_window(case, window or spec.window)
             t_last = max((float(data[n]["time"][-1]) for n in clamped), default=0.0)
             if isinstance(win, tuple) and win[0] >= t_last:

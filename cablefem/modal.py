@@ -26,7 +26,7 @@ from slepc4py import SLEPc
 from .units import unit
 from .petsc_utils import case_options, default_options, lu_options
 
-__all__ = ["ModalResult", "solve_modes", "classify_mode"]
+__all__ = ["ModalResult", "solve_modes", "classify_mode", "free_dofs"]
 
 log = logging.getLogger(__name__)
 
@@ -91,6 +91,17 @@ def classify_network_mode(points: np.ndarray, shape: np.ndarray) -> dict:
 def _label_text(lab: dict) -> str:
     parts = [lab[k] for k in ("plane", "symmetry") if k in lab]
     return (" " + " ".join(parts)) if parts else ""
+
+
+def free_dofs(model) -> int:
+    """Number of degrees of freedom not fixed by the model's Dirichlet conditions (global,
+    collective): how many natural modes there are at most."""
+    x = fpetsc.create_vector(model.f_static)
+    x.set(1.0)
+    fpetsc.set_bc(x, model.bcs, scale=0.0)  # the fixed entries become 0 * g = 0
+    n = x.sum()
+    x.destroy()
+    return int(round(n))
 
 
 def solve_modes(model, n: int = 6) -> ModalResult:

@@ -10,6 +10,7 @@ residual and call :meth:`CableModel.compile` again before solving.
 from __future__ import annotations
 
 import logging
+import time
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -147,10 +148,13 @@ class CableModel:
         self.weight = sec.mass * case.gravity.g  # N/m
         self.tension_only = case.solver.tension_only
 
+        self._t_build = time.perf_counter()
         self.geometry, self.initial_shape = self._build_geometry()
         self.length = self.geometry.length
+        self._phase(f"mesh of {len(self.geometry.stations) - 1} elements")
         self.mesh = create_line_mesh(comm, self.geometry.points, self.geometry.cells)
         self.mesh.topology.create_connectivity(0, 1)
+        self._phase("function spaces")
         with quiet_compiler():  # the elements are JIT-compiled on first use
             self.V = self._space()
             self.W = fem.FunctionSpace(self.mesh, ("DG", 0))
@@ -186,10 +190,22 @@ class CableModel:
                                 case.source) from None
         self.bcs = self._make_bcs()
         self._point_tags()
+        self._phase("forms")
         self.build_forms()
         self.compile()
+        self._phase("node map")
         self._nodal_map()
         self.set_time(0.0)
+        self._phase("model ready")
+
+    #: from this many nodes on, the build logs each of its phases (a build of 1e5 elements
+    #: takes seconds, of 1e6 about a minute on one core)
+    LOG_PHASES_FROM = 100_000
+
+    def _phase(self, what: str) -> None:
+        """Log a build phase of a large problem (rank 0), with the time so far."""
+        if len(self.geometry.stations) >= self.LOG_PHASES_FROM:
+            log.info("build: %s (%.1f s)", what, time.perf_counter() - self._t_build)
 
     bs = 3  #: components per node
     is_beam = False

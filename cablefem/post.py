@@ -11,8 +11,13 @@ from any string solver. For a clamped anchor at every time (``docs/theory.md``
 
 ``moment`` is the magnitude of that vector and ``Mx, My, Mz`` its components (internal
 moment in the anchor's direction of travel, into the span); ``moment_layer`` is the layer's
-term alone. Slack or invalid anchors get ``valid = 0`` and empty moment fields, never a
-silent zero.
+term alone. Slack anchors get ``valid = 0`` and empty moment fields, never a silent zero;
+rows outside the method's range (layer too long, not quasi-static, or a force more than
+90 degrees from the clamp direction, :data:`MAX_ANCHOR_ANGLE`) get ``valid = 0`` with their
+numbers kept, and :func:`anchor_moments` says why in ``invalid_reason``.
+
+Sign convention of the forces: ``N`` is the force of the span on the anchor, i.e. the
+tension times the unit tangent from the anchor into the span (``docs/post.md``).
 """
 
 from __future__ import annotations
@@ -25,10 +30,16 @@ import numpy as np
 
 from . import asymptotics
 
-__all__ = ["ANCHOR_COLUMNS", "MOMENT_COLUMNS", "anchor_moments", "read_anchor_forces",
-           "AnchorHistory"]
+__all__ = ["ANCHOR_COLUMNS", "MOMENT_COLUMNS", "MAX_ANCHOR_ANGLE", "anchor_moments",
+           "read_anchor_forces", "AnchorHistory"]
 
 ANCHOR_COLUMNS = ["time", "anchor", "Nx", "Ny", "Nz", "tension"]
+#: Largest angle Delta between the clamp direction and the anchor force that the layer
+#: describes. The clamp turns the cable by Delta within the layer; beyond 90 degrees the
+#: cable would leave the clamp backwards, which no taut cable does: such a force has the
+#: wrong sign (the anchor's reaction instead of the span's force) or comes from a
+#: mis-oriented clamp.
+MAX_ANCHOR_ANGLE = np.pi / 2
 MOMENT_COLUMNS = ["delta", "moment", "Mx", "My", "Mz", "psi0", "layer_length",
                   "moment_layer", "valid"]
 
@@ -37,6 +48,9 @@ def anchor_moments(forces: np.ndarray, direction: np.ndarray, EI: float, EA: flo
                    mass: float, accel: np.ndarray, load: np.ndarray, length: float,
                    omega: float | None = None, form: str = "exact") -> dict[str, np.ndarray]:
     """Anchor moment columns for one clamped anchor over ``n`` times.
+
+    Rows with ``delta`` above :data:`MAX_ANCHOR_ANGLE` are invalid; ``invalid_reason``
+    (n,) says why a row is invalid ("" when valid).
 
     Parameters
     ----------
@@ -54,10 +68,20 @@ def anchor_moments(forces: np.ndarray, direction: np.ndarray, EI: float, EA: flo
     with np.errstate(invalid="ignore"):
         M = lay.moment_vector + EI * kap
     M = np.where(lay.slack[:, None], np.nan, M)
+    with np.errstate(invalid="ignore"):
+        backwards = lay.delta > MAX_ANCHOR_ANGLE  # NaN (slack) compares False
+        long_ = lay.length_ratio > asymptotics.MAX_LENGTH_RATIO
+        dynamic = lay.period_ratio > asymptotics.MAX_PERIOD_RATIO
+    valid = lay.valid & ~backwards
+    reason = np.select(
+        [lay.slack, backwards, ~lay.valid & long_, ~lay.valid & dynamic, ~lay.valid],
+        ["slack", "force more than 90 deg from the clamp direction", "layer too long",
+         "layer not quasi-static", "undefined layer"], default="")
     return {"delta": lay.delta, "moment": np.linalg.norm(M, axis=1), "Mx": M[:, 0],
             "My": M[:, 1], "Mz": M[:, 2], "psi0": lay.psi0, "layer_length": lay.layer_length,
-            "moment_layer": lay.moment, "valid": lay.valid.astype(int),
-            "tension": lay.tension, "normal": lay.normal, "slack": lay.slack}
+            "moment_layer": lay.moment, "valid": valid.astype(int),
+            "invalid_reason": reason, "tension": lay.tension, "normal": lay.normal,
+            "slack": lay.slack}
 
 
 @dataclass

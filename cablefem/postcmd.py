@@ -19,7 +19,8 @@ from . import __version__, catenary
 from .case import Case
 from .io import AnchorCSV, write_json
 from .plots import anchor_figures
-from .post import ANCHOR_COLUMNS, MOMENT_COLUMNS, anchor_moments, read_anchor_forces
+from .post import (ANCHOR_COLUMNS, MAX_ANCHOR_ANGLE, MOMENT_COLUMNS, anchor_moments,
+                   read_anchor_forces)
 from .run import _max_excitation, steady_state_stats
 
 __all__ = ["run_post", "case_length"]
@@ -43,14 +44,30 @@ def case_length(case: Case) -> float:
     return catenary.length_for_sag_ratio(span, rise, geo.value, w, case.section.EA)
 
 
+#: an anchor is refused when more than this share of its (non-slack) rows has the force
+#: more than 90 degrees from the clamp direction: then the file's sign convention is wrong,
+#: not a few samples (``docs/post.md``)
+MAX_BACKWARDS_SHARE = 0.5
+
+
 def run_post(case: Case, forces_csv: Path, outdir: Path, form: str = "exact",
-             comm: MPI.Comm = MPI.COMM_WORLD) -> dict:
-    """Post-process ``forces_csv`` with ``case``; raises ValueError on bad input."""
+             comm: MPI.Comm = MPI.COMM_WORLD, sign: str = "span") -> dict:
+    """Post-process ``forces_csv`` with ``case``; raises ValueError on bad input.
+
+    ``sign``: "span" when the CSV holds the force of the span on the anchor (pointing into
+    the span, what ``cablefem run`` writes), "anchor" when it holds the force of the anchor
+    on the cable (flipped here). An anchor most of whose rows have the force more than 90
+    degrees from its clamp direction is refused (ValueError naming the convention and
+    ``--sign``); single such rows are kept with ``valid = 0``."""
     t0 = time.perf_counter()
+    if sign not in ("span", "anchor"):
+        raise ValueError(f"sign must be 'span' or 'anchor', got {sign!r}")
     if case.network is not None:
         raise ValueError(f"{case.source}: 'cablefem post' takes single-cable cases; for a "
                          "network, its anchor forces come from 'cablefem run'")
     hist = read_anchor_forces(forces_csv)
+    if sign == "anchor":
+        hist.forces = {k: -v for k, v in hist.forces.items()}
     names = [a.name for a in case.anchors]
     unknown = sorted(set(hist.forces) - set(names))
     if unknown:
@@ -75,11 +92,30 @@ def run_post(case: Case, forces_csv: Path, outdir: Path, form: str = "exact",
                          for t in times])
         res = anchor_moments(hist.forces[a.name], a.direction, sec.EI, sec.EA, sec.mass, acc,
                              load, length, omega, form)
+        backwards = res["delta"] > MAX_ANCHOR_ANGLE
+        taut = ~res["slack"]
+        if np.count_nonzero(backwards) > MAX_BACKWARDS_SHARE * max(np.count_nonzero(taut), 1):
+            other = "anchor" if sign == "span" else "span"
+            raise ValueError(
+                f"{forces_csv}: anchor '{a.name}': {np.count_nonzero(backwards)} of "
+                f"{np.count_nonzero(taut)} rows have the force more than 90 degrees from the "
+                f"clamp direction (median angle "
+                f"{np.degrees(np.median(res['delta'][taut])):.1f} deg): the CSV must hold the "
+                "force of the span on the anchor (tension times the tangent into the span)"
+                + (f"; if it holds the anchor's reaction, run again with --sign {other}"
+                   if sign == "span" else f"; --sign anchor flipped it: try --sign {other}"))
         moments[a.name] = {k: res[k] for k in MOMENT_COLUMNS}
+        reasons, counts = np.unique(res["invalid_reason"][res["invalid_reason"] != ""],
+                                    return_counts=True)
         summary_anchors[a.name] = {
-            "first_moment": float(res["moment"][0]),
+            # the first row is the static state when the history starts at rest, as a run's
+            # anchors.csv does: the name 'cablefem run' gives it
+            "static_moment": float(res["moment"][0]),
             "valid_fraction": float(np.mean(res["valid"])),
+            "invalid_rows": {str(r): int(c) for r, c in zip(reasons, counts)},
             "steady_state_moment": steady_state_stats(times, res["moment"])}
+        for r, c in zip(reasons, counts):
+            log.warning("anchor %s: %d of %d rows invalid: %s", a.name, c, times.size, r)
     cols = ANCHOR_COLUMNS + MOMENT_COLUMNS
     with AnchorCSV(outdir / "anchors.csv", cols, comm) as out:
         rows = []
@@ -94,7 +130,7 @@ def run_post(case: Case, forces_csv: Path, outdir: Path, form: str = "exact",
     figs = (anchor_figures(outdir, times, moments, comm, units=case.units)
             if moments and times.size > 1 else [])
     summary = {"cablefem": __version__, "status": "completed", "command": "post",
-               "forces": str(forces_csv), "case": case.to_dict(), "length": length,
+               "forces": str(forces_csv), "sign": sign, "case": case.to_dict(), "length": length,
                "anchors": summary_anchors, "figures": figs,
                "wall_time": {"total": time.perf_counter() - t0}}
     write_json(outdir / "summary.json", summary, comm)

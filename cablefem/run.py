@@ -23,11 +23,13 @@ from .checkpoint import (case_digest, read_checkpoint, truncate_csv, write_check
 from .dynamics import DynamicsError, DynamicsStats, Interrupted, integrate
 from .io import AnchorCSV, MomentsWriter, StringWriter, write_json, write_modes
 from .log import Progress, quiet_compiler
+from .modal import free_dofs, solve_modes
 from .units import unit
-from .modal import solve_modes
 from .model import CableModel
 from .netmodel import NetworkModel
-from .post import ANCHOR_COLUMNS, MOMENT_COLUMNS, anchor_moments, composite_field
+from .post import (ANCHOR_COLUMNS, MAX_ANCHOR_ANGLE, MOMENT_COLUMNS, anchor_moments,
+                   composite_field)
+from .resources import note_small_problem
 from .statics import solve_static
 
 __all__ = ["RunResult", "RunError", "RunInterrupted", "run_case", "steady_state_stats", "warn",
@@ -343,10 +345,63 @@ class _Emitter:
 
 def run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, **kwargs
              ) -> RunResult:
-    """Run a case (see :func:`_run_case` for the arguments), the compiler's messages kept
-    off the console (:func:`cablefem.log.quiet_compiler`)."""
-    with quiet_compiler():
-        return _run_case(case, outdir, comm, **kwargs)
+    """Run a case (see :func:`_run_case` for the keywords and what is written), the C
+    compiler's messages kept off the console (:func:`cablefem.log.quiet_compiler`).
+
+    Before any work (collective): the memory estimate (:func:`cablefem.resources.
+    check_memory`, CaseError naming ``mesh.elements``) and the output folder's check and
+    lock (:func:`cablefem.outdir.output_lock`, OutdirError), held until the run ends.
+    SIGINT/SIGTERM stop the run at any time with :class:`RunInterrupted`: cleanly, with a
+    checkpoint, in the dynamics; before them (build, statics, modes) as soon as Python
+    code runs again after the C call in progress, with nothing to resume.
+    """
+    from .outdir import output_lock
+    from .resources import check_memory
+
+    check_memory(case, comm, kwargs.get("model", "string"))
+    with output_lock(outdir, comm), _StopOnSignal() as stop:
+        try:
+            with quiet_compiler():  # no compiler lines on the console
+                return _run_case(case, outdir, comm, **kwargs)
+        except (RunInterrupted, CaseError):
+            raise
+        except BaseException as err:  # noqa: BLE001 - a signal may surface as any error
+            if stop.signal is None:
+                raise
+            raise RunInterrupted(
+                f"stopped by {signal.Signals(stop.signal).name} outside the time integration "
+                f"(build, statics, modes or the final output): {outdir} holds no complete "
+                "result; run again ('--restart' continues from a checkpoint of the "
+                "dynamics only)", stop.signal) from err
+
+
+class _Stopped(BaseException):
+    """Raised by the signal handler of :class:`_StopOnSignal` (not an Exception: no
+    ``except Exception`` on the way up swallows it)."""
+
+
+class _StopOnSignal:
+    """SIGINT/SIGTERM raise :class:`_Stopped` in the main thread (remembering the signal)
+    until the dynamics put their own checkpointing handlers in place."""
+
+    def __init__(self) -> None:
+        self.signal: int | None = None
+        self._old: dict = {}
+
+    def _handler(self, signum, frame):  # noqa: ARG002 - signal API
+        self.signal = signum
+        raise _Stopped(signum)
+
+    def __enter__(self):
+        if threading.current_thread() is threading.main_thread():
+            self._old = {sig: signal.signal(sig, self._handler)
+                         for sig in (signal.SIGINT, signal.SIGTERM)}
+        return self
+
+    def __exit__(self, *exc):
+        for sig, old in self._old.items():
+            signal.signal(sig, old)
+        return False
 
 
 def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *,
@@ -406,6 +461,11 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
                                case.anchors[e].name: ell
                                for e, ell in model.layer_lengths.items()},
                            **model.section_values}
+    note = note_small_problem(summary["degrees_of_freedom"], comm)
+    if note:
+        summary["notes"] = [note]
+    if summary["elements"] >= model.LOG_PHASES_FROM:
+        log.info("statics: %d degrees of freedom", summary["degrees_of_freedom"])
     static = solve_static(model)
     r = model.gather_nodal(model.u)
     sag = None
@@ -427,6 +487,12 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
         summary["static"]["virtual_hinges"] = model.hinges.report()
 
     n_modes = case.modal.modes if modes is None else modes
+    free = free_dofs(model)
+    if n_modes and n_modes > free:
+        warn(summary, "modal.modes", f"{n_modes} modes asked for, but the model has "
+             f"{free} free degrees of freedom: " + (f"computing {free}" if free else
+                                                     "no modes computed"))
+        n_modes = free
     if n_modes:
         modal = solve_modes(model, n_modes)
         write_modes(model, modal, outdir / "modes.xdmf")
@@ -560,6 +626,13 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
         if a.name in moments and len(times):
             mo = moments[a.name]
             entry["valid_fraction"] = float(np.mean(mo["valid"]))
+            with np.errstate(invalid="ignore"):
+                backwards = int(np.count_nonzero(mo["delta"] > MAX_ANCHOR_ANGLE))
+            if backwards:
+                entry["rows_beyond_90deg"] = backwards
+                warn(summary, f"anchors.{a.name}", f"{backwards} of {len(times)} rows have "
+                     "the anchor force more than 90 degrees from the clamp direction: "
+                     "outside the method, valid = 0 (check anchors.direction)")
             if len(times) > 1:
                 entry["steady_state_moment"] = steady_state_stats(times, mo["moment"])
         summary["anchors"][a.name] = entry
@@ -575,23 +648,34 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
         if len(moments) > MAX_PANELS:
             log.info("figures: the %d most loaded of %d clamped anchors (all are in "
                      "anchors.csv)", MAX_PANELS, len(moments))
-    if case.fatigue is not None and len(times) > 1 and moments:
+    if case.fatigue is not None and error is None and not (len(times) > 1 and moments):
+        warn(summary, "fatigue", "no fatigue report: it needs a time history at a clamped "
+             "anchor (" + ("no clamped anchor" if not moments else "no dynamics run") + ")")
+    elif case.fatigue is not None and error is None:
         from .fatiguecmd import run_fatigue
 
         try:  # samples without a moment (slack anchor) are left out and counted
-            reps = run_fatigue(case, outdir, invalid="drop", comm=comm)
+            # the anchors' sections from this summary: summary.json is not written yet
+            reps = run_fatigue(case, outdir, invalid="drop", comm=comm,
+                               sections={n: e.get("section")
+                                         for n, e in summary["anchors"].items()})
             summary["fatigue"] = {n: {k: r.get(k) for k in (
                 "damage", "time_to_failure", "equivalent_range_N_C", "max_range",
                 "dropped_invalid_samples")} for n, r in reps.items()}
-        except ValueError as err:
-            log.error("fatigue: %s", err)
+        except ValueError as err:  # a step the case asks for failed: so did the run
+            error = RunError(f"fatigue: {err}")
+            log.error("%s", error)
             summary["fatigue"] = {"error": str(err)}
+            summary["status"] = "failed"
+            summary["error"] = str(error)
     summary["wall_time"]["total"] = time.perf_counter() - wall0
     write_json(outdir / "summary.json", summary, comm)
     log.info("results in %s (%.2f s)", outdir, summary["wall_time"]["total"])
     result = RunResult(summary, times, forces, moments, model)
     if isinstance(error, Interrupted):
         raise RunInterrupted(summary["error"], stop["signal"]) from error
+    if isinstance(error, RunError):
+        raise error
     if error is not None:
         raise RunError(f"{error} -- results up to t = {times[-1] if times.size else 0:g} "
                        f"are in {outdir}") from error
