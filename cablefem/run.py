@@ -541,10 +541,11 @@ def run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *,
         summary["status"] = "interrupted"
         summary["signal"] = int(sig) if sig is not None else None
         ck_time = _checkpoint_time(outdir, comm)
-        summary["error"] = (f"{err}; resume with: cablefem run --restart {outdir}"
-                            + (f" (continues from the checkpoint at t = {ck_time:g})"
-                               if ck_time is not None else " (no checkpoint yet: it will "
-                               "start again)"))
+        summary["error"] = (f"{err}; resume with: cablefem run --restart {outdir} "
+                            f"(continues from the checkpoint at t = {ck_time:g})"
+                            if ck_time is not None else
+                            f"{err} before the first checkpoint: nothing to resume, run the "
+                            "case again")
         log.warning("%s", summary["error"])
     except (DynamicsError, FloatingPointError) as err:
         error = err
