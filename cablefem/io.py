@@ -117,6 +117,7 @@ class Series:
         self.dir.mkdir(parents=True, exist_ok=True)
         self.n_points, self.n_cells = len(points), len(cells)
         tmp = self.dir / "mesh.h5.tmp"
+        tmp.unlink(missing_ok=True)  # a killed run's: never open an HDF5 file it had open
         with h5py.File(tmp, "w") as f:
             f["points"] = points
             f["cells"] = cells
@@ -404,12 +405,16 @@ _RUN_PATTERNS = (re.compile(r"string(_restart)?\d{6}\.pvtu"),
                  re.compile(r"string(_restart)?_p\d+_\d{6}\.vtu"))
 
 
+#: the temporary files of the atomic writes (temporary file, then rename) of a run
+_TEMPORARIES = ("summary.json.tmp", "anchors.csv.tmp", "checkpoint.npz.tmp.npz",
+                "string.xdmf.tmp", "moments.xdmf.tmp")
+
+
 def remove_temporaries(outdir: Path, comm: MPI.Comm = MPI.COMM_WORLD) -> None:
     """Remove the temporary files a killed run left (rank 0; collective)."""
-    if comm.rank == 0 and Path(outdir).is_dir():
-        for f in Path(outdir).iterdir():
-            if f.is_file() and (f.name.endswith(".tmp") or f.name.endswith(".tmp.npz")):
-                f.unlink()
+    if comm.rank == 0:
+        for name in _TEMPORARIES:
+            (Path(outdir) / name).unlink(missing_ok=True)
     comm.Barrier()
 
 
