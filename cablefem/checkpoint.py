@@ -3,26 +3,30 @@
 Every ``dynamics.checkpoint_every`` steps the state (nodal displacement and velocity in
 station order, time, step, the step-cutting state) goes to ``checkpoint.npz``, written by
 rank 0 to a temporary file and renamed (never half written), after ``anchors.csv`` has been
-flushed. ``cablefem run --restart DIR`` rebuilds the model from the same case file (its
-SHA-256 must match), truncates ``anchors.csv`` to the checkpoint's time, appends to
-``string.xdmf``, rewrites ``moments.xdmf`` up to the checkpoint, and continues; the result
-equals an uninterrupted run to round-off (see :func:`cablefem.dynamics.integrate`).
+flushed and the field series (``string.xdmf``, ``moments.xdmf``) have closed their current
+part and listed it (:class:`cablefem.io.Series`); it also holds the run's cumulative
+counters and the number of frames of each series. ``cablefem run --restart DIR`` rebuilds
+the model from the same case file (its SHA-256 must match), truncates ``anchors.csv`` to
+the checkpoint's time, keeps the series' frames up to it (and checks their number),
+discards whatever a kill left after it, and continues; the result equals an uninterrupted
+run to round-off (see :func:`cablefem.dynamics.integrate`), whether the run stopped on a
+signal or was killed at any instant.
 """
 
 from __future__ import annotations
 
 import hashlib
 import os
-import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import numpy as np
 from mpi4py import MPI
 
 from .dynamics import Checkpoint
+from .faults import kill_point
 
 __all__ = ["CHECKPOINT", "case_digest", "write_checkpoint", "read_checkpoint",
-           "truncate_csv", "xdmf_times"]
+           "truncate_csv", "run_status"]
 
 CHECKPOINT = "checkpoint.npz"
 
@@ -42,6 +46,7 @@ def write_checkpoint(model, outdir: Path, ck: Checkpoint, digest: str, extra: di
         tmp = Path(outdir) / (CHECKPOINT + ".tmp.npz")
         np.savez(tmp, u=u, v=v, time=ck.time, step=ck.step, level=ck.level, calm=ck.calm,
                  layers=ck.layers, digest=digest, case=str(model.case.source), **extra)
+        kill_point("checkpoint")
         os.replace(tmp, Path(outdir) / CHECKPOINT)
     model.comm.Barrier()
 
@@ -63,6 +68,22 @@ def read_checkpoint(outdir: Path, comm: MPI.Comm = MPI.COMM_WORLD) -> dict:
     return data
 
 
+def run_status(outdir: Path, comm: MPI.Comm = MPI.COMM_WORLD) -> dict:
+    """The ``status`` and ``dynamics.t_end`` of the run in ``outdir`` from its
+    ``summary.json`` (``{}`` when there is none or it is unreadable); same on every rank."""
+    out = None
+    if comm.rank == 0:
+        import json
+
+        try:
+            s = json.loads((Path(outdir) / "summary.json").read_text())
+            out = {"status": s.get("status"),
+                   "t_end": (s.get("dynamics") or {}).get("t_end")}
+        except (OSError, ValueError):
+            out = {}
+    return comm.bcast(out, root=0)
+
+
 def truncate_csv(path: Path, t_max: float, comm: MPI.Comm = MPI.COMM_WORLD) -> None:
     """Keep the header and the complete rows with ``time <= t_max`` (rank 0)."""
     if comm.rank == 0 and Path(path).is_file():
@@ -82,17 +103,3 @@ def truncate_csv(path: Path, t_max: float, comm: MPI.Comm = MPI.COMM_WORLD) -> N
         tmp.write_text("\n".join(keep) + "\n")
         os.replace(tmp, path)
     comm.Barrier()
-
-
-def xdmf_times(path: Path) -> list[float]:
-    """Time values of the first temporal collection of an XDMF file ([] if none)."""
-    if not Path(path).is_file():
-        return []
-    try:
-        root = ET.parse(path).getroot()
-    except ET.ParseError:
-        return []
-    for grid in root.iter("Grid"):
-        if grid.get("CollectionType") == "Temporal":
-            return [float(t.get("Value")) for t in grid.iter("Time")]
-    return []

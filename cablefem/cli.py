@@ -261,6 +261,14 @@ def _main(argv: list[str] | None = None) -> int:
                 return _input_error(str(err))
             if args.output is not None and args.output.resolve() != args.restart.resolve():
                 return _input_error("--output must be the --restart folder (or omitted)")
+            from .checkpoint import run_status
+
+            done = run_status(args.restart)
+            if done.get("status") == "completed":
+                return _input_error(
+                    f"{args.restart}: the run is complete (t_end = {done.get('t_end')} s): "
+                    "nothing to restart; for a longer run, start a new one with a larger "
+                    "--t-end")
             args.output = args.restart
             args.case = args.case or Path(str(ck["case"]))
             for key, default in (("model", "string"), ("refine", 1.0),

@@ -27,6 +27,7 @@ from __future__ import annotations
 import logging
 import time
 from collections.abc import Iterator
+from decimal import Decimal
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -41,7 +42,7 @@ from .petsc_utils import (SNESHistory, assemble_jacobian_rows, assemble_residual
                           linear_solver_options, lu_options)
 
 __all__ = ["Checkpoint", "DynamicsError", "DynamicsStats", "Interrupted", "integrate",
-           "initial_velocity"]
+           "initial_velocity", "grid_time"]
 
 log = logging.getLogger(__name__)
 
@@ -82,6 +83,13 @@ class DynamicsStats:
     linear_iterations: int = 0
     wall_time: float = 0.0
     output_times: list[float] = field(default_factory=list)
+
+
+def grid_time(step: int, dt: float) -> float:
+    """Time of point ``step`` of the nominal grid: ``step x dt`` computed exactly in decimal
+    from ``dt`` as written (0.005 -> 0.06 at step 12, not 0.060000000000000005), then
+    rounded once to the nearest double."""
+    return float(Decimal(repr(float(dt))) * step)
 
 
 _TS_REASONS = {-1: "Newton failed (TS_DIVERGED_NONLINEAR_SOLVE)",
@@ -259,7 +267,8 @@ def integrate(model, t_end: float, dt: float, rho_inf: float = 0.9, output_every
     level = 0 if start is None else start.level  # nominal steps split in 4**level
     calm = 0 if start is None else start.calm  # nominal steps without failure at level
     while t < t_end - eps_t:
-        t_start, t_next = t, min(t + dt, t_end)  # one step of the nominal grid
+        # one step of the nominal grid, its end step x dt (no round-off accumulated)
+        t_start, t_next = t, min(grid_time(step + 1, dt), t_end)
         if t_end - t_next < 1e-6 * dt:  # the sum of many dt falls short of t_end by
             t_next = t_end  # round-off: no extra step of ~1e-11 s (its velocity jump at a
             # moving anchor gave forces of 1e6 N in the last row)

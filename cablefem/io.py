@@ -1,14 +1,18 @@
-"""Output: XDMF for ParaView, CSV histories and the JSON summary, MPI-correct.
+"""Output: XDMF time series for ParaView, CSV histories and the JSON summary, MPI-correct.
 
-* ``string.xdmf`` (+ ``.h5``): displacement, velocity (P1, point data), tension and strain
-  (DG0, cell data) over time, written collectively by dolfinx (each function a grid of its
-  own, which ParaView shows as separate blocks), and the same fields as one dataset per
-  time in ``string.pvd`` (+ ``.vtu``/``.pvtu``), the file to open in ParaView. The mesh is
-  the reference; apply *Warp By Vector* with ``displacement`` to see the cable move.
-* ``moments.xdmf`` (+ ``.h5``): the composite curvature and bending moment on a line mesh of
-  its own, graded towards the clamped anchors, written by rank 0 with meshio from gathered
-  data. Points are the static deformed positions; ``displacement`` moves them to the
-  current ones (*Warp By Vector* again).
+Every output survives a kill at any instant: what a killed run leaves is either complete or
+discarded by ``cablefem run --restart`` (``docs/outputs.md``).
+
+* ``string.xdmf``: the string's fields over time, one grid per time holding every field
+  (ParaView shows one dataset per time): ``displacement`` (from the stress-free reference,
+  which is the mesh), ``dynamic_displacement`` (from the static state), ``velocity`` (point
+  data), ``tension``, ``strain`` (cell data), and a rod's extra fields. Gathered to rank 0
+  and written there with h5py, see :class:`Series`.
+* ``moments.xdmf``: the composite curvature and bending moment on a line mesh of its own,
+  graded towards the clamped anchors (rank 0). Its points are the static deformed
+  positions; ``dynamic_displacement`` moves them to the current ones.
+* ``series/<name>/``: the heavy data of both: ``mesh.h5`` and one ``part-NNNN.h5`` per
+  checkpoint interval.
 * ``anchors.csv``: one row per output time and anchor, written by rank 0 and flushed at
   every row, so that an interrupted run keeps what it computed.
 * ``summary.json``: written atomically (temporary file, then rename) by rank 0.
@@ -20,15 +24,25 @@ import json
 import math
 import os
 import re
+import shutil
+import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import numpy as np
-from dolfinx import fem
-from dolfinx.io import VTKFile, XDMFFile
+from dolfinx.io import XDMFFile
 from mpi4py import MPI
 
-__all__ = ["StringWriter", "AnchorCSV", "MomentsWriter", "write_json", "write_modes",
-           "jsonable"]
+from .faults import kill_point
+
+__all__ = ["StringWriter", "AnchorCSV", "MomentsWriter", "Series", "OutputError",
+           "write_json", "write_modes", "jsonable", "clean_outputs", "remove_temporaries",
+           "SERIES"]
+
+SERIES = "series"  #: the folder of the series' HDF5 data, under the output folder
+
+
+class OutputError(RuntimeError):
+    """An output cannot be written or resumed (e.g. frames of a run to resume are lost)."""
 
 
 def jsonable(obj):
@@ -61,56 +75,239 @@ def write_json(path: Path, data: dict, comm: MPI.Comm = MPI.COMM_WORLD) -> None:
     comm.Barrier()
 
 
-class StringWriter:
-    """``string.xdmf``: the string's fields over time (collective)."""
+class Series:
+    """A time series of fields on a fixed line mesh: ``<name>.xdmf`` and its data under
+    ``series/<name>/`` (``mesh.h5``, ``part-NNNN.h5``), written by rank 0 with h5py.
 
-    def __init__(self, model, path: Path, append_after: float | None = None) -> None:
-        """``append_after``: resume an existing file, skipping times up to that one (they
-        are in the file already)."""
+    Built to survive a kill at any instant: the frames go to a part file, which is closed
+    and a new one started at every checkpoint (:meth:`checkpoint`), and the XDMF file (one
+    grid per time with every field, XML of our own) is replaced atomically at every
+    checkpoint and at :meth:`close`. A kill can only damage the part written after the last
+    checkpoint, which the XDMF file does not list yet. Resuming (``resume_after``) keeps the
+    XDMF file's frames up to that time (there must be ``expected_frames`` of them: a lost
+    frame is an error, never silent), deletes every part they do not use, and continues in
+    a new part. All methods are collective; only rank 0 holds data.
+    """
+
+    def __init__(self, outdir: Path, name: str, points: np.ndarray | None,
+                 cells: np.ndarray | None, comm: MPI.Comm = MPI.COMM_WORLD,
+                 resume_after: float | None = None, expected_frames: int | None = None):
+        self.comm = comm
+        self.name = name
+        self.xdmf = Path(outdir) / f"{name}.xdmf"
+        self.rel = f"{SERIES}/{name}"
+        self.dir = Path(outdir) / SERIES / name
+        self.grids: list[ET.Element] = []
+        self.h5 = None
+        self.part = 0
+        error = None
+        if comm.rank == 0:
+            try:
+                self._setup(np.asarray(points, float), np.asarray(cells, np.int64),
+                            resume_after, expected_frames)
+            except (OSError, ValueError, ET.ParseError) as err:
+                error = f"{self.xdmf}: {err}"
+        error = comm.bcast(error, root=0)
+        if error is not None:
+            raise OutputError(error)
+
+    def _setup(self, points, cells, resume_after, expected_frames) -> None:
+        import h5py
+
+        self.dir.mkdir(parents=True, exist_ok=True)
+        self.n_points, self.n_cells = len(points), len(cells)
+        tmp = self.dir / "mesh.h5.tmp"
+        tmp.unlink(missing_ok=True)  # a killed run's: never open an HDF5 file it had open
+        with h5py.File(tmp, "w") as f:
+            f["points"] = points
+            f["cells"] = cells
+        os.replace(tmp, self.dir / "mesh.h5")
+        if resume_after is not None:
+            self.grids = _frames_until(self.xdmf, resume_after)
+            if expected_frames is not None and len(self.grids) != expected_frames:
+                raise ValueError(f"{len(self.grids)} frames up to t = {resume_after:g} s, "
+                                 f"the checkpoint says {expected_frames}: frames were lost")
+        used = {item.text.strip().split(":")[0].rsplit("/", 1)[-1]
+                for grid in self.grids for item in grid.iter("DataItem")}
+        for f in self.dir.iterdir():  # parts of a replaced or killed run
+            if f.name.startswith("part-") and f.name not in used:
+                f.unlink()
+        nums = [int(n[5:9]) for n in used if n.startswith("part-")]
+        self.part = max(nums) + 1 if nums else 0
+        self._write_xml()
+
+    @property
+    def frames(self) -> int:
+        """Frames written (rank 0; 0 elsewhere)."""
+        return len(self.grids)
+
+    def write(self, t: float, point_data: dict, cell_data: dict | None = None) -> None:
+        """Append a frame (rank 0's arrays; the other ranks pass anything)."""
+        if self.comm.rank != 0:
+            return
+        import h5py
+
+        if self.h5 is None:
+            self.h5 = h5py.File(self.dir / f"part-{self.part:04d}.h5", "w")
+        k = len(self.grids)
+        group = self.h5.create_group(f"f{k:06d}")
+        grid = ET.Element("Grid", Name=f"{self.name}-{k}", GridType="Uniform")
+        top = ET.SubElement(grid, "Topology", TopologyType="Polyline", NodesPerElement="2",
+                            NumberOfElements=str(self.n_cells))
+        _item(top, (self.n_cells, 2), "Int", f"{self.rel}/mesh.h5:/cells")
+        geo = ET.SubElement(grid, "Geometry", GeometryType="XYZ")
+        _item(geo, (self.n_points, 3), "Float", f"{self.rel}/mesh.h5:/points")
+        ET.SubElement(grid, "Time", Value=repr(float(t)))
+        first = True
+        for center, data in (("Node", point_data), ("Cell", cell_data or {})):
+            for key, arr in data.items():
+                arr = np.ascontiguousarray(arr, dtype=np.float64)
+                group.create_dataset(key, data=arr)
+                if first:
+                    kill_point(f"frame-{self.name}")
+                    first = False
+                kind = "Scalar" if arr.ndim == 1 else ("Vector" if arr.shape[1] == 3
+                                                       else "Matrix")
+                att = ET.SubElement(grid, "Attribute", Name=key, AttributeType=kind,
+                                    Center=center)
+                _item(att, arr.shape, "Float",
+                      f"{self.rel}/part-{self.part:04d}.h5:/f{k:06d}/{key}")
+        self.grids.append(grid)
+
+    def checkpoint(self) -> None:
+        """Close the current part (the next frame starts a new one) and rewrite the XDMF
+        file: everything written so far is complete and listed."""
+        if self.comm.rank == 0:
+            if self.h5 is not None:
+                self.h5.close()
+                self.h5 = None
+                self.part += 1
+            self._write_xml()
+
+    def close(self) -> None:
+        self.checkpoint()
+
+    def _write_xml(self) -> None:
+        root = ET.Element("Xdmf", Version="3.0")
+        coll = ET.SubElement(ET.SubElement(root, "Domain"), "Grid", Name=self.name,
+                             GridType="Collection", CollectionType="Temporal")
+        coll.extend(self.grids)
+        ET.indent(root)
+        tmp = self.xdmf.with_name(self.xdmf.name + ".tmp")
+        with open(tmp, "wb") as fh:
+            fh.write(b'<?xml version="1.0"?>\n')
+            ET.ElementTree(root).write(fh)
+            fh.write(b"\n")
+        kill_point("xml")
+        os.replace(tmp, self.xdmf)
+
+
+def _item(parent: ET.Element, shape, kind: str, ref: str) -> None:
+    item = ET.SubElement(parent, "DataItem", Dimensions=" ".join(map(str, shape)),
+                         NumberType=kind, Precision="8", Format="HDF")
+    item.text = ref
+
+
+def _frames_until(path: Path, t_max: float) -> list[ET.Element]:
+    """The grids of a :class:`Series`' XDMF file with ``time <= t_max``."""
+    if not path.is_file():
+        raise ValueError("no such file: the run to resume did not write it")
+    root = ET.parse(path).getroot()
+    coll = next((g for g in root.iter("Grid") if g.get("CollectionType") == "Temporal"),
+                None)
+    if coll is None:
+        raise ValueError("not a time series written by cablefem")
+    out = []
+    for grid in coll.findall("Grid"):
+        if float(grid.find("Time").get("Value")) <= t_max * (1 + 1e-12) + 1e-300:
+            out.append(grid)
+    return out
+
+
+class StringWriter:
+    """``string.xdmf``: the string's fields over time (collective; see :class:`Series`).
+
+    The fields are gathered to rank 0 in the order of the reference geometry's nodes and
+    cells (the mesh's input order), whatever the partition."""
+
+    def __init__(self, model, outdir: Path, resume_after: float | None = None,
+                 expected_frames: int | None = None) -> None:
         self.model = model
-        self.skip_until = append_after
-        if append_after is not None and Path(path).is_file():
-            self.file = XDMFFile(model.comm, str(path), "a")
-        else:
-            self.file = XDMFFile(model.comm, str(path), "w")
-            self.file.write_mesh(model.mesh)
-        # the same fields as one dataset per time (ParaView shows the XDMF's functions as
-        # separate blocks): string.pvd, or string_restart.pvd when a run is resumed
-        pvd = Path(path).with_suffix(".pvd")
-        if append_after is not None:
-            pvd = pvd.with_name(pvd.stem + "_restart.pvd")
-        self.vtk = VTKFile(model.comm, str(pvd), "w")
-        self._pvd = pvd
-        self._vtk_count = 0
+        geo = model.geometry
+        self._maps: dict = {}
+        self.static = model.gather_nodal(model.u_static)
+        self.series = Series(outdir, "string", geo.points, geo.cells, model.comm,
+                             resume_after, expected_frames)
+
+    def _gather(self, f) -> np.ndarray | None:
+        """``f`` (P1 or DG0, any block size) at the reference nodes or cells, on rank 0."""
+        m = self.model
+        S = f.function_space
+        key = id(S)
+        if key not in self._maps:
+            from scipy.spatial import cKDTree
+
+            geo = m.geometry
+            cellwise = S.ufl_element().degree() == 0
+            targets = (0.5 * (geo.points[geo.cells[:, 0]] + geo.points[geo.cells[:, 1]])
+                       if cellwise else geo.points)
+            n_owned = S.dofmap.index_map.size_local
+            xyz = S.tabulate_dof_coordinates()[:n_owned]
+            dist, idx = cKDTree(targets).query(xyz)
+            scale = max(1.0, float(np.max(np.abs(geo.points))))
+            ok = not (dist.size and dist.max() > 1e-8 * scale)
+            allidx = m.comm.gather(idx, root=0)
+            if m.comm.rank == 0:
+                allidx = np.concatenate(allidx)
+                ok = ok and allidx.size == len(targets) and \
+                    np.unique(allidx).size == len(targets)
+            if not m.comm.allreduce(ok, op=MPI.LAND):
+                raise OutputError(f"could not map the dofs of {f.name} to the mesh's "
+                                  f"{'cells' if cellwise else 'nodes'}")
+            self._maps[key] = (idx, n_owned, S.dofmap.index_map_bs, len(targets))
+        idx, n_owned, bs, n = self._maps[key]
+        parts = m.comm.gather((idx, f.x.array[: bs * n_owned].reshape(-1, bs).copy()),
+                              root=0)
+        if m.comm.rank != 0:
+            return None
+        out = np.empty((n, bs))
+        for i, vals in parts:
+            out[i] = vals
+        return out[:, 0] if bs == 1 else out
 
     def write(self, t: float) -> None:
         m = self.model
-        if self.skip_until is not None and t <= self.skip_until * (1 + 1e-12) + 1e-300:
-            return
         fields = m.output_fields()
-        for f in fields:
-            if not np.all(np.isfinite(f.x.array)):
-                raise FloatingPointError(f"non-finite {f.name} at t = {t:g}: not written")
-        for f in fields:
-            self.file.write_function(f, t)
-        self.vtk.write_function(fields, t)
-        # dolfinx 0.5.2 lists each rank's .vtu once per function in the .pvtu: ParaView
-        # would load as many overlapping copies; keep one entry per piece
-        m.comm.Barrier()
+        values = {f.name: self._gather(f) for f in fields}
+        bad = None
         if m.comm.rank == 0:
-            _dedupe_pieces(self._pvd.with_name(f"{self._pvd.stem}{self._vtk_count:06d}.pvtu"))
-        self._vtk_count += 1
+            bad = next((k for k, v in values.items() if not np.all(np.isfinite(v))), None)
+        bad = m.comm.bcast(bad, root=0)
+        if bad is not None:
+            raise FloatingPointError(f"non-finite {bad} at t = {t:g}: not written")
+        point, cell = {}, {}
+        for f in fields:
+            (cell if f.function_space.ufl_element().degree() == 0 else point)[f.name] = \
+                values[f.name]
+            if f.name == "displacement" and m.comm.rank == 0:
+                point["dynamic_displacement"] = values[f.name] - self.static
+        self.series.write(t, point, cell)
+
+    @property
+    def frames(self) -> int:
+        return self.series.frames
+
+    def checkpoint(self) -> None:
+        self.series.checkpoint()
 
     def close(self) -> None:
-        self.file.close()
-        self.vtk.close()
+        self.series.close()
 
     def __enter__(self):
         return self
 
     def __exit__(self, *exc):
         self.close()
-
 
 class AnchorCSV:
     """``anchors.csv``, one row per output time and anchor (rank 0 writes; others no-op)."""
@@ -158,112 +355,80 @@ def _cell(v) -> str:
 
 
 class MomentsWriter:
-    """``moments.xdmf``: composite curvature and moment on a line mesh of its own (rank 0)."""
+    """``moments.xdmf``: composite curvature and moment on a line mesh of its own (data on
+    rank 0; collective, see :class:`Series`). The mesh's points are the static deformed
+    positions; ``dynamic_displacement`` moves them to the current ones."""
 
-    def __init__(self, path: Path, points: np.ndarray, comm: MPI.Comm = MPI.COMM_WORLD,
-                 keep_until: float | None = None, cells: np.ndarray | None = None):
-        """``keep_until``: resume, keeping the frames of an existing file up to that time."""
+    def __init__(self, outdir: Path, points: np.ndarray, comm: MPI.Comm = MPI.COMM_WORLD,
+                 resume_after: float | None = None, expected_frames: int | None = None,
+                 cells: np.ndarray | None = None):
+        self.comm = comm
         self.points0 = np.asarray(points, float)
-        self.writer = None
-        old = _read_frames(path, keep_until) if comm.rank == 0 and keep_until is not None \
-            else []
-        if comm.rank == 0:
-            import meshio
-
-            path = Path(path).resolve()
-            self.writer = meshio.xdmf.TimeSeriesWriter(path)
-            cwd = os.getcwd()
-            os.chdir(path.parent)  # meshio opens "<stem>.h5" in the current folder
-            try:
-                self.writer.__enter__()
-            finally:
-                os.chdir(cwd)
-            n = len(points)
-            if cells is None:  # one polyline through all points
-                cells = np.column_stack([np.arange(n - 1), np.arange(1, n)])
-            self.writer.write_points_cells(self.points0, [("line", np.asarray(cells))])
-            for t, data in old:
-                self.writer.write_data(t, point_data=data)
+        n = len(self.points0)
+        if cells is None:  # one polyline through all points
+            cells = np.column_stack([np.arange(n - 1), np.arange(1, n)])
+        self.series = Series(outdir, "moments", self.points0, cells, comm, resume_after,
+                             expected_frames)
 
     def write(self, t: float, positions: np.ndarray, curvature: np.ndarray,
               moment: np.ndarray, stations: np.ndarray) -> None:
-        if self.writer is None:
-            return
-        data = {"displacement": positions - self.points0, "curvature": curvature,
-                "moment": moment, "moment_magnitude": np.linalg.norm(moment, axis=1),
-                "s": stations}
-        for k, v in data.items():
-            if not np.all(np.isfinite(v)):
-                raise FloatingPointError(f"non-finite composite {k} at t = {t:g}")
-        self.writer.write_data(t, point_data=data)
+        bad = None
+        if self.comm.rank == 0:
+            data = {"dynamic_displacement": positions - self.points0, "curvature": curvature,
+                    "moment": moment, "moment_magnitude": np.linalg.norm(moment, axis=1),
+                    "s": stations}
+            bad = next((k for k, v in data.items() if not np.all(np.isfinite(v))), None)
+        bad = self.comm.bcast(bad, root=0)
+        if bad is not None:
+            raise FloatingPointError(f"non-finite composite {bad} at t = {t:g}")
+        if self.comm.rank == 0:
+            self.series.write(t, data)
 
-    def dump(self) -> None:
-        """Make the file readable as it is now (XML written, HDF5 flushed): checkpoints."""
-        if self.writer is not None:
-            import meshio
+    @property
+    def frames(self) -> int:
+        return self.series.frames
 
-            self.writer.h5_file.flush()
-            meshio.xdmf.time_series.write_xml(self.writer.filename, self.writer.xdmf_file)
-            _patch_polyline(self.writer.filename)
+    def checkpoint(self) -> None:
+        self.series.checkpoint()
 
     def close(self) -> None:
-        if self.writer is not None:
-            self.writer.__exit__(None, None, None)
-            _patch_polyline(self.writer.filename)
-            self.writer = None
+        self.series.close()
 
 
-def _dedupe_pieces(path: Path) -> None:
-    """Remove repeated ``<Piece Source=...>`` lines of a .pvtu file (atomically)."""
-    if not path.is_file():
-        return
-    seen, out = set(), []
-    for line in path.read_text().splitlines(keepends=True):
-        if "<Piece " in line:
-            if line.strip() in seen:
-                continue
-            seen.add(line.strip())
-        out.append(line)
-    tmp = path.with_suffix(".pvtu.tmp")
-    tmp.write_text("".join(out))
-    os.replace(tmp, path)
+#: what a run writes into its folder, removed before a new (not resumed) run: the current
+#: layout and the one before it (string.pvd, one .pvtu/.vtu per frame, string.h5, ...)
+_RUN_OUTPUTS = ("summary.json", "anchors.csv", "string.xdmf", "string.h5", "moments.xdmf",
+                "moments.h5", "modes.xdmf", "modes.h5", "checkpoint.npz", "string.pvd",
+                "string_restart.pvd", "anchor_moments.png", "anchor_polar.png",
+                "fatigue.json", "fatigue.md", "fatigue_histogram.png")
+_RUN_PATTERNS = (re.compile(r"string(_restart)?\d{6}\.pvtu"),
+                 re.compile(r"string(_restart)?_p\d+_\d{6}\.vtu"))
 
 
-def _patch_polyline(path: Path) -> None:
-    """meshio writes line cells as a ``Polyline`` topology without ``NodesPerElement``;
-    ParaView's XDMF3 reader aborts on that: add ``NodesPerElement="2"``."""
-    path = Path(path)
-    text = path.read_text()
-    fixed = re.sub(r'TopologyType="Polyline"(?![^>]*NodesPerElement)',
-                   'TopologyType="Polyline" NodesPerElement="2"', text)
-    if fixed != text:
-        tmp = path.with_suffix(path.suffix + ".tmp")
-        tmp.write_text(fixed)
-        os.replace(tmp, path)
+#: the temporary files of the atomic writes (temporary file, then rename) of a run
+_TEMPORARIES = ("summary.json.tmp", "anchors.csv.tmp", "checkpoint.npz.tmp.npz",
+                "string.xdmf.tmp", "moments.xdmf.tmp")
 
 
-def _read_frames(path: Path, t_max: float) -> list[tuple[float, dict]]:
-    """The frames of a meshio XDMF time series up to ``t_max`` (unreadable file: none)."""
-    import meshio
+def remove_temporaries(outdir: Path, comm: MPI.Comm = MPI.COMM_WORLD) -> None:
+    """Remove the temporary files a killed run left (rank 0; collective)."""
+    if comm.rank == 0:
+        for name in _TEMPORARIES:
+            (Path(outdir) / name).unlink(missing_ok=True)
+    comm.Barrier()
 
-    frames = []
-    if not Path(path).is_file():
-        return frames
-    cwd = os.getcwd()
-    try:
-        os.chdir(Path(path).resolve().parent)
-        with meshio.xdmf.TimeSeriesReader(Path(path).name) as reader:
-            reader.read_points_cells()
-            for k in range(reader.num_steps):
-                t, data, _ = reader.read_data(k)
-                if t <= t_max * (1 + 1e-12) + 1e-300:
-                    frames.append((t, {key: np.array(v) for key, v in data.items()}))
-    except Exception:  # noqa: BLE001 - a file cut off by a kill: start it again
-        frames = []
-    finally:
-        os.chdir(cwd)
-    return frames
 
+def clean_outputs(outdir: Path, comm: MPI.Comm = MPI.COMM_WORLD) -> None:
+    """Remove the outputs of an earlier run from ``outdir`` (rank 0; collective), so that
+    a new run leaves no stale frame, checkpoint or figure. Other files are left alone."""
+    if comm.rank == 0 and Path(outdir).is_dir():
+        outdir = Path(outdir)
+        shutil.rmtree(outdir / SERIES, ignore_errors=True)
+        for f in outdir.iterdir():
+            if f.is_file() and (f.name in _RUN_OUTPUTS or
+                                any(p.fullmatch(f.name) for p in _RUN_PATTERNS)):
+                f.unlink()
+    remove_temporaries(outdir, comm)
 
 def write_modes(model, modal, path: Path) -> None:
     """Mode shapes to XDMF; mode ``i`` is stored at "time" ``i`` (ParaView's time slider)."""

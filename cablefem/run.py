@@ -18,10 +18,11 @@ from mpi4py import MPI
 from . import __version__, asymptotics
 from .case import Case
 from .case import CaseError, check_table_ends
-from .checkpoint import (case_digest, read_checkpoint, truncate_csv, write_checkpoint,
-                         xdmf_times)
+from .checkpoint import case_digest, read_checkpoint, truncate_csv, write_checkpoint
 from .dynamics import DynamicsError, DynamicsStats, Interrupted, integrate
-from .io import AnchorCSV, MomentsWriter, StringWriter, write_json, write_modes
+from .faults import kill_point
+from .io import (AnchorCSV, MomentsWriter, OutputError, StringWriter, clean_outputs,
+                 remove_temporaries, write_json, write_modes)
 from .log import Progress, quiet_compiler
 from .modal import free_dofs, solve_modes
 from .units import unit
@@ -122,9 +123,11 @@ class _Emitter:
     FLUSH_ROWS = 256
 
     def __init__(self, model: CableModel, outdir: Path, form: str, omega: float | None,
-                 static_forces: np.ndarray, resume_after: float | None = None):
+                 static_forces: np.ndarray, resume_after: float | None = None,
+                 frames: dict | None = None):
         """``resume_after``: continue the files of an earlier run after that time
-        (``anchors.csv`` already truncated to it)."""
+        (``anchors.csv`` already truncated to it); ``frames``: the number of frames of each
+        series up to then (``"string"``, ``"moments"``), from the checkpoint."""
         self.model = model
         self.outdir = outdir
         self.form = form
@@ -143,10 +146,8 @@ class _Emitter:
             a.name: {k: [] for k in MOMENT_COLUMNS} for a in self.clamped}
         if resume_after is not None:
             self._load_history(outdir / "anchors.csv")
-        skip = None
-        if resume_after is not None:  # frames after the checkpoint may be there already
-            skip = max([resume_after] + xdmf_times(outdir / "string.xdmf"))
-        self.string = StringWriter(model, outdir / "string.xdmf", append_after=skip)
+        frames = frames or {}
+        self.string = StringWriter(model, outdir, resume_after, frames.get("string"))
         self.csv = AnchorCSV(outdir / "anchors.csv", cols, model.comm,
                              append=resume_after is not None)
         self._pending = 0
@@ -170,6 +171,15 @@ class _Emitter:
                 pts = np.column_stack([np.interp(self.stations, model.geometry.stations,
                                                  r[:, k]) for k in range(3)])
             self.points0 = model.comm.bcast(pts, root=0)
+        if self.stations is not None:
+            cells = None
+            if self.network:  # one polyline per clamped anchor
+                offs = np.cumsum([0] + [s.size for s in self.sigmas[:-1]])
+                cells = np.concatenate([np.column_stack([np.arange(s.size - 1),
+                                                         np.arange(1, s.size)]) + off
+                                        for s, off in zip(self.sigmas, offs)])
+            self.moments = MomentsWriter(outdir, self.points0, model.comm, resume_after,
+                                         frames.get("moments"), cells=cells)
 
     def _load_history(self, path: Path) -> None:
         """Histories written before a restart (rank 0 reads, all ranks get them)."""
@@ -292,16 +302,6 @@ class _Emitter:
         layers = {c.name: self._moments(c, np.array([t]), forces[idx[c.name]][None, :])
                   for c in self.clamped}
         if self.network:
-            if self.moments is None:
-                cells = np.concatenate([np.column_stack([np.arange(s.size - 1),
-                                                         np.arange(1, s.size)]) + off
-                                        for s, off in zip(self.sigmas, np.cumsum(
-                                            [0] + [s.size for s in self.sigmas[:-1]]))])
-                self.moments = MomentsWriter(self.outdir / "moments.xdmf", self.points0,
-                                             m.comm, keep_until=self.resume_after,
-                                             cells=cells)
-            if self.resume_after is not None and t <= self.resume_after * (1 + 1e-12):
-                return
             pos, kap, mom = self._segments(t, forces, layers)
             self.moments.write(t, pos, kap, mom, self.stations)
             return
@@ -316,11 +316,6 @@ class _Emitter:
                                        self.load_at(t), self.stations, s_a, deltas,
                                        get("layer_length"), np.nan_to_num(get("normal")),
                                        m.tension_only)
-        if self.moments is None:
-            self.moments = MomentsWriter(self.outdir / "moments.xdmf", self.points0, m.comm,
-                                         keep_until=self.resume_after)
-        if self.resume_after is not None and t <= self.resume_after * (1 + 1e-12):
-            return  # already in the file
         self.moments.write(t, pos, kap, None if kap is None else self.EI * kap,
                            self.stations)
 
@@ -328,10 +323,15 @@ class _Emitter:
         u = self.model.gather_nodal(self.model.u)
         return None if u is None else self.model.geometry.points + u
 
-    def dump(self) -> None:
-        """Make every output readable as it is now (at checkpoints)."""
+    def checkpoint(self) -> dict:
+        """Make every output complete and listed as it is now (at checkpoints); the number
+        of frames of each series (rank 0's), for the checkpoint."""
+        self.flush()
+        self.string.checkpoint()
         if self.moments is not None:
-            self.moments.dump()
+            self.moments.checkpoint()
+        return {"string": self.string.frames,
+                "moments": self.moments.frames if self.moments is not None else 0}
 
     def close(self) -> None:
         try:
@@ -415,7 +415,10 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
     clamped anchor, ``moments.xdmf`` and figures under ``outdir``. On a failure the files
     written so far stay valid, ``summary.json`` says what happened, and :class:`RunError` is
     raised. SIGINT/SIGTERM stop the dynamics cleanly (:class:`RunInterrupted`);
-    ``restart=True`` continues a run in ``outdir`` from its last checkpoint.
+    ``restart=True`` continues a run in ``outdir`` from its last checkpoint (after a signal
+    or a kill at any instant), and its files end as those of an uninterrupted run. A new
+    run (``restart=False``) first removes an earlier run's outputs from ``outdir``. Until
+    the run ends, ``summary.json`` says ``"status": "running"`` with the last checkpoint.
     ``model="beam"`` runs the reference rod (:mod:`cablefem.beam`) instead of the string,
     its mesh density scaled by ``refine``; the anchor moments are then the rod's own.
     """
@@ -440,6 +443,10 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
     else:
         model = CableModel(case, comm)
     t_build = time.perf_counter() - wall0
+    if restart:  # what a kill left half-written (the series' own parts: see io.Series)
+        remove_temporaries(outdir, comm)
+    else:  # a new run replaces every output of an earlier one in the folder
+        clean_outputs(outdir, comm)
     groups = model.dimensionless_groups()
     log.info("%s: l = %.6g %s, %d elements, eps = %s, eps_b = %s", case.title, model.length,
              unit(case.units, "length"),
@@ -485,6 +492,10 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
     summary["outer_correction"] = "none" if kind == "beam" else case.solver.outer_correction
     if model.hinges:
         summary["static"]["virtual_hinges"] = model.hinges.report()
+    # a folder found after a kill says what happened: running, last checkpoint (none yet)
+    summary["checkpoint"] = None
+    if not restart:
+        write_json(outdir / "summary.json", summary, comm)
 
     n_modes = case.modal.modes if modes is None else modes
     free = free_dofs(model)
@@ -501,9 +512,15 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
         summary["wall_time"]["modal"] = modal.wall_time
         # the static state again: the modal solve does not change model.u, but be explicit
         model.u.x.array[:] = model.u_static.x.array
+        if not restart:
+            write_json(outdir / "summary.json", summary, comm)
 
     omega = _max_excitation(case)
     resume = None
+    frames = None
+    # the dynamics counters of the whole run: those before the checkpoint resumed from
+    base = {"newton_iterations": 0, "rejected_steps": 0, "linear_iterations": 0,
+            "outputs": 0, "wall_dynamics": 0.0}
     if restart:
         resume = read_checkpoint(outdir, comm)
         if str(resume["digest"]) != case_digest(case):
@@ -513,11 +530,24 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
         if t_end is None and "t_stop" in resume:
             t_end = float(resume["t_stop"])
         ck = resume["checkpoint"]
+        if "frames_string" not in resume:
+            raise RunError(f"{outdir}: the checkpoint was written by an older cablefem "
+                           "(without the frame counts of its field series): it cannot be "
+                           "resumed; run the case again")
+        frames = {"string": int(resume["frames_string"]),
+                  "moments": int(resume["frames_moments"])}
+        for key, val in base.items():
+            base[key] = type(val)(resume[key])
         truncate_csv(outdir / "anchors.csv", ck.time, comm)
         summary["restarted_from"] = ck.time
+        summary["checkpoint"] = {"time": ck.time, "step": ck.step}
+        write_json(outdir / "summary.json", summary, comm)
         log.info("restarting from the checkpoint at t = %.6g (step %d)", ck.time, ck.step)
-    emitter = _Emitter(model, outdir, form, omega, static.anchor_forces,
-                       None if resume is None else resume["checkpoint"].time)
+    try:
+        emitter = _Emitter(model, outdir, form, omega, static.anchor_forces,
+                           None if resume is None else resume["checkpoint"].time, frames)
+    except OutputError as err:
+        raise RunError(f"{err}; run the case again") from err
     if resume is not None:  # after the emitter, which takes its reference from the statics
         model.scatter_nodal(resume["u"], model.u)
         model.scatter_nodal(resume["v"], model.v)
@@ -539,15 +569,27 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
                             for sig in (signal.SIGINT, signal.SIGTERM)}
 
             def checkpoint(ck):
-                emitter.flush()
-                emitter.dump()
+                frames = emitter.checkpoint()
                 extra = {"t_stop": t_stop, "model": kind, "refine": refine,
-                         "outer_correction": case.solver.outer_correction}
+                         "outer_correction": case.solver.outer_correction,
+                         "frames_string": frames["string"],
+                         "frames_moments": frames["moments"],
+                         "newton_iterations": base["newton_iterations"]
+                         + stats.newton_iterations,
+                         "rejected_steps": base["rejected_steps"] + stats.rejected_steps,
+                         "linear_iterations": base["linear_iterations"]
+                         + stats.linear_iterations,
+                         "outputs": base["outputs"] + len(stats.output_times),
+                         "wall_dynamics": base["wall_dynamics"]
+                         + time.perf_counter() - t_dyn0}
                 write_checkpoint(model, outdir, ck, digest, extra)
+                summary["checkpoint"] = {"time": ck.time, "step": ck.step}
+                write_json(outdir / "summary.json", summary, comm)
 
             bar = Progress(t_stop, "dynamics", comm, enabled=progress)
             stride = math.gcd(dyn.output_every, dyn.fields_every)
             start = None if resume is None else resume["checkpoint"]
+            t_dyn0 = time.perf_counter()
             for t, forces in integrate(model, t_stop, dyn.dt, dyn.rho_inf, stride, stats,
                                        start=start, checkpoint_every=dyn.checkpoint_every,
                                        on_checkpoint=checkpoint,
@@ -558,14 +600,18 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
                 if step % dyn.fields_every == 0 or last:
                     emitter.fields(t, forces)
                 bar.update(t, f"step {step}")
+                kill_point("step")
             bar.close()
+            # the whole run's counters (a resumed run adds those before its checkpoint)
+            newton = base["newton_iterations"] + stats.newton_iterations
             summary["dynamics"] = {
                 "t_end": t_stop, "dt": dyn.dt, "rho_inf": dyn.rho_inf, "steps": stats.steps,
-                "rejected_steps": stats.rejected_steps,
-                "newton_iterations": stats.newton_iterations,
-                "newton_per_step": stats.newton_iterations / max(stats.steps, 1),
-                "outputs": len(stats.output_times)}
-            summary["wall_time"]["dynamics"] = stats.wall_time
+                "rejected_steps": base["rejected_steps"] + stats.rejected_steps,
+                "newton_iterations": newton,
+                "linear_iterations": base["linear_iterations"] + stats.linear_iterations,
+                "newton_per_step": newton / max(stats.steps, 1),
+                "outputs": base["outputs"] + len(stats.output_times)}
+            summary["wall_time"]["dynamics"] = base["wall_dynamics"] + stats.wall_time
         else:
             emitter.add(0.0, static.anchor_forces)
             emitter.fields(0.0, static.anchor_forces)
@@ -575,10 +621,11 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
         summary["status"] = "interrupted"
         summary["signal"] = int(sig) if sig is not None else None
         ck_time = _checkpoint_time(outdir, comm)
-        summary["error"] = (f"{err}; resume with: cablefem run --restart {outdir}"
-                            + (f" (continues from the checkpoint at t = {ck_time:g})"
-                               if ck_time is not None else " (no checkpoint yet: it will "
-                               "start again)"))
+        summary["error"] = (f"{err}; resume with: cablefem run --restart {outdir} "
+                            f"(continues from the checkpoint at t = {ck_time:g})"
+                            if ck_time is not None else
+                            f"{err} before the first checkpoint: nothing to resume, run the "
+                            "case again")
         log.warning("%s", summary["error"])
     except (DynamicsError, FloatingPointError) as err:
         error = err

@@ -1,5 +1,5 @@
 """The XDMF output opens in ParaView's own reader (headless ``pvpython``): runs when
-ParaView is installed (Debian's ``paraview``), skipped otherwise."""
+ParaView is installed (Debian's ``paraview`` and ``python3-paraview``), skipped otherwise."""
 
 from __future__ import annotations
 
@@ -23,22 +23,37 @@ for name in sys.argv[1:]:
     reader = simple.OpenDataFile(name)
     reader.UpdatePipelineInformation()
     times = list(reader.TimestepValues) if hasattr(reader, "TimestepValues") else []
-    reader.UpdatePipeline(times[-1] if times else 0.0)
-    info = reader.GetDataInformation()
-    pd = reader.PointData.keys()
-    cd = reader.CellData.keys()
-    out[name] = {"points": info.GetNumberOfPoints(), "cells": info.GetNumberOfCells(),
-                 "times": len(times), "point_arrays": sorted(pd), "cell_arrays": sorted(cd)}
+    frames = []  # every frame: points, cells and the range of every array
+    for t in times or [0.0]:
+        reader.UpdatePipeline(t)
+        info = reader.GetDataInformation()
+        arrays = {}
+        for kind, data in (("point", reader.PointData), ("cell", reader.CellData)):
+            for key in data.keys():
+                arrays[kind + ":" + key] = list(data[key].GetRange(-1))
+        frames.append({"points": info.GetNumberOfPoints(), "cells": info.GetNumberOfCells(),
+                       "arrays": arrays})
+    out[name] = {"times": times, "frames": frames}
 print("JSON" + json.dumps(out))
 '''
 
 
+def paraview_read(*paths) -> dict:
+    script = Path(paths[0]).parent / "read_with_paraview.py"
+    script.write_text(SCRIPT)
+    res = subprocess.run(["pvpython", str(script), *map(str, paths)], capture_output=True,
+                         text=True, timeout=300)
+    script.unlink()
+    assert res.returncode == 0, res.stderr[-2000:]
+    return json.loads(res.stdout.split("JSON", 1)[1])
+
+
 def test_xdmf_opens_in_paraview(tmp_path):
     """A short network run (the fan, 3 stays of 10 elements): ParaView reads string.xdmf
-    with 33 points, 30 cells, every field and 5 time steps, and moments.xdmf with its
-    arrays; the numbers come from the mesh and the output strides. (This test found that
-    meshio's Polyline topology lacked NodesPerElement, which made ParaView abort.)"""
-    root = Path(__file__).resolve().parents[1]
+    as one dataset per time with 33 points, 30 cells and every field, at each of the 5
+    field times (t = 0 and every 10 of 40 steps), and moments.xdmf with its arrays at the
+    same times; the numbers come from the mesh and the output strides. (This test found
+    that a Polyline topology without NodesPerElement made ParaView abort.)"""
     sys.path.insert(0, str(Path(__file__).parent))
     from test_network import fan_case, fan_mesh  # noqa: E402
 
@@ -49,22 +64,28 @@ def test_xdmf_opens_in_paraview(tmp_path):
     d = fan_case(mesh, g=9.81, dynamics={"t_end": 0.2, "dt": 0.005, "fields_every": 10})
     out = tmp_path / "run"
     run_case(parse_case(d), out, figures=False, progress=False)
-    script = tmp_path / "read.py"
-    script.write_text(SCRIPT)
-    res = subprocess.run(["pvpython", str(script), str(out / "string.xdmf"),
-                          str(out / "moments.xdmf"), str(out / "string.pvd")],
-                         capture_output=True, text=True, timeout=300, cwd=root)
-    assert res.returncode == 0, res.stderr[-2000:]
-    info = json.loads(res.stdout.split("JSON", 1)[1])
+    info = paraview_read(out / "string.xdmf", out / "moments.xdmf")
     s = info[str(out / "string.xdmf")]
-    # dolfinx writes each function (displacement, velocity, tension, strain) as a grid of
-    # its own: ParaView loads them as 4 blocks of the 33-node, 30-cell mesh
-    assert (s["points"], s["cells"], s["times"]) == (4 * 33, 4 * 30, 5)
-    assert {"displacement", "velocity"} <= set(s["point_arrays"])
-    assert {"tension", "strain"} <= set(s["cell_arrays"])
-    p = info[str(out / "string.pvd")]  # one dataset with every field
-    assert (p["points"], p["cells"], p["times"]) == (33, 30, 5)
-    assert {"displacement", "velocity"} <= set(p["point_arrays"])
-    assert {"tension", "strain"} <= set(p["cell_arrays"])
+    assert s["times"] == pytest.approx([0.0, 0.05, 0.1, 0.15, 0.2], abs=1e-15)
+    for frame in s["frames"]:  # one dataset with every field, at every time
+        assert (frame["points"], frame["cells"]) == (33, 30)
+        assert set(frame["arrays"]) == {"point:displacement", "point:dynamic_displacement",
+                                        "point:velocity", "cell:tension", "cell:strain"}
+    # ParaView shows each time's own data: the largest displacement and tension of every
+    # frame as meshio reads them from the files (same doubles: equal to round-off)
+    import meshio
+    import numpy as np
+
+    with meshio.xdmf.TimeSeriesReader(out / "string.xdmf") as reader:
+        reader.read_points_cells()
+        for k, frame in enumerate(s["frames"]):
+            _, pd, cd = reader.read_data(k)
+            assert frame["arrays"]["point:displacement"][1] == pytest.approx(
+                np.max(np.linalg.norm(pd["displacement"], axis=1)), rel=1e-12)
+            assert frame["arrays"]["cell:tension"] == pytest.approx(
+                [np.min(cd["tension"][0]), np.max(cd["tension"][0])], rel=1e-12)
     m = info[str(out / "moments.xdmf")]
-    assert m["times"] == 5 and {"moment", "curvature", "displacement"} <= set(m["point_arrays"])
+    assert m["times"] == s["times"]
+    for frame in m["frames"]:
+        assert {"point:moment", "point:curvature", "point:dynamic_displacement"} <= \
+            set(frame["arrays"])

@@ -1,0 +1,29 @@
+"""A test hook: ``CABLEFEM_KILL_AT=<point>:<n>`` makes the process SIGKILL itself the
+``n``-th time it reaches ``<point>`` (default ``n = 1``), to test that a run killed at any
+instant can be resumed. Points: ``step`` (after a time step's outputs), ``checkpoint``
+(``checkpoint.npz`` written to its temporary file, not yet renamed), ``xml`` (a series'
+XDMF file written to its temporary file, not yet renamed), ``frame-string`` and
+``frame-moments`` (in the middle of a frame of that series: one array written, the others
+not). Unset (the normal case), it does nothing.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+
+__all__ = ["kill_point"]
+
+_counts: dict[str, int] = {}
+
+
+def kill_point(name: str) -> None:
+    spec = os.environ.get("CABLEFEM_KILL_AT")
+    if not spec:
+        return
+    where, _, n = spec.partition(":")
+    if where != name:
+        return
+    _counts[name] = _counts.get(name, 0) + 1
+    if _counts[name] == int(n or 1):
+        os.kill(os.getpid(), signal.SIGKILL)

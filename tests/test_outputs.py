@@ -1,0 +1,68 @@
+"""The field series under MPI (also run by ``.ci/mpitest`` on 2 ranks): gathered to rank 0
+in the mesh's order whatever the partition, and resumed from a checkpoint collectively,
+ending with the files of the uninterrupted run."""
+
+from __future__ import annotations
+
+import json
+
+import meshio
+import numpy as np
+from mpi4py import MPI
+
+from cablefem.run import run_case
+
+comm = MPI.COMM_WORLD
+
+
+def frames(path):
+    out = []
+    with meshio.xdmf.TimeSeriesReader(path) as reader:
+        reader.read_points_cells()
+        for k in range(reader.num_steps):
+            t, pd, cd = reader.read_data(k)
+            out.append((t, {**pd, **{key: v[0] for key, v in cd.items()}}))
+    return out
+
+
+def test_series_resumed_and_partitioned(mpi_tmp_path, make_case):
+    """A run to t = 0.15 s, then resumed (``restart=True``, the API) to 0.3 s from its
+    last checkpoint (t = 0.1 s: what it wrote after it is discarded) equals the
+    uninterrupted 0.3 s run on the same ranks (same operations: exactly, to round-off), and
+    the partitioned fields equal a run on one rank (direct solvers: 1e-9, as in
+    test_network)."""
+    case = make_case(elements=8, damping={"ratio": 0.005, "frequencies": [16.407, 32.814]},
+                     motion={"type": "harmonic", "amplitude": [2e-4, 0, 0],
+                             "omega": 32.814},
+                     dynamics={"t_end": 0.3, "dt": 0.005, "fields_every": 4,
+                               "checkpoint_every": 10})
+    kw = dict(figures=False, progress=False, modes=0)
+    ref = run_case(case, mpi_tmp_path / "ref", comm, **kw)
+    part = run_case(case, mpi_tmp_path / "resumed", comm, t_end=0.15, **kw)
+    assert part.times[-1] == 0.15
+    res = run_case(case, mpi_tmp_path / "resumed", comm, restart=True, t_end=0.3, **kw)
+    assert res.summary["restarted_from"] == 0.1
+    np.testing.assert_allclose(res.times, ref.times, rtol=0, atol=0)
+    for name in ref.forces:  # repeated operations: round-off
+        np.testing.assert_allclose(res.forces[name], ref.forces[name], rtol=1e-12)
+    for key in ("steps", "newton_iterations", "rejected_steps", "outputs"):
+        assert res.summary["dynamics"][key] == ref.summary["dynamics"][key]
+    if comm.rank == 0:
+        one = run_case(case, mpi_tmp_path / "one", MPI.COMM_SELF, **kw)
+        assert one.summary["status"] == "completed"
+        for name in ("string.xdmf", "moments.xdmf"):
+            a, b = frames(mpi_tmp_path / "resumed" / name), frames(mpi_tmp_path / "ref" / name)
+            c = frames(mpi_tmp_path / "one" / name)
+            assert [t for t, _ in a] == [t for t, _ in b] == [t for t, _ in c]
+            assert len(a) == 1 + 60 // 4  # t = 0 and every 4th of 60 steps
+            for (_, da), (_, db), (_, dc) in zip(a, b, c):
+                for key in db:
+                    np.testing.assert_allclose(da[key], db[key], rtol=1e-12, atol=1e-15)
+                    scale = max(np.max(np.abs(dc[key])), 1e-300)
+                    np.testing.assert_allclose(db[key], dc[key], rtol=1e-9,
+                                               atol=1e-9 * scale)
+        ls = lambda d: sorted(str(p.relative_to(d)) for p in d.rglob("*"))  # noqa: E731
+        assert ls(mpi_tmp_path / "resumed") == ls(mpi_tmp_path / "ref")
+        s = json.loads((mpi_tmp_path / "resumed" / "summary.json").read_text())
+        assert s["status"] == "completed" and s["mpi_ranks"] == comm.size
+    comm.Barrier()
