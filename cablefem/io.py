@@ -430,6 +430,7 @@ def clean_outputs(outdir: Path, comm: MPI.Comm = MPI.COMM_WORLD) -> None:
                 f.unlink()
     remove_temporaries(outdir, comm)
 
+
 def write_modes(model, modal, path: Path) -> None:
     """Mode shapes to XDMF; mode ``i`` is stored at "time" ``i`` (ParaView's time slider)."""
     with XDMFFile(model.comm, str(path), "w") as f:

@@ -26,12 +26,28 @@ class _RankZeroFilter(logging.Filter):
         return self.rank == 0
 
 
+class _StderrHandler(logging.StreamHandler):
+    """A StreamHandler on whatever ``sys.stderr`` is at the time of each record (not the
+    one at set-up: a test runner or a notebook may replace it and close the old one)."""
+
+    def __init__(self) -> None:
+        super().__init__(sys.stderr)
+
+    @property
+    def stream(self):  # noqa: D401 - logging's attribute
+        return sys.stderr
+
+    @stream.setter
+    def stream(self, value) -> None:  # set by StreamHandler.__init__; always sys.stderr
+        pass
+
+
 def setup_logging(level: int = logging.INFO, comm: MPI.Comm = MPI.COMM_WORLD) -> None:
     """Send ``cablefem`` log records to stderr, from rank 0 only (idempotent)."""
     logger = logging.getLogger("cablefem")
     logger.setLevel(level)
     if not any(getattr(h, "_cablefem", False) for h in logger.handlers):
-        handler = logging.StreamHandler(sys.stderr)
+        handler = _StderrHandler()
         handler.setFormatter(logging.Formatter("[cablefem] %(message)s"))
         handler.addFilter(_RankZeroFilter(comm))
         handler._cablefem = True  # type: ignore[attr-defined]

@@ -53,3 +53,25 @@ def test_moment_axis_range_shows_a_small_variation():
     assert lo == pytest.approx(m.min() - 0.05 * span) and hi == pytest.approx(m.max() + 0.05 * span)
     assert lo > 0.9  # zero is not forced in
     assert moment_axis_range(np.array([np.nan])) is None
+
+
+def test_log_follows_the_current_stderr(monkeypatch):
+    """The log handler writes to sys.stderr as it is at each message: a runner that swaps
+    (and closes) the stream between uses must not get "I/O operation on closed file"."""
+    import io
+    import logging
+
+    from cablefem.log import setup_logging
+
+    setup_logging(logging.INFO)
+    first = io.StringIO()
+    monkeypatch.setattr("sys.stderr", first)
+    logging.getLogger("cablefem.test").warning("one")
+    first.close()
+    second = io.StringIO()
+    monkeypatch.setattr("sys.stderr", second)
+    logging.getLogger("cablefem.test").warning("two")
+    from mpi4py import MPI
+
+    if MPI.COMM_WORLD.rank == 0:  # the handler lets rank 0's records through only
+        assert "[cablefem] two" in second.getvalue()

@@ -121,7 +121,8 @@ def test_network_parallel_equals_serial_and_xdmf(mpi_tmp_path):
     mesh = fan_mesh(str(mpi_tmp_path / "fan.msh"))
     d = fan_case(mesh, g=9.81, dynamics={"t_end": 0.2, "dt": 0.005, "fields_every": 10})
     d["anchors"][0]["motion"] = {"type": "ellipse", "omega": 6.0,
-                                 "axis_sin": [0.02, 0, 0], "axis_cos": [0, 0.01, 0]}
+                                 "axis_sin": [0.02, 0, 0], "axis_cos": [0, 0.01, 0],
+                                 "ramp": 0.0}  # moving from t = 0 (0.2 s run)
     case = parse_case(d)
     hist = []
     for c in (comm, MPI.COMM_SELF):
