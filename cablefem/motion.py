@@ -202,8 +202,29 @@ def table_resolution(times: np.ndarray, values: np.ndarray, dt: float) -> list[s
     return out
 
 
+class _RampedMotion:
+    """The ramped displacement, velocity and acceleration of a motion given unramped by its
+    ``_u0``, ``_v0``, ``_a0`` and its ``ramp`` duration (:func:`ramp_factors`)."""
+
+    def _eval(self, kind: str, t: float) -> np.ndarray:
+        return _ramped(kind, self.ramp, t, lambda: self._u0(t), lambda: self._v0(t),
+                       lambda: self._a0(t))
+
+    def displacement(self, t: float) -> np.ndarray:
+        """Displacement (m), shape (3,)."""
+        return self._eval("displacement", t)
+
+    def velocity(self, t: float) -> np.ndarray:
+        """Velocity (m/s), shape (3,)."""
+        return self._eval("velocity", t)
+
+    def acceleration(self, t: float) -> np.ndarray:
+        """Acceleration (m/s^2), shape (3,)."""
+        return self._eval("acceleration", t)
+
+
 @dataclass(frozen=True, eq=False)
-class HarmonicMotion:
+class HarmonicMotion(_RampedMotion):
     """Harmonic motion ``u_k(t) = r(t) A_k sin(omega_k t + phi_k)`` per component ``k``.
 
     ``r`` is the smooth ramp over ``ramp`` s (:func:`ramp_factors`); with ``ramp = 0`` (the
@@ -241,22 +262,6 @@ class HarmonicMotion:
     def _a0(self, t: float) -> np.ndarray:
         return -self.amplitude * self.omega**2 * np.sin(self.omega * t + self.phase)
 
-    def _eval(self, kind: str, t: float) -> np.ndarray:
-        return _ramped(kind, self.ramp, t, lambda: self._u0(t), lambda: self._v0(t),
-                       lambda: self._a0(t))
-
-    def displacement(self, t: float) -> np.ndarray:
-        """Displacement (m), shape (3,)."""
-        return self._eval("displacement", t)
-
-    def velocity(self, t: float) -> np.ndarray:
-        """Velocity (m/s), shape (3,)."""
-        return self._eval("velocity", t)
-
-    def acceleration(self, t: float) -> np.ndarray:
-        """Acceleration (m/s^2), shape (3,)."""
-        return self._eval("acceleration", t)
-
     def describe(self) -> dict:
         """JSON-serialisable description."""
         return {"type": "harmonic", "amplitude": self.amplitude.tolist(),
@@ -265,7 +270,7 @@ class HarmonicMotion:
 
 
 @dataclass(frozen=True, eq=False)
-class EllipseMotion:
+class EllipseMotion(_RampedMotion):
     """Elliptic motion from the rest position: ``u = r(t) (a_s sin(w t) + a_c (cos(w t) - 1))``.
 
     ``r`` is the smooth ramp over ``ramp`` s (:func:`ramp_factors`; 0, the default of this
@@ -308,22 +313,6 @@ class EllipseMotion:
     def _a0(self, t: float) -> np.ndarray:
         wt = self.omega * t
         return -self.omega**2 * (self.axis_sin * math.sin(wt) + self.axis_cos * math.cos(wt))
-
-    def _eval(self, kind: str, t: float) -> np.ndarray:
-        return _ramped(kind, self.ramp, t, lambda: self._u0(t), lambda: self._v0(t),
-                       lambda: self._a0(t))
-
-    def displacement(self, t: float) -> np.ndarray:
-        """Displacement (m), shape (3,)."""
-        return self._eval("displacement", t)
-
-    def velocity(self, t: float) -> np.ndarray:
-        """Velocity (m/s), shape (3,)."""
-        return self._eval("velocity", t)
-
-    def acceleration(self, t: float) -> np.ndarray:
-        """Acceleration (m/s^2), shape (3,)."""
-        return self._eval("acceleration", t)
 
     def describe(self) -> dict:
         """JSON-serialisable description."""
