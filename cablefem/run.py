@@ -574,14 +574,7 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
                          "outer_correction": case.solver.outer_correction,
                          "frames_string": frames["string"],
                          "frames_moments": frames["moments"],
-                         "newton_iterations": base["newton_iterations"]
-                         + stats.newton_iterations,
-                         "rejected_steps": base["rejected_steps"] + stats.rejected_steps,
-                         "linear_iterations": base["linear_iterations"]
-                         + stats.linear_iterations,
-                         "outputs": base["outputs"] + len(stats.output_times),
-                         "wall_dynamics": base["wall_dynamics"]
-                         + time.perf_counter() - t_dyn0}
+                         **_whole_run(base, stats, time.perf_counter() - t_dyn0)}
                 write_checkpoint(model, outdir, ck, digest, extra)
                 summary["checkpoint"] = {"time": ck.time, "step": ck.step}
                 write_json(outdir / "summary.json", summary, comm)
@@ -603,15 +596,15 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
                 kill_point("step")
             bar.close()
             # the whole run's counters (a resumed run adds those before its checkpoint)
-            newton = base["newton_iterations"] + stats.newton_iterations
+            total = _whole_run(base, stats, stats.wall_time)
             summary["dynamics"] = {
                 "t_end": t_stop, "dt": dyn.dt, "rho_inf": dyn.rho_inf, "steps": stats.steps,
-                "rejected_steps": base["rejected_steps"] + stats.rejected_steps,
-                "newton_iterations": newton,
-                "linear_iterations": base["linear_iterations"] + stats.linear_iterations,
-                "newton_per_step": newton / max(stats.steps, 1),
-                "outputs": base["outputs"] + len(stats.output_times)}
-            summary["wall_time"]["dynamics"] = base["wall_dynamics"] + stats.wall_time
+                "rejected_steps": total["rejected_steps"],
+                "newton_iterations": total["newton_iterations"],
+                "linear_iterations": total["linear_iterations"],
+                "newton_per_step": total["newton_iterations"] / max(stats.steps, 1),
+                "outputs": total["outputs"]}
+            summary["wall_time"]["dynamics"] = total["wall_dynamics"]
         else:
             emitter.add(0.0, static.anchor_forces)
             emitter.fields(0.0, static.anchor_forces)
@@ -727,6 +720,16 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
         raise RunError(f"{error} -- results up to t = {times[-1] if times.size else 0:g} "
                        f"are in {outdir}") from error
     return result
+
+
+def _whole_run(base: dict, stats: DynamicsStats, wall: float) -> dict:
+    """The dynamics counters of the whole run: ``base`` (those before the checkpoint a run
+    resumed from; zeros otherwise) plus this run's ``stats`` and dynamics wall time."""
+    return {"newton_iterations": base["newton_iterations"] + stats.newton_iterations,
+            "rejected_steps": base["rejected_steps"] + stats.rejected_steps,
+            "linear_iterations": base["linear_iterations"] + stats.linear_iterations,
+            "outputs": base["outputs"] + len(stats.output_times),
+            "wall_dynamics": base["wall_dynamics"] + wall}
 
 
 def _checkpoint_time(outdir: Path, comm: MPI.Comm) -> float | None:
