@@ -63,3 +63,17 @@ def make_case():
 def observed_order(h: np.ndarray, err: np.ndarray) -> float:
     """Least-squares slope of log(err) against log(h)."""
     return float(np.polyfit(np.log(h), np.log(err), 1)[0])
+
+
+def read_series(path) -> list[tuple[float, dict]]:
+    """Every frame (time, {field: values}) of an XDMF time series, read with meshio as users
+    do; cell fields are flattened to their single block."""
+    import meshio
+
+    frames = []
+    with meshio.xdmf.TimeSeriesReader(path) as reader:
+        reader.read_points_cells()
+        for k in range(reader.num_steps):
+            t, pd, cd = reader.read_data(k)
+            frames.append((t, {**pd, **{key: v[0] for key, v in cd.items()}}))
+    return frames

@@ -6,23 +6,14 @@ from __future__ import annotations
 
 import json
 
-import meshio
 import numpy as np
 from mpi4py import MPI
 
 from cablefem.run import run_case
 
+from conftest import read_series
+
 comm = MPI.COMM_WORLD
-
-
-def frames(path):
-    out = []
-    with meshio.xdmf.TimeSeriesReader(path) as reader:
-        reader.read_points_cells()
-        for k in range(reader.num_steps):
-            t, pd, cd = reader.read_data(k)
-            out.append((t, {**pd, **{key: v[0] for key, v in cd.items()}}))
-    return out
 
 
 def test_series_resumed_and_partitioned(mpi_tmp_path, make_case):
@@ -51,8 +42,8 @@ def test_series_resumed_and_partitioned(mpi_tmp_path, make_case):
         one = run_case(case, mpi_tmp_path / "one", MPI.COMM_SELF, **kw)
         assert one.summary["status"] == "completed"
         for name in ("string.xdmf", "moments.xdmf"):
-            a, b = frames(mpi_tmp_path / "resumed" / name), frames(mpi_tmp_path / "ref" / name)
-            c = frames(mpi_tmp_path / "one" / name)
+            a, b = read_series(mpi_tmp_path / "resumed" / name), read_series(mpi_tmp_path / "ref" / name)
+            c = read_series(mpi_tmp_path / "one" / name)
             assert [t for t, _ in a] == [t for t, _ in b] == [t for t, _ in c]
             assert len(a) == 1 + 60 // 4  # t = 0 and every 4th of 60 steps
             for (_, da), (_, db), (_, dc) in zip(a, b, c):

@@ -24,6 +24,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from conftest import read_series
+
 pytestmark = pytest.mark.serial  # subprocesses, signals and mpirun: not under mpirun
 
 # a tiny cable (8 elements): 60 steps, fields every 4 steps, a checkpoint every 10
@@ -77,17 +79,7 @@ def rows(path: Path) -> np.ndarray:
                          for r in csv.DictReader(fh)])
 
 
-def series(path: Path) -> list[tuple[float, dict]]:
-    """Every frame of an XDMF time series, read with meshio (as users do)."""
-    import meshio
-
-    frames = []
-    with meshio.xdmf.TimeSeriesReader(path) as reader:
-        reader.read_points_cells()
-        for k in range(reader.num_steps):
-            t, pd, cd = reader.read_data(k)
-            frames.append((t, {**pd, **{k: v[0] for k, v in cd.items()}}))
-    return frames
+series = read_series  # every frame of an XDMF series (conftest)
 
 
 def files(out: Path) -> list[str]:
