@@ -33,8 +33,8 @@ from pathlib import Path
 import numpy as np
 from mpi4py import MPI
 
+from cablefem.app.run import run_case
 from cablefem.case import load_case
-from cablefem.run import run_case
 
 DEMOS = Path(__file__).resolve().parents[1] / "demos"
 CASES = {"A": DEMOS / "paper_inplane.toml", "B": DEMOS / "paper_spatial.toml"}

@@ -45,7 +45,7 @@ def worker(n: int, steps: int) -> None:
 
     from cablefem.case import load_case
     from cablefem.dynamics import DynamicsStats, integrate
-    from cablefem.netmodel import NetworkModel
+    from cablefem.network import NetworkModel
     from cablefem.statics import solve_static
 
     comm = MPI.COMM_WORLD

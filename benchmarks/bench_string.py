@@ -21,10 +21,10 @@ from pathlib import Path
 
 from mpi4py import MPI
 
+from cablefem.app.run import run_case
+from cablefem.cable import CableModel
 from cablefem.case import load_case
 from cablefem.dynamics import DynamicsStats, integrate
-from cablefem.model import CableModel
-from cablefem.run import run_case
 from cablefem.statics import solve_static
 
 CASE = Path(__file__).resolve().parents[1] / "demos" / "paper_inplane.toml"

@@ -1,3 +1,3 @@
-from .cli import main
+from cablefem.app.cli import main
 
 raise SystemExit(main())

@@ -27,19 +27,27 @@ from __future__ import annotations
 import logging
 import time
 from collections.abc import Iterator
-from decimal import Decimal
 from dataclasses import dataclass, field
+from decimal import Decimal
 
 import numpy as np
 from dolfinx.fem import petsc as fpetsc
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from .anchors import AnchorForces
-from .hinge import HingeError
-from .petsc_utils import (SNESHistory, assemble_jacobian_rows, assemble_residual_rows,
-                          case_options, copy_in, default_options,
-                          linear_solver_options, lu_options)
+from cablefem.errors import DynamicsError, Interrupted
+from cablefem.hinge import HingeError
+from cablefem.petsc_utils import (
+    SNESHistory,
+    assemble_jacobian_rows,
+    assemble_residual_rows,
+    case_options,
+    copy_in,
+    default_options,
+    linear_solver_options,
+    lu_options,
+)
+from cablefem.reactions import AnchorForces
 
 __all__ = ["Checkpoint", "DynamicsError", "DynamicsStats", "Interrupted", "integrate",
            "initial_velocity", "grid_time"]
@@ -57,22 +65,6 @@ class Checkpoint:
     calm: int = 0
     #: virtual hinges: (n_hinges, 2) tension and angle of each layer's law (cablefem.hinge)
     layers: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
-
-
-class Interrupted(RuntimeError):
-    """The run was asked to stop (a signal); ``.time`` is the last completed time."""
-
-    def __init__(self, message: str, time: float) -> None:
-        super().__init__(message)
-        self.time = time
-
-
-class DynamicsError(RuntimeError):
-    """The time integration cannot continue; ``.time`` is the last time reached."""
-
-    def __init__(self, message: str, time: float) -> None:
-        super().__init__(message)
-        self.time = time
 
 
 @dataclass

@@ -17,7 +17,7 @@ the frequencies (the span turns about H, not about A).
   material is not in the string;
 * the layer's own weight and inertia, ``m sigma_h (g - a_A)``, are added to the hinge
   force, so that the anchor force is the force at the real anchor
-  (:meth:`cablefem.anchors.AnchorForces.compute`); the boundary layer (the anchor moment)
+  (:meth:`cablefem.reactions.AnchorForces.compute`); the boundary layer (the anchor moment)
   and the hinge itself are computed from it;
 * statics iterates hinge -> equilibrium -> anchor force -> hinge to a fixed point (the
   relative change falls by 1e-2 to 1e-3 per iteration on the paper's cases).
@@ -48,16 +48,13 @@ from __future__ import annotations
 import numpy as np
 from mpi4py import MPI
 
-from .asymptotics import far_field_offsets, layer, virtual_hinge
+from cablefem.asymptotics import far_field_offsets, layer, virtual_hinge
+from cablefem.errors import HingeError
 
 __all__ = ["VirtualHinges", "HingeError", "MAX_FRACTION"]
 
 #: Largest fraction of the first element's stress-free length that the hinge may remove.
 MAX_FRACTION = 0.5
-
-
-class HingeError(RuntimeError):
-    """The virtual hinge cannot be placed (what and where are in the message)."""
 
 
 class _Hinge:

@@ -23,8 +23,8 @@ from dolfinx import fem
 from dolfinx.fem import petsc as fpetsc
 from slepc4py import SLEPc
 
-from .units import unit
-from .petsc_utils import case_options, default_options, lu_options
+from cablefem.petsc_utils import case_options, default_options, lu_options
+from cablefem.units import unit
 
 __all__ = ["ModalResult", "solve_modes", "classify_mode", "free_dofs"]
 

@@ -32,6 +32,8 @@ from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 
+from cablefem.errors import CaseError
+
 __all__ = [
     "Motion", "HarmonicMotion", "EllipseMotion", "TableMotion", "TimeFunction",
     "read_motion_csv", "read_factor_csv", "ramp_factors", "default_ramp", "table_resolution",
@@ -463,7 +465,7 @@ def _read_csv(path: str | os.PathLike, columns: tuple[str, ...],
 
     Blank lines and lines starting with ``#`` are skipped. Every problem names its line.
     """
-    from cablefem.case import CaseError  # case.py imports this module: import at call time
+
 
     path = Path(path)
     problems: list[tuple[str, str]] = []

@@ -6,7 +6,6 @@ from __future__ import annotations
 from collections import deque
 
 import numpy as np
-
 from dolfinx import fem
 from dolfinx.fem import petsc as fpetsc
 from petsc4py import PETSc

@@ -21,18 +21,22 @@ from dolfinx.fem import petsc as fpetsc
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from .units import unit
-from .anchors import AnchorForces
-from .petsc_utils import (SNESHistory, assemble_jacobian, assemble_residual, copy_in,
-                          case_options, default_options, lu_options)
+from cablefem.errors import StaticError
+from cablefem.petsc_utils import (
+    SNESHistory,
+    assemble_jacobian,
+    assemble_residual,
+    case_options,
+    copy_in,
+    default_options,
+    lu_options,
+)
+from cablefem.reactions import AnchorForces
+from cablefem.units import unit
 
 __all__ = ["StaticResult", "StaticError", "solve_static"]
 
 log = logging.getLogger(__name__)
-
-
-class StaticError(RuntimeError):
-    """Static equilibrium could not be found; the message says where and why."""
 
 
 @dataclass
@@ -92,7 +96,7 @@ def _hinge_iterations(model, snes, x, history, reaction, forces, tol: float = 1e
     offset h and removed length sigma_h nearly cancel in the span's tension: the relative
     change falls by orders of magnitude per iteration. ``forces`` is updated in place to
     the last equilibrium's; returns the Newton iterations."""
-    from .hinge import HingeError
+    from cablefem.hinge import HingeError
 
     its_total = 0
     for it in range(1, max_iterations + 1):

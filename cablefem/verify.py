@@ -10,9 +10,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from .case import Case
-from .catenary import catenary_between
-from .post import anchor_moments
+from cablefem.case import Case
+from cablefem.catenary import catenary_between
+from cablefem.moments import anchor_moments
 
 __all__ = ["closed_form_anchor_moments"]
 
@@ -20,7 +20,7 @@ __all__ = ["closed_form_anchor_moments"]
 def closed_form_anchor_moments(case: Case, form: str = "exact") -> dict[str, dict]:
     """Static anchor-moment columns (as in anchors.csv) of every clamped anchor, from the
     exact elastic catenary of the bare cable (no point masses or extra loads)."""
-    from .postcmd import case_length
+    from cablefem.app.post import case_length
 
     sec = case.section
     length = case_length(case)

@@ -36,9 +36,9 @@ from pathlib import Path
 
 from mpi4py import MPI
 
+from cablefem.app.log import setup_logging
+from cablefem.app.run import run_case
 from cablefem.case import load_case
-from cablefem.log import setup_logging
-from cablefem.run import run_case
 from cablefem.verify import closed_form_anchor_moments
 
 here = Path(__file__).resolve().parent

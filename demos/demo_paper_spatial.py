@@ -27,9 +27,9 @@ from pathlib import Path
 import numpy as np
 from mpi4py import MPI
 
+from cablefem.app.log import setup_logging
+from cablefem.app.run import run_case
 from cablefem.case import load_case
-from cablefem.log import setup_logging
-from cablefem.run import run_case
 from cablefem.verify import closed_form_anchor_moments
 
 here = Path(__file__).resolve().parent

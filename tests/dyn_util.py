@@ -4,14 +4,13 @@ discrete mode, and the value of a nodal dof gathered over ranks."""
 from __future__ import annotations
 
 import numpy as np
+from conftest import level_case
 from mpi4py import MPI
 
+from cablefem.cable import CableModel
 from cablefem.case import parse_case
 from cablefem.dynamics import DynamicsStats, integrate
-from cablefem.model import CableModel
 from cablefem.statics import solve_static
-
-from conftest import level_case
 
 EA, L0, L, M = 100.0, 1.0, 1.01, 1.0  # T = EA (L/l - 1) = 1, stretch 1.01
 T = EA * (L / L0 - 1)

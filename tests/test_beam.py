@@ -1,4 +1,4 @@
-"""The reference rod (cablefem.beam): rotations, the rod against closed forms and published
+"""The reference rod (cablefem.rod): rotations, the rod against closed forms and published
 solutions, and its anchor moment against the composite asymptotic solution (issue 4).
 
 Runs serially and on 2 MPI ranks (every model is built on COMM_WORLD)."""
@@ -10,15 +10,22 @@ from pathlib import Path
 import numpy as np
 import pytest
 import ufl
-from dolfinx import fem, mesh as dmesh
+from dolfinx import fem
+from dolfinx import mesh as dmesh
 from mpi4py import MPI
 from petsc4py import PETSc
 
 from cablefem import asymptotics
-from cablefem.beam import (BeamModel, beam_stations, cayley_from_rotation, rotation_matrix,
-                           split, virtual_rotation_map)
 from cablefem.case import CaseError, load_case, parse_case
 from cablefem.modal import solve_modes
+from cablefem.rod import (
+    BeamModel,
+    beam_stations,
+    cayley_from_rotation,
+    rotation_matrix,
+    split,
+    virtual_rotation_map,
+)
 from cablefem.statics import solve_static
 
 DEMOS = Path(__file__).resolve().parents[1] / "demos"
@@ -162,7 +169,7 @@ def _elastica(alpha: float) -> tuple[float, float, float]:
     """Cantilever under a dead tip load P normal to it, alpha = P l^2/EI: tip deflection
     along the load, shortening, and tip angle, from the elastica EI theta'' = -P cos theta,
     theta(0) = 0, theta'(l) = 0 (scipy solve_bvp, tolerance 1e-10)."""
-    from scipy.integrate import solve_bvp, cumulative_trapezoid  # noqa: F401
+    from scipy.integrate import cumulative_trapezoid, solve_bvp  # noqa: F401
 
     s = np.linspace(0, 1, 2001)
 
@@ -297,7 +304,7 @@ def test_beam_run_writes_the_string_runs_files(mpi_tmp_path):
     import dataclasses
     import json
 
-    from cablefem.run import run_case
+    from cablefem.app.run import run_case
 
     case = load_case(DEMOS / "paper_inplane.toml")
     anchors = [dataclasses.replace(a, motion=None) for a in case.anchors]

@@ -14,12 +14,27 @@ import numpy as np
 import pytest
 
 from cablefem.case import (
-    CASE_KEYS, CaseError, TableDoc, format_case_reference, load_case, parse_case,
-    check_table_ends, rayleigh_coefficients, startup_time,
+    CASE_KEYS,
+    CaseError,
+    TableDoc,
+    check_table_ends,
+    format_case_reference,
+    load_case,
+    parse_case,
+    rayleigh_coefficients,
+    startup_time,
 )
 from cablefem.motion import (
-    ACCELERATION_STEP_FRACTION, DEFAULT_RAMP_PERIODS, EllipseMotion, HarmonicMotion, Motion,
-    TableMotion, TimeFunction, ramp_factors, read_factor_csv, read_motion_csv,
+    ACCELERATION_STEP_FRACTION,
+    DEFAULT_RAMP_PERIODS,
+    EllipseMotion,
+    HarmonicMotion,
+    Motion,
+    TableMotion,
+    TimeFunction,
+    ramp_factors,
+    read_factor_csv,
+    read_motion_csv,
 )
 from cablefem.properties import Section, dimensionless_groups
 

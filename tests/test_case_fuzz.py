@@ -11,10 +11,11 @@ import math
 import tempfile
 from pathlib import Path
 
-from hypothesis import HealthCheck, given, settings, strategies as st
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
+from cablefem.app.cli import main
 from cablefem.case import Case, CaseError, load_case
-from cablefem.cli import main
 
 BASE = """title = "fuzz"
 [section]

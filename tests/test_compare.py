@@ -17,8 +17,8 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 
-from cablefem.cli import main
-from cablefem.comparecmd import compare_runs, format_table
+from cablefem.app.cli import main
+from cablefem.app.compare import compare_runs, format_table
 
 COLUMNS = ["time", "anchor", "Nx", "Ny", "Nz", "tension", "delta", "moment", "Mx", "My", "Mz",
            "psi0", "layer_length", "moment_layer", "valid"]
@@ -304,7 +304,7 @@ def test_first_row_warning(mpi_tmp_path, spoil):
     kw = {"moment": {"static_moment": 0.5}, "tension": {"first_tension": 150.0}}.get(spoil, {})
     b = write_run(mpi_tmp_path / "b", model="beam", scale=1.0, t_end=3.0, **kw)
     handler = _Collect()
-    logger = logging.getLogger("cablefem.comparecmd")
+    logger = logging.getLogger("cablefem.app.compare")
     logger.addHandler(handler)
     try:
         res = compare_runs(a, b)

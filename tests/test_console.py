@@ -11,8 +11,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from cablefem.log import Progress
-from cablefem.plots import moment_axis_range
+from cablefem.app.log import Progress
+from cablefem.app.plots import moment_axis_range
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -61,7 +61,7 @@ def test_log_follows_the_current_stderr(monkeypatch):
     import io
     import logging
 
-    from cablefem.log import setup_logging
+    from cablefem.app.log import setup_logging
 
     setup_logging(logging.INFO)
     first = io.StringIO()

@@ -5,10 +5,9 @@ import re
 import subprocess
 from pathlib import Path
 
-from cablefem.case import format_case_reference
-
-
 import pytest
+
+from cablefem.case import format_case_reference
 
 
 @pytest.mark.parametrize("marker,network", [("case-keys", False), ("network-keys", True)])

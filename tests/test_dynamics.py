@@ -6,15 +6,14 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from dolfinx import fem
-from mpi4py import MPI
 import ufl
-
-from cablefem.case import parse_case
-from cablefem.run import RunError, run_case
-
 from conftest import level_case, observed_order
-from dyn_util import L, L0, M, T, free_vibration, node_value, omega_discrete
+from dolfinx import fem
+from dyn_util import L0, L, M, T, free_vibration, node_value, omega_discrete
+from mpi4py import MPI
+
+from cablefem.app.run import RunError, run_case
+from cablefem.case import parse_case
 
 
 def _zero_crossing_omega(ts, ys) -> float:
@@ -109,8 +108,8 @@ def test_reactions_balance_momentum(make_case):
     case = make_case(motion={"type": "harmonic", "amplitude": [2e-4, 0, 0], "omega": 32.814},
                      damping={"ratio": 0.005, "frequencies": [16.407, 32.814]},
                      dynamics={"t_end": 0.2, "dt": 0.005})
+    from cablefem.cable import CableModel
     from cablefem.dynamics import integrate
-    from cablefem.model import CableModel
     from cablefem.statics import solve_static
 
     model = CableModel(case, MPI.COMM_WORLD)
@@ -192,8 +191,8 @@ def test_rayleigh_current_tangent_is_frame_independent():
         for a in d["anchors"]:
             a["position"] = list(rot @ np.asarray(a["position"], float))
             a["direction"] = list(rot @ np.asarray(a["direction"], float))
+        from cablefem.cable import CableModel
         from cablefem.dynamics import integrate
-        from cablefem.model import CableModel
         from cablefem.statics import solve_static
 
         model = CableModel(parse_case(d), MPI.COMM_WORLD)

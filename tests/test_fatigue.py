@@ -18,7 +18,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from cablefem import fatigue as fat
-from cablefem.post import ANCHOR_COLUMNS, MOMENT_COLUMNS
+from cablefem.moments import ANCHOR_COLUMNS, MOMENT_COLUMNS
 
 DS_C = 100.0
 DS_D = DS_C * 0.4 ** (1 / 3)  # (2e6/5e6)^(1/3) ds_C
@@ -446,12 +446,11 @@ def test_default_window_leaves_out_the_start_up(mpi_tmp_path):
     window, D = 9.5/1e7 + 0.5/N(100 + a2) over 10 time units; fatigue.json says which
     window and why. window = 'all' counts the start-up: D = 20/2.5e5 + ... A run that ends
     within the start-up is refused with a message naming the window."""
+    from conftest import level_case
     from mpi4py import MPI
 
+    from cablefem.app.fatigue import run_fatigue
     from cablefem.case import parse_case
-    from cablefem.fatiguecmd import run_fatigue
-
-    from conftest import level_case
 
     comm = MPI.COMM_WORLD
     ramp = 19.99

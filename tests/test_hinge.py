@@ -15,11 +15,11 @@ from mpi4py import MPI
 from scipy.integrate import solve_ivp
 
 from cablefem.asymptotics import far_field_offsets, virtual_hinge
-from cablefem.beam import BeamModel
+from cablefem.cable import CableModel
 from cablefem.case import CaseError, load_case, parse_case
 from cablefem.modal import solve_modes
-from cablefem.model import CableModel
-from cablefem.post import anchor_moments
+from cablefem.moments import anchor_moments
+from cablefem.rod import BeamModel
 from cablefem.statics import StaticError, solve_static
 
 DEMOS = Path(__file__).resolve().parents[1] / "demos"
@@ -247,7 +247,7 @@ def test_hinged_string_steady_state_rms_against_the_rod(name, mpi_tmp_path):
     RMS, benchmarks/bench_paper.py): the steady-state RMS anchor moment of the string with
     the following hinge within 1 % of the rod's (the issue's target; measured 0.08-0.76 %).
     The peaks are not asserted: they miss the 1 % target (2.5-4 %, README)."""
-    from cablefem.run import run_case
+    from cablefem.app.run import run_case
 
     rms = {}
     for label, case, kw in (("rod", load_case(DEMOS / name), {"model": "beam"}),
@@ -265,8 +265,8 @@ def test_following_hinge_resumes_from_a_checkpoint_exactly(mpi_tmp_path):
     alone does not give them back: the tension measured in it depends on the law it was
     solved with). Case B resumed from checkpoint.npz at step 20 of 40 gives the
     uninterrupted anchor forces exactly (measured: 0; without the laws: 5 % off)."""
-    from cablefem.checkpoint import read_checkpoint, write_checkpoint
     from cablefem.dynamics import integrate
+    from cablefem.io.checkpoint import read_checkpoint, write_checkpoint
 
     def run(start=None):
         m = CableModel(_hinged("paper_spatial.toml"), MPI.COMM_WORLD)

@@ -5,15 +5,14 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from conftest import level_case, observed_order
 from mpi4py import MPI
 
+from cablefem.cable import CableModel
 from cablefem.case import parse_case
 from cablefem.catenary import irvine_symmetric_frequency
-from cablefem.model import CableModel
 from cablefem.modal import solve_modes
 from cablefem.statics import solve_static
-
-from conftest import level_case, observed_order
 
 
 def taut_model(n: int, EA=100.0, l=1.0, L=1.01, m=1.0):

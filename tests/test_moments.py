@@ -6,16 +6,15 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from conftest import level_case, observed_order
 from mpi4py import MPI
 
+from cablefem.cable import CableModel
 from cablefem.case import parse_case
 from cablefem.catenary import catenary_between
 from cablefem.dynamics import integrate
-from cablefem.model import CableModel
-from cablefem.post import anchor_moments
+from cablefem.moments import anchor_moments
 from cablefem.statics import solve_static
-
-from conftest import level_case, observed_order
 
 EA, EI, CHORD = 17857.14, 4e-4, 1.0013333
 W = np.array([0.0, 0.0, -1.0])  # weight per length, case A units

@@ -10,11 +10,11 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 
+from cablefem.app.run import run_case
 from cablefem.case import CaseError, parse_case
 from cablefem.dynamics import integrate
 from cablefem.modal import solve_modes
-from cablefem.netmodel import NetworkModel
-from cablefem.run import run_case
+from cablefem.network import NetworkModel
 from cablefem.statics import solve_static
 
 comm = MPI.COMM_WORLD
@@ -138,7 +138,7 @@ def test_network_parallel_equals_serial_and_xdmf(mpi_tmp_path):
     assert len(res.forces) == 6 and all(n.split(":")[0] in ("pylon", "deck")
                                         for n in res.forces)
     if comm.rank == 0:
-        from cablefem.network import read_network_mesh
+        from cablefem.geometry import read_network_mesh
 
         net = read_network_mesh(mesh)
         with meshio.xdmf.TimeSeriesReader(out / "string.xdmf") as reader:

@@ -7,11 +7,10 @@ from __future__ import annotations
 import json
 
 import numpy as np
+from conftest import read_series
 from mpi4py import MPI
 
-from cablefem.run import run_case
-
-from conftest import read_series
+from cablefem.app.run import run_case
 
 comm = MPI.COMM_WORLD
 

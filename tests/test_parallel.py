@@ -7,8 +7,8 @@ from __future__ import annotations
 import numpy as np
 from mpi4py import MPI
 
+from cablefem.cable import CableModel
 from cablefem.dynamics import integrate
-from cablefem.model import CableModel
 from cablefem.modal import solve_modes
 from cablefem.statics import solve_static
 

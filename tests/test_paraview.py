@@ -57,8 +57,8 @@ def test_xdmf_opens_in_paraview(tmp_path):
     sys.path.insert(0, str(Path(__file__).parent))
     from test_network import fan_case, fan_mesh  # noqa: E402
 
+    from cablefem.app.run import run_case
     from cablefem.case import parse_case
-    from cablefem.run import run_case
 
     mesh = fan_mesh(str(tmp_path / "fan.msh"))
     d = fan_case(mesh, g=9.81, dynamics={"t_end": 0.2, "dt": 0.005, "fields_every": 10})

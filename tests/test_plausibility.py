@@ -11,9 +11,9 @@ import sys
 import pytest
 from mpi4py import MPI
 
+from cablefem.app.run import run_case
+from cablefem.cable import MAX_PLAUSIBLE_STRAIN, PLAUSIBLE_LENGTH_RATIO, CableModel
 from cablefem.case import parse_case
-from cablefem.model import MAX_PLAUSIBLE_STRAIN, PLAUSIBLE_LENGTH_RATIO, CableModel
-from cablefem.run import run_case
 
 EA, MASS, G, CHORD = 8.7589e8, 50.0, 9.81, 200.0  # a 200 m steel stay (stay_cable_si.toml)
 

@@ -7,9 +7,8 @@ In-process tests run serially and under mpirun -n 2; subprocess tests are serial
 
 from __future__ import annotations
 
-import dataclasses
-
 import csv
+import dataclasses
 import json
 import math
 import os
@@ -23,12 +22,11 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import level_case
 from mpi4py import MPI
 
+from cablefem.app.run import RunError, run_case
 from cablefem.case import CaseError, load_case, parse_case
-from cablefem.run import RunError, run_case
-
-from conftest import level_case
 
 comm = MPI.COMM_WORLD
 ROOT = Path(__file__).resolve().parents[1]
@@ -156,7 +154,7 @@ def test_anchor_moments_angle_above_90_degrees_invalid():
     """The shared formula (run and post): a force at Delta > pi/2 from the clamp direction
     is flagged invalid with its reason; Delta < pi/2 stays valid; the angle itself is the
     one built (1e-14: atan2 of exact sines and cosines)."""
-    from cablefem.post import anchor_moments
+    from cablefem.moments import anchor_moments
 
     deltas = np.array([0.1, 1.5, 1.6, 3.0])
     N = 100.0 * np.column_stack([np.cos(deltas), np.zeros(4), np.sin(deltas)])
@@ -174,7 +172,7 @@ def test_network_run_writes_fatigue(mpi_tmp_path):
     """demos/fan.toml: run_case writes fatigue.json with a positive damage at every clamped
     anchor of the network (12 stay ends), listed in summary['fatigue'] too; 'run_fatigue'
     afterwards on the same folder reproduces it (same data, same computation: 1e-12)."""
-    from cablefem.fatiguecmd import run_fatigue
+    from cablefem.app.fatigue import run_fatigue
 
     text = (ROOT / "demos" / "fan.toml").read_text().replace(
         '"../meshes/fan_small.msh"', json.dumps(str(ROOT / "meshes" / "fan_small.msh")))
@@ -249,7 +247,7 @@ def test_more_modes_than_free_dofs(mpi_tmp_path, make_case):
 def test_output_lock_collective(mpi_tmp_path):
     """The verdict reaches every rank: a file as output folder raises OutdirError on all;
     the lock is re-entrant within a process and released after the outermost holder."""
-    from cablefem.outdir import LOCK_NAME, OutdirError, output_lock
+    from cablefem.io.outdir import LOCK_NAME, OutdirError, output_lock
 
     f = mpi_tmp_path / "afile"
     if comm.rank == 0:
@@ -360,7 +358,7 @@ def test_second_run_refused_and_restart_after_kill9(tmp_path):
 def test_memory_estimate_refuses_what_does_not_fit(monkeypatch, make_case):
     """With 1 GB available on every node, 1e6 elements (estimate 4.9 GB) are refused with
     a CaseError naming mesh.elements and the estimate; 1e4 elements (0.19 GB x 1.5) pass."""
-    from cablefem import resources
+    from cablefem.app import resources
 
     monkeypatch.setattr(resources, "mem_available", lambda: 1.0e9)
     with pytest.raises(CaseError) as err:
@@ -375,7 +373,7 @@ def test_memory_estimate_refuses_what_does_not_fit(monkeypatch, make_case):
 def test_memory_model_bounds_measured_peak(tmp_path):
     """The estimate against the peak resident memory of a real run of 50 000 elements
     (statics, 1 mode, 2 steps): within the safety factor both ways."""
-    from cablefem.resources import SAFETY, estimate_memory
+    from cablefem.app.resources import SAFETY, estimate_memory
 
     dyn = ("[dynamics]\nt_end = 0.0002\ndt = 0.0001\nfields_every = 1\n[modal]\nmodes = 1\n")
     case = write_toml(tmp_path / "c.toml", CASE.format(elements=50_000, extra=dyn))
@@ -392,7 +390,7 @@ def test_memory_model_bounds_measured_peak(tmp_path):
 def test_ten_million_elements_refused_at_once(tmp_path):
     """10 million elements: refused in seconds (exit 2, mesh.elements, the estimate),
     before any folder is made -- where the estimate does not fit this machine."""
-    from cablefem.resources import SAFETY, estimate_memory, mem_available
+    from cablefem.app.resources import SAFETY, estimate_memory, mem_available
 
     avail = mem_available()
     if avail is None or SAFETY * estimate_memory(10_000_000) <= avail:
@@ -449,7 +447,7 @@ def test_sigint_during_build_and_statics(tmp_path, marker):
 def test_small_problem_note():
     """The note on too many ranks for too few degrees of freedom: none on one rank or with
     enough dofs per rank, one below the threshold."""
-    from cablefem.resources import MIN_DOFS_PER_RANK, note_small_problem
+    from cablefem.app.resources import MIN_DOFS_PER_RANK, note_small_problem
 
     class Two:
         size = 2
@@ -462,7 +460,7 @@ def test_small_problem_note():
 def test_small_problem_note_in_summary(mpi_tmp_path, make_case):
     """run_case lists the note in summary['notes'] when run on more ranks than pay off
     (12 elements: 39 degrees of freedom)."""
-    from cablefem.resources import MIN_DOFS_PER_RANK
+    from cablefem.app.resources import MIN_DOFS_PER_RANK
 
     res = run_case(make_case(elements=12), mpi_tmp_path / "o", modes=1, dynamics=False,
                    figures=False, progress=False)

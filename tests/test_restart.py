@@ -5,7 +5,7 @@ uninterrupted run: the same ``anchors.csv`` (here exactly: the same operations a
 from the checkpoint, at which the uninterrupted run restarts its integrator as well), the
 same field frames, the same file names and the whole run's solver counters.
 
-The kills at exact points use the ``CABLEFEM_KILL_AT=<point>:<n>`` hook (cablefem.faults);
+The kills at exact points use the ``CABLEFEM_KILL_AT=<point>:<n>`` hook (cablefem.io.faults);
 one kill comes from outside, at whatever instant the run is in."""
 
 from __future__ import annotations
@@ -23,7 +23,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
 from conftest import read_series
 
 pytestmark = pytest.mark.serial  # subprocesses, signals and mpirun: not under mpirun

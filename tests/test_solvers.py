@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 
+from cablefem.cable import CableModel
 from cablefem.dynamics import _make_ts, integrate
-from cablefem.model import CableModel
 from cablefem.petsc_utils import LARGE_ABOVE, SNESHistory, linear_solver_options
 from cablefem.statics import solve_static
 

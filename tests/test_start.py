@@ -14,10 +14,10 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 
-from cablefem.beam import BeamModel
+from cablefem.cable import CableModel
 from cablefem.case import load_case, parse_case
 from cablefem.dynamics import integrate
-from cablefem.model import CableModel
+from cablefem.rod import BeamModel
 from cablefem.statics import solve_static
 
 DEMOS = Path(__file__).resolve().parents[1] / "demos"

@@ -5,14 +5,13 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from conftest import observed_order
 from mpi4py import MPI
 
+from cablefem.cable import CableModel
 from cablefem.case import parse_case
 from cablefem.catenary import catenary_between
-from cablefem.model import CableModel
 from cablefem.statics import solve_static
-
-from conftest import observed_order
 
 
 def inclined_case(elements: int, **extra) -> dict:

@@ -20,14 +20,21 @@ from dolfinx.fem import petsc as fpetsc
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from .petsc_utils import (ADD, FORWARD, INSERT, REVERSE, case_options, default_options,
-                          lu_options)
+from cablefem.petsc_utils import (
+    ADD,
+    FORWARD,
+    INSERT,
+    REVERSE,
+    case_options,
+    default_options,
+    lu_options,
+)
 
 __all__ = ["AnchorForces"]
 
 
 class AnchorForces:
-    """Computes ``N_a`` for every anchor of a :class:`~cablefem.model.CableModel`."""
+    """Computes ``N_a`` for every anchor of a :class:`~cablefem.cable.CableModel`."""
 
     def __init__(self, model) -> None:
         self.model = model

@@ -9,7 +9,7 @@ it when the process ends in any way (also ``kill -9``), so a killed run never le
 lock, and ``cablefem run --restart DIR`` takes it again. The lock file itself stays.
 
 Within one process the lock is re-entrant (the command line takes it, then
-:func:`cablefem.run.run_case` takes it again for the same folder); it is released when the
+:func:`cablefem.app.run.run_case` takes it again for the same folder); it is released when the
 outermost holder leaves.
 """
 
@@ -23,15 +23,13 @@ from pathlib import Path
 
 from mpi4py import MPI
 
+from cablefem.errors import OutdirError
+
 __all__ = ["OutdirError", "output_lock", "LOCK_NAME"]
 
 LOCK_NAME = ".cablefem.lock"
 
 _held: dict[str, list] = {}  # resolved folder -> [file object, depth] (rank 0 only)
-
-
-class OutdirError(ValueError):
-    """The output folder cannot be used (not a directory, not writable, in use)."""
 
 
 def _take(outdir: Path) -> str | None:

@@ -16,9 +16,9 @@ from pathlib import Path
 import numpy as np
 from mpi4py import MPI
 
-from .case import Case, CaseError, startup_time
-from .units import unit
-from .fatigue import SNCurve, StressSection, fatigue_report, read_anchor_csv, write_report
+from cablefem.case import Case, CaseError, startup_time
+from cablefem.fatigue import SNCurve, StressSection, fatigue_report, read_anchor_csv, write_report
+from cablefem.units import unit
 
 __all__ = ["run_fatigue"]
 

@@ -25,11 +25,11 @@ from pathlib import Path
 import numpy as np
 from mpi4py import MPI
 
-from . import __version__
-from .fatigue import read_anchor_csv
-from .io import jsonable, write_json
-from .plots import MAX_PANELS
-from .run import steady_state_stats
+from cablefem import __version__
+from cablefem.app.plots import MAX_PANELS
+from cablefem.app.run import steady_state_stats
+from cablefem.fatigue import read_anchor_csv
+from cablefem.io.series import jsonable, write_json
 
 __all__ = ["compare_runs", "format_table", "history_error", "start_warnings", "FRACTION",
            "START_TOLERANCE"]

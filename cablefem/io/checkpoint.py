@@ -4,7 +4,7 @@ Every ``dynamics.checkpoint_every`` steps the state (nodal displacement and velo
 station order, time, step, the step-cutting state) goes to ``checkpoint.npz``, written by
 rank 0 to a temporary file and renamed (never half written), after ``anchors.csv`` has been
 flushed and the field series (``string.xdmf``, ``moments.xdmf``) have closed their current
-part and listed it (:class:`cablefem.io.Series`); it also holds the run's cumulative
+part and listed it (:class:`cablefem.io.series.Series`); it also holds the run's cumulative
 counters and the number of frames of each series. ``cablefem run --restart DIR`` rebuilds
 the model from the same case file (its SHA-256 must match), truncates ``anchors.csv`` to
 the checkpoint's time, keeps the series' frames up to it (and checks their number),
@@ -22,8 +22,8 @@ from pathlib import Path
 import numpy as np
 from mpi4py import MPI
 
-from .dynamics import Checkpoint
-from .faults import kill_point
+from cablefem.dynamics import Checkpoint
+from cablefem.io.faults import kill_point
 
 __all__ = ["CHECKPOINT", "case_digest", "write_checkpoint", "read_checkpoint",
            "truncate_csv", "run_status"]

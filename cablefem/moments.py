@@ -28,7 +28,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import asymptotics
+from cablefem import asymptotics
 
 __all__ = ["ANCHOR_COLUMNS", "MOMENT_COLUMNS", "MAX_ANCHOR_ANGLE", "anchor_moments",
            "read_anchor_forces", "AnchorHistory"]

@@ -15,17 +15,17 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import ufl
-from ufl.algorithms import expand_derivatives
-from dolfinx import fem, mesh as dmesh
+from dolfinx import fem
+from dolfinx import mesh as dmesh
 from mpi4py import MPI
 from petsc4py import PETSc
+from ufl.algorithms import expand_derivatives
 
-from . import catenary, string
-from .case import Case, CaseError
-from .log import quiet_compiler
-from .motion import Motion
-from .network import create_line_mesh, polyline_cable, straight_cable, \
-    graded_stations
+from cablefem import catenary, forms
+from cablefem.case import Case, CaseError
+from cablefem.geometry import create_line_mesh, graded_stations, polyline_cable, straight_cable
+from cablefem.jit import quiet_compiler
+from cablefem.motion import Motion
 
 __all__ = ["CableModel", "AnchorBC"]
 
@@ -165,7 +165,7 @@ class CableModel:
         self.u_bc = fem.Function(self.V, name="prescribed_displacement")
         self.du = ufl.TestFunction(self.V)
         self.dw = ufl.TrialFunction(self.V)
-        self.t0 = string.reference_tangent(self.mesh)
+        self.t0 = forms.reference_tangent(self.mesh)
 
         m = self.mesh
         self._coefficients()
@@ -181,7 +181,7 @@ class CableModel:
         self.anchors = self._build_anchors()
         self.hinges = None
         if self.has_hinges():
-            from .hinge import HingeError, VirtualHinges
+            from cablefem.hinge import HingeError, VirtualHinges
 
             try:
                 self.hinges = VirtualHinges(self)
@@ -362,17 +362,17 @@ class CableModel:
         """Build the UFL residuals and Jacobians (override or extend, then :meth:`compile`)."""
         u, a, du, t0, cc = self.u, self.a, self.du, self.t0, self.c
         self._set_forms(
-            F_int=string.internal_work(u, du, t0, self.EA, self.tension_only, c=cc),
-            F_weight=string.load_work(self.m * self.gravity, du, c=cc),
-            F_inertia=string.inertia_work(self.m, a, du, c=cc),
+            F_int=forms.internal_work(u, du, t0, self.EA, self.tension_only, c=cc),
+            F_weight=forms.load_work(self.m * self.gravity, du, c=cc),
+            F_inertia=forms.inertia_work(self.m, a, du, c=cc),
             du_t=du, a_t=a, dx=ufl.dx,
             # the same with compression allowed: statics uses it to get off a guess on
             # which every element is slack (zero tangent stiffness under tension only)
-            bilateral=string.internal_work(u, du, t0, self.EA, False, c=cc))
+            bilateral=forms.internal_work(u, du, t0, self.EA, False, c=cc))
 
     def _axial_damping_work(self):
         """The "axial" damping model's virtual work (strain-rate damping along the axis)."""
-        return string.axial_damping_work(self.u, self.v, self.du, self.t0, self.EA,
+        return forms.axial_damping_work(self.u, self.v, self.du, self.t0, self.EA,
                                          self.beta, c=self.c)
 
     def _set_forms(self, F_int, F_weight, F_inertia, du_t, a_t, dx, bilateral=None) -> None:
@@ -386,7 +386,7 @@ class CableModel:
         u, v, a, dw = self.u, self.v, self.a, self.dw
         case, cc = self.case, self.c
         self.F_internal = F_int
-        extra = [string.load_work(q, du_t, dx=dx, c=cc) for q, _ in self.loads]
+        extra = [forms.load_work(q, du_t, dx=dx, c=cc) for q, _ in self.loads]
         extra += [pm.mass * ufl.inner(self.gravity, du_t("+")) * self.dS(tag)
                   for pm in case.point_masses for tag in self._item_tags(pm)]
         extra += [ufl.inner(q, du_t("+")) * self.dS(tag)
@@ -440,7 +440,7 @@ class CableModel:
         """JIT-compile the forms (FFCx caches them: later runs take milliseconds).
 
         The C compiler's messages (setuptools logs them through the root logger) are kept
-        off the console meanwhile (:func:`cablefem.log.quiet_compiler`)."""
+        off the console meanwhile (:func:`cablefem.jit.quiet_compiler`)."""
         with quiet_compiler():
             self._compile()
 
@@ -454,13 +454,13 @@ class CableModel:
         self.j_dynamic = fem.form(self.J_dynamic)
         self.m_form = fem.form(self.M_form)
         self.tension_expr = fem.Expression(
-            string.tension(self.u, self.t0, self.EA, self.tension_only, self.c),
+            forms.tension(self.u, self.t0, self.EA, self.tension_only, self.c),
             self.W.element.interpolation_points())
-        self.strain_expr = fem.Expression(string.axial_strain(self.u, self.t0, self.c),
+        self.strain_expr = fem.Expression(forms.axial_strain(self.u, self.t0, self.c),
                                           self.W.element.interpolation_points())
         self.energy_forms = (
             fem.form(0.5 * ufl.inner(self.v, self.v) * self.c * self.m * ufl.dx),
-            fem.form(string.strain_energy_density(self.u, self.t0, self.EA, self.tension_only,
+            fem.form(forms.strain_energy_density(self.u, self.t0, self.EA, self.tension_only,
                                                   self.c)
                      * ufl.dx),
             fem.form(-ufl.inner(self.c * self.m * self.gravity, self.u) * ufl.dx))
@@ -570,6 +570,6 @@ class CableModel:
         f.x.scatter_forward()
 
     def dimensionless_groups(self) -> dict:
-        from .properties import dimensionless_groups
+        from cablefem.properties import dimensionless_groups
 
         return dimensionless_groups(self.case.section, self.length, self.case.gravity.g)

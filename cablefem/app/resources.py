@@ -23,7 +23,7 @@ import logging
 
 from mpi4py import MPI
 
-from .case import Case, CaseError
+from cablefem.case import Case, CaseError
 
 __all__ = ["BASE_BYTES", "BYTES_PER_ELEMENT", "SAFETY", "estimate_memory", "check_memory",
            "mem_available", "MIN_DOFS_PER_RANK", "note_small_problem"]

@@ -15,13 +15,18 @@ from pathlib import Path
 import numpy as np
 from mpi4py import MPI
 
-from . import __version__, catenary
-from .case import Case
-from .io import AnchorCSV, write_json
-from .plots import anchor_figures
-from .post import (ANCHOR_COLUMNS, MAX_ANCHOR_ANGLE, MOMENT_COLUMNS, anchor_moments,
-                   read_anchor_forces)
-from .run import _max_excitation, steady_state_stats
+from cablefem import __version__, catenary
+from cablefem.app.plots import anchor_figures
+from cablefem.app.run import _max_excitation, steady_state_stats
+from cablefem.case import Case
+from cablefem.io.series import AnchorCSV, write_json
+from cablefem.moments import (
+    ANCHOR_COLUMNS,
+    MAX_ANCHOR_ANGLE,
+    MOMENT_COLUMNS,
+    anchor_moments,
+    read_anchor_forces,
+)
 
 __all__ = ["run_post", "case_length"]
 

@@ -2,7 +2,7 @@
 
 Nothing else lives here: no meshes, no solvers. Every function takes UFL objects and returns
 UFL expressions or forms, so that users can add terms (drag, buoyancy, ...) to the residual
-that :class:`cablefem.model.CableModel` exposes.
+that :class:`cablefem.cable.CableModel` exposes.
 
 Kinematics on a 1D mesh embedded in 3D, with ``s`` the arc length of the mesh (the
 reference configuration). A single cable's mesh is its stress-free geometry; a network's

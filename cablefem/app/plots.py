@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 from mpi4py import MPI
 
-from .units import unit
+from cablefem.units import unit
 
 __all__ = ["anchor_figures", "is_spatial", "moment_axis_range"]
 

@@ -20,8 +20,6 @@ discarded by ``cablefem run --restart`` (``docs/outputs.md``).
 
 from __future__ import annotations
 
-import json
-import math
 import os
 import re
 import shutil
@@ -32,7 +30,10 @@ import numpy as np
 from dolfinx.io import XDMFFile
 from mpi4py import MPI
 
-from .faults import kill_point
+from cablefem.errors import OutputError
+from cablefem.io.anchorcsv import AnchorCSV
+from cablefem.io.faults import kill_point
+from cablefem.io.summary import jsonable, write_json
 
 __all__ = ["StringWriter", "AnchorCSV", "MomentsWriter", "Series", "OutputError",
            "write_json", "write_modes", "jsonable", "clean_outputs", "remove_temporaries",
@@ -41,38 +42,8 @@ __all__ = ["StringWriter", "AnchorCSV", "MomentsWriter", "Series", "OutputError"
 SERIES = "series"  #: the folder of the series' HDF5 data, under the output folder
 
 
-class OutputError(RuntimeError):
-    """An output cannot be written or resumed (e.g. frames of a run to resume are lost)."""
 
 
-def jsonable(obj):
-    """Convert numpy scalars/arrays and non-finite floats to plain JSON values."""
-    if isinstance(obj, dict):
-        return {str(k): jsonable(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [jsonable(v) for v in obj]
-    if isinstance(obj, np.ndarray):
-        return jsonable(obj.tolist())
-    if isinstance(obj, (np.floating, float)):
-        x = float(obj)
-        return x if math.isfinite(x) else None
-    if isinstance(obj, (np.integer,)):
-        return int(obj)
-    if isinstance(obj, (np.bool_,)):
-        return bool(obj)
-    if isinstance(obj, Path):
-        return str(obj)
-    return obj
-
-
-def write_json(path: Path, data: dict, comm: MPI.Comm = MPI.COMM_WORLD) -> None:
-    """Write ``data`` as JSON from rank 0, atomically; collective (all ranks call it)."""
-    if comm.rank == 0:
-        path = Path(path)
-        tmp = path.with_suffix(path.suffix + ".tmp")
-        tmp.write_text(json.dumps(jsonable(data), indent=2) + "\n")
-        os.replace(tmp, path)
-    comm.Barrier()
 
 
 class Series:
@@ -309,49 +280,8 @@ class StringWriter:
     def __exit__(self, *exc):
         self.close()
 
-class AnchorCSV:
-    """``anchors.csv``, one row per output time and anchor (rank 0 writes; others no-op)."""
-
-    def __init__(self, path: Path, columns: list[str], comm: MPI.Comm = MPI.COMM_WORLD,
-                 append: bool = False):
-        self.columns = columns
-        self.fh = None
-        if comm.rank == 0:
-            resume = append and Path(path).is_file()
-            self.fh = open(path, "a" if resume else "w", newline="")
-            if not resume:
-                self.fh.write(",".join(columns) + "\n")
-            self.fh.flush()
-
-    def write(self, rows: list[dict]) -> None:
-        if self.fh is None:
-            return
-        cols = self.columns
-        self.fh.write("".join(",".join(_cell(row.get(c, "")) for c in cols) + "\n"
-                              for row in rows))
-        self.fh.flush()
-
-    def close(self) -> None:
-        if self.fh is not None:
-            self.fh.close()
-            self.fh = None
-
-    def __enter__(self):
-        return self
-
-    def __exit__(self, *exc):
-        self.close()
 
 
-def _cell(v) -> str:
-    if isinstance(v, str):
-        return v if not any(ch in v for ch in ',"\n') else '"' + v.replace('"', '""') + '"'
-    if isinstance(v, (bool, np.bool_)):
-        return str(int(v))
-    if isinstance(v, (int, np.integer)):
-        return str(int(v))
-    x = float(v)
-    return "" if not math.isfinite(x) else repr(x)
 
 
 class MomentsWriter:

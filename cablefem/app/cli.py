@@ -36,7 +36,7 @@ class _Parser(argparse.ArgumentParser):
 
 
 def _parser() -> argparse.ArgumentParser:
-    from .case import format_case_reference
+    from cablefem.case import format_case_reference
 
     keys = format_case_reference()
     p = _Parser(prog="cablefem", formatter_class=argparse.RawDescriptionHelpFormatter,
@@ -194,8 +194,8 @@ def _compare(args) -> int:
     """``cablefem compare``: no case file; rank 0 prints the table."""
     from mpi4py import MPI
 
-    from .comparecmd import compare_runs, format_table
-    from .log import setup_logging
+    from cablefem.app.compare import compare_runs, format_table
+    from cablefem.app.log import setup_logging
 
     setup_logging(logging.WARNING if args.quiet else logging.INFO)
     try:
@@ -232,7 +232,7 @@ def _main(argv: list[str] | None = None) -> int:
     parser = _parser()
     args, extra = parser.parse_known_args(argv)
     if args.version:
-        from . import __version__
+        from cablefem import __version__
 
         print(f"cablefem {__version__}")
         return EXIT_OK
@@ -240,7 +240,7 @@ def _main(argv: list[str] | None = None) -> int:
         parser.print_help()
         return EXIT_INPUT
     if args.command == "keys":
-        from .case import format_case_reference
+        from cablefem.case import format_case_reference
 
         print(format_case_reference())
         return EXIT_OK
@@ -249,11 +249,11 @@ def _main(argv: list[str] | None = None) -> int:
     if args.command == "compare":
         return _compare(args)
 
-    from .case import CaseError, load_case
+    from cablefem.case import CaseError, load_case
 
     if args.command == "run":
         if args.restart is not None:
-            from .checkpoint import read_checkpoint
+            from cablefem.io.checkpoint import read_checkpoint
 
             try:
                 ck = read_checkpoint(args.restart)
@@ -261,7 +261,7 @@ def _main(argv: list[str] | None = None) -> int:
                 return _input_error(str(err))
             if args.output is not None and args.output.resolve() != args.restart.resolve():
                 return _input_error("--output must be the --restart folder (or omitted)")
-            from .checkpoint import run_status
+            from cablefem.io.checkpoint import run_status
 
             done = run_status(args.restart)
             if done.get("status") == "completed":
@@ -301,12 +301,12 @@ def _main(argv: list[str] | None = None) -> int:
     if getattr(args, "n", None) is not None and args.n < 1:
         return _input_error(f"--n must be >= 1, got {args.n}")
 
-    from .log import setup_logging
-    from .outdir import OutdirError, output_lock
+    from cablefem.app.log import setup_logging
+    from cablefem.io.outdir import OutdirError, output_lock
 
     setup_logging(logging.WARNING if args.quiet else logging.INFO)
     if args.command == "fatigue":
-        from .fatiguecmd import run_fatigue
+        from cablefem.app.fatigue import run_fatigue
 
         if not (args.rundir / "anchors.csv").is_file():
             return _input_error(f"{args.rundir}: no anchors.csv there (not a run folder)")
@@ -325,7 +325,7 @@ def _main(argv: list[str] | None = None) -> int:
             return _input_error(str(err))
         return EXIT_OK
     if args.command == "post":
-        from .postcmd import run_post
+        from cablefem.app.post import run_post
 
         try:
             with output_lock(args.output):
@@ -336,8 +336,8 @@ def _main(argv: list[str] | None = None) -> int:
         return EXIT_OK
 
     _petsc_options(extra)
-    from .run import RunError, RunInterrupted, run_case
-    from .statics import StaticError
+    from cablefem.app.run import RunError, RunInterrupted, run_case
+    from cablefem.statics import StaticError
 
     try:
         if args.command == "run":

@@ -63,9 +63,9 @@ from dolfinx import fem
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from .case import Case, CaseError
-from .model import CableModel
-from .network import straight_cable
+from cablefem.cable import CableModel
+from cablefem.case import Case, CaseError
+from cablefem.geometry import straight_cable
 
 __all__ = ["BeamModel", "beam_stations", "cayley_from_rotation", "cayley_rotation",
            "rotation_matrix", "virtual_rotation_map", "rod_strains"]
@@ -201,7 +201,7 @@ def energy_density(G, K, EA, GA, EI, GJ):
 
 # ----------------------------------------------------------------------------- the model
 class BeamModel(CableModel):
-    """The rod counterpart of :class:`~cablefem.model.CableModel` (same attributes, with six
+    """The rod counterpart of :class:`~cablefem.cable.CableModel` (same attributes, with six
     components per node: ``u`` holds displacement and Cayley vector).
 
     ``refine`` scales the mesh density (elements per layer and per span) for convergence

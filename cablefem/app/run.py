@@ -15,40 +15,41 @@ from pathlib import Path
 import numpy as np
 from mpi4py import MPI
 
-from . import __version__, asymptotics
-from .case import Case
-from .case import CaseError, check_table_ends
-from .checkpoint import case_digest, read_checkpoint, truncate_csv, write_checkpoint
-from .dynamics import DynamicsError, DynamicsStats, Interrupted, integrate
-from .faults import kill_point
-from .io import (AnchorCSV, MomentsWriter, OutputError, StringWriter, clean_outputs,
-                 remove_temporaries, write_json, write_modes)
-from .log import Progress, quiet_compiler
-from .modal import free_dofs, solve_modes
-from .units import unit
-from .model import CableModel
-from .netmodel import NetworkModel
-from .post import (ANCHOR_COLUMNS, MAX_ANCHOR_ANGLE, MOMENT_COLUMNS, anchor_moments,
-                   composite_field)
-from .resources import note_small_problem
-from .statics import solve_static
+from cablefem import __version__, asymptotics
+from cablefem.app.log import Progress, quiet_compiler
+from cablefem.app.resources import note_small_problem
+from cablefem.cable import CableModel
+from cablefem.case import Case, CaseError, check_table_ends
+from cablefem.dynamics import DynamicsError, DynamicsStats, Interrupted, integrate
+from cablefem.errors import RunError, RunInterrupted
+from cablefem.io.checkpoint import case_digest, read_checkpoint, truncate_csv, write_checkpoint
+from cablefem.io.faults import kill_point
+from cablefem.io.series import (
+    AnchorCSV,
+    MomentsWriter,
+    OutputError,
+    StringWriter,
+    clean_outputs,
+    remove_temporaries,
+    write_json,
+    write_modes,
+)
+from cablefem.modal import free_dofs, solve_modes
+from cablefem.moments import (
+    ANCHOR_COLUMNS,
+    MAX_ANCHOR_ANGLE,
+    MOMENT_COLUMNS,
+    anchor_moments,
+    composite_field,
+)
+from cablefem.network import NetworkModel
+from cablefem.statics import solve_static
+from cablefem.units import unit
 
 __all__ = ["RunResult", "RunError", "RunInterrupted", "run_case", "steady_state_stats", "warn",
            "static_sag_ratio", "rod_moment_columns"]
 
 log = logging.getLogger(__name__)
-
-
-class RunError(RuntimeError):
-    """A run stopped before the end; the files written so far are valid."""
-
-
-class RunInterrupted(RuntimeError):
-    """A run stopped on a signal; ``.signal`` is its number. Resume with ``--restart``."""
-
-    def __init__(self, message: str, signum: int | None) -> None:
-        super().__init__(message)
-        self.signal = signum
 
 
 @dataclass
@@ -346,17 +347,17 @@ class _Emitter:
 def run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, **kwargs
              ) -> RunResult:
     """Run a case (see :func:`_run_case` for the keywords and what is written), the C
-    compiler's messages kept off the console (:func:`cablefem.log.quiet_compiler`).
+    compiler's messages kept off the console (:func:`cablefem.jit.quiet_compiler`).
 
-    Before any work (collective): the memory estimate (:func:`cablefem.resources.
+    Before any work (collective): the memory estimate (:func:`cablefem.app.resources.
     check_memory`, CaseError naming ``mesh.elements``) and the output folder's check and
-    lock (:func:`cablefem.outdir.output_lock`, OutdirError), held until the run ends.
+    lock (:func:`cablefem.io.outdir.output_lock`, OutdirError), held until the run ends.
     SIGINT/SIGTERM stop the run at any time with :class:`RunInterrupted`: cleanly, with a
     checkpoint, in the dynamics; before them (build, statics, modes) as soon as Python
     code runs again after the C call in progress, with nothing to resume.
     """
-    from .outdir import output_lock
-    from .resources import check_memory
+    from cablefem.app.resources import check_memory
+    from cablefem.io.outdir import output_lock
 
     check_memory(case, comm, kwargs.get("model", "string"))
     with output_lock(outdir, comm), _StopOnSignal() as stop:
@@ -419,7 +420,7 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
     or a kill at any instant), and its files end as those of an uninterrupted run. A new
     run (``restart=False``) first removes an earlier run's outputs from ``outdir``. Until
     the run ends, ``summary.json`` says ``"status": "running"`` with the last checkpoint.
-    ``model="beam"`` runs the reference rod (:mod:`cablefem.beam`) instead of the string,
+    ``model="beam"`` runs the reference rod (:mod:`cablefem.rod`) instead of the string,
     its mesh density scaled by ``refine``; the anchor moments are then the rod's own.
     """
     wall0 = time.perf_counter()
@@ -435,7 +436,7 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
     if kind not in ("string", "beam"):
         raise ValueError(f"model must be 'string' or 'beam', got {kind!r}")
     if kind == "beam":
-        from .beam import BeamModel
+        from cablefem.rod import BeamModel
 
         model = BeamModel(case, comm, refine=refine)
     elif case.network is not None:
@@ -679,7 +680,7 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
     if summary["status"] == "running":
         summary["status"] = "completed"
     if figures and len(times) > 1 and moments:
-        from .plots import MAX_PANELS, anchor_figures
+        from cablefem.app.plots import MAX_PANELS, anchor_figures
 
         source = ("the rod's own moment (beam model)" if kind == "beam"
                   else "inner solution + string curvature")
@@ -692,7 +693,7 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
         warn(summary, "fatigue", "no fatigue report: it needs a time history at a clamped "
              "anchor (" + ("no clamped anchor" if not moments else "no dynamics run") + ")")
     elif case.fatigue is not None and error is None:
-        from .fatiguecmd import run_fatigue
+        from cablefem.app.fatigue import run_fatigue
 
         try:  # samples without a moment (slack anchor) are left out and counted
             # the anchors' sections from this summary: summary.json is not written yet

@@ -1,0 +1,111 @@
+"""Checks of a case against its run: tables that end before ``t_end``, tables too coarse
+for the time step, and the start-up time (the end of the longest ramp)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from cablefem.case.schema import (
+    Case,
+)
+from cablefem.motion import (
+    DEFAULT_RAMP_PERIODS,
+    EllipseMotion,
+    HarmonicMotion,
+    TableMotion,
+    TimeFunction,
+    default_ramp,
+    table_resolution,
+)
+
+# ---------------------------------------------------------------------------------------------
+# Parsing, table by table.
+
+
+def _tables(case: Case) -> list[tuple[str, Any]]:
+    """(key path, motion or time function) of every table of the case."""
+    out: list[tuple[str, Any]] = [(f"anchors[{i}].motion", a.motion)
+                                  for i, a in enumerate(case.anchors)
+                                  if isinstance(a.motion, TableMotion)]
+    for name in ("loads", "point_loads"):
+        out += [(f"{name}[{i}].time", item.time) for i, item in enumerate(getattr(case, name))
+                if isinstance(item.time, TimeFunction) and item.time.kind == "table"]
+    return out
+
+
+def check_table_ends(case: Case, t_end: float) -> list[tuple[str, str]]:
+    """Problems ``(key, message)`` of the tables (anchor motions, load factors) that end
+    before ``t_end`` (s) without ``hold = true``: they would be held silently."""
+    problems = []
+    for key, table in _tables(case):
+        last = float(table.times[-1])
+        if not table.hold and last < t_end * (1 - 1e-12) - 1e-12:
+            problems.append((f"{key}.file", f"the table ends at t = {last:g} s, before the "
+                                            f"end of the run t = {t_end:g} s: extend it, or "
+                                            f"set {key}.hold = true to hold its last row"))
+    return problems
+
+
+#: a table motion "starts at rest" when its displacement at t = 0 is below this fraction of
+#: its largest row and its velocity below this fraction of its largest velocity at the rows
+_START_FRACTION = 1e-3
+
+
+def _table_warnings(case: Case, dt: float, t_end: float) -> list[tuple[str, str]]:
+    """Valid but suspicious tables: what the time step cannot resolve
+    (:func:`cablefem.motion.table_resolution`), a motion table that does not start at the
+    static position and at rest, and a held end where the velocity jumps to 0."""
+    out = []
+    for key, table in _tables(case):
+        motion = isinstance(table, TableMotion)
+        values = table.values if motion else table.factors
+        out += [(f"{key}.file", m) for m in table_resolution(table.times, values, dt)]
+        if not motion:
+            continue
+        scale_u = float(np.max(np.linalg.norm(values, axis=1)))
+        scale_v = max(float(np.linalg.norm(table.velocity(float(t)))) for t in table.times)
+        u0 = table.displacement(0.0)
+        v0 = table.velocity(0.0)
+        if np.linalg.norm(u0) > _START_FRACTION * scale_u:
+            out.append((f"{key}.file", f"the anchor's displacement at t = 0 is "
+                                       f"{np.round(u0, 12).tolist()} m, not 0 (the static "
+                                       f"position): it jumps there at the first step"))
+        if np.linalg.norm(v0) > _START_FRACTION * scale_v:
+            out.append((f"{key}.file", f"the anchor's velocity at t = 0 is "
+                                       f"{np.round(v0, 12).tolist()} m/s, not 0: the run "
+                                       f"starts with a velocity jump (start the table at "
+                                       f"rest)"))
+        for edge, name in ((float(table.times[0]), "starts"), (float(table.times[-1]), "ends")):
+            inside = 0.0 < edge < t_end
+            v = table.velocity(edge)  # the spline's (held only strictly outside)
+            if inside and np.linalg.norm(v) > _START_FRACTION * scale_v:
+                out.append((f"{key}.file", f"the table {name} at t = {edge:g} s with a velocity "
+                                           f"{np.round(v, 12).tolist()} m/s and is held "
+                                           f"constant beyond: the velocity jumps to 0 there"))
+    return out
+
+
+def startup_time(case: Case) -> tuple[float, str]:
+    """End of the start-up of the anchor motions (s) and why: the longest ramp of a
+    harmonic or elliptic motion; a motion with ``ramp = 0`` that jumps at ``t = 0``
+    (displacement or velocity not zero) counts :data:`DEFAULT_RAMP_PERIODS` of its
+    periods, as long as its default ramp. 0 without such motions (tables start as given)."""
+    best, why = 0.0, "no anchor motion with a ramp or a jump at t = 0"
+    for i, a in enumerate(case.anchors):
+        m = a.motion
+        if not isinstance(m, (HarmonicMotion, EllipseMotion)):
+            continue
+        if m.ramp > 0:
+            t, reason = m.ramp, f"the end of the ramp anchors[{i}].motion.ramp = {m.ramp:g} s"
+        elif np.any(m.displacement(0.0) != 0) or np.any(m.velocity(0.0) != 0):
+            t = (default_ramp(m.omega, m.amplitude) if isinstance(m, HarmonicMotion)
+                 else default_ramp(m.omega))
+            reason = (f"anchors[{i}].motion jumps at t = 0 (ramp = 0): "
+                      f"{DEFAULT_RAMP_PERIODS:g} of its periods, {t:g} s")
+        else:
+            continue
+        if t > best:
+            best, why = t, reason
+    return best, why
