@@ -172,3 +172,15 @@ def test_fatigue_after_run_and_command(tmp_path):
     plain = write_case(tmp_path / "..")
     res = cablefem("fatigue", out, "--case", plain)
     assert res.returncode == 2 and "fatigue" in res.stderr and "Traceback" not in res.stderr
+
+
+@pytest.mark.serial
+def test_output_cut_short_by_the_reader_is_not_an_error():
+    """`cablefem keys | true`: the reader closes the pipe before reading. The command
+    stops quietly with exit 0 (before: "internal error: BrokenPipeError", exit 1)."""
+    proc = subprocess.Popen([sys.executable, "-m", "cablefem", "keys"], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE)
+    proc.stdout.close()  # the reader goes away before the command has written anything
+    err = proc.stderr.read().decode()
+    assert proc.wait(timeout=60) == 0, err
+    assert "error" not in err.lower(), err

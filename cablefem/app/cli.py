@@ -217,6 +217,12 @@ def main(argv: list[str] | None = None) -> int:
         return 128 + 2
     except SystemExit:
         raise
+    except BrokenPipeError:  # the reader of stdout went away (`cablefem keys | head`)
+        import os
+
+        # Python would complain again when it flushes stdout at exit: point it at devnull
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return EXIT_OK
     except Exception as err:  # noqa: BLE001 - the last guard of the command line
         import os
 
