@@ -1,0 +1,512 @@
+"""What a model is built from, independent of the case files: the cable's gravity, stress-free
+geometry, mesh, loads, point masses, damping and solver switches, gathered in
+:class:`CableDescription` (a single cable or, with ``network``, a cable network).
+
+The case schema (:mod:`cablefem.case`) reuses these classes: a :class:`cablefem.case.Case` is
+a :class:`CableDescription` plus the run settings (dynamics, modal, fatigue, title).
+:func:`describe_cable` and :func:`describe_network` build a checked description from Python
+objects (every problem under its argument's name, one :class:`cablefem.errors.CaseError`);
+:func:`cablefem.create_cable` and :func:`cablefem.create_network` build the model from it.
+Pure Python/NumPy: no dolfinx import.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from cablefem import catenary
+from cablefem.anchor import ANCHOR_KINDS, Anchor
+from cablefem.errors import CaseError
+from cablefem.motion import TimeFunction
+from cablefem.properties import Section
+from cablefem.validation import is_sequence, number_problem, show, vector_problem
+
+__all__ = ["Gravity", "Geometry", "MeshSpec", "DistributedLoad", "PointMass", "PointLoad",
+           "Damping", "SolverSpec", "BeamSpec", "CableSpec", "NetworkSpec", "CableDescription",
+           "rayleigh_coefficients", "describe_cable", "describe_network", "anchor_problems",
+           "zero_segments", "stress_free_length", "GEOMETRY_KINDS", "GEOMETRY_BOUNDS",
+           "DAMPING_MODELS", "OUTER_CORRECTIONS", "MAX_ELEMENTS"]
+
+#: the ways to give the stress-free length, and the bounds of their values
+GEOMETRY_KINDS = ("length", "horizontal_tension", "sag_ratio", "polyline")
+GEOMETRY_BOUNDS = {"length": {"gt": 0}, "horizontal_tension": {"gt": 0},
+                   "sag_ratio": {"gt": 0, "le": 10}}
+GEOMETRY_UNITS = {"length": "m", "horizontal_tension": "N", "sag_ratio": "-"}
+DAMPING_MODELS = ("rayleigh", "rayleigh_k0", "axial", "none")
+OUTER_CORRECTIONS = ("none", "hinge")
+MAX_ELEMENTS = 10_000_000
+NAME = re.compile(r"[A-Za-z0-9_-]+")  #: anchor names
+_TOL = 1e-9  # relative tolerance for coincident points and parallel directions
+
+
+@dataclass
+class Gravity:
+    """Gravitational acceleration ``g`` (m/s^2) along the unit vector ``direction``."""
+
+    g: float = 9.81
+    direction: np.ndarray = field(default_factory=lambda: np.array([0.0, 0.0, -1.0]))
+
+    @property
+    def vector(self) -> np.ndarray:
+        """``g * direction`` (m/s^2)."""
+        return self.g * self.direction
+
+
+@dataclass
+class Geometry:
+    """How the stress-free length is given: ``kind`` is 'length' | 'horizontal_tension' |
+    'sag_ratio' | 'polyline'; ``value`` is l (m), H (N) or the sag ratio (-), and for a
+    polyline its length l (m); ``polyline`` (n, 3) the stress-free points (m)."""
+
+    kind: str
+    value: float | None
+    polyline: np.ndarray | None = None
+
+    @property
+    def length(self) -> float | None:
+        """The stress-free length l (m) if the case gives it, else None (catenary needed)."""
+        return self.value if self.kind in ("length", "polyline") else None
+
+
+@dataclass
+class MeshSpec:
+    """Number of string elements and the mid-span / end element length ratio."""
+
+    elements: int = 30
+    grading: float = 1.0
+
+
+@dataclass
+class DistributedLoad:
+    """Load per unit stress-free length ``value`` (N/m) times ``time.value(t)``."""
+
+    value: np.ndarray
+    time: TimeFunction = field(default_factory=TimeFunction.constant)
+
+
+@dataclass
+class PointMass:
+    """Lumped ``mass`` (kg) at stress-free arc length ``s`` (m) from the first anchor (a
+    network: ``s`` is the name of a 0D group of the mesh)."""
+
+    s: float
+    mass: float
+
+
+@dataclass
+class PointLoad:
+    """Force ``value`` (N) times ``time.value(t)`` at stress-free arc length ``s`` (m) (a
+    network: ``s`` is the name of a 0D group of the mesh)."""
+
+    s: float
+    value: np.ndarray
+    time: TimeFunction = field(default_factory=TimeFunction.constant)
+
+
+@dataclass
+class Damping:
+    """Damping model 'none' | 'rayleigh' (current tangent) | 'rayleigh_k0' (static tangent)
+    | 'axial', with resolved ``alpha`` (1/s), ``beta`` (s); ``ratios`` and ``frequencies``
+    (rad/s) when given that way (:meth:`from_ratios`)."""
+
+    model: str = "none"
+    alpha: float = 0.0
+    beta: float = 0.0
+    ratios: tuple | None = None
+    frequencies: tuple | None = None
+
+    def ratio_at(self, omega: float) -> float:
+        """Rayleigh modal damping ratio ``alpha/(2 omega) + beta omega/2`` at omega (rad/s)."""
+        return self.alpha / (2.0 * omega) + self.beta * omega / 2.0
+
+    @classmethod
+    def from_ratios(cls, ratios: tuple[float, float], frequencies: tuple[float, float],
+                    model: str = "rayleigh") -> Damping:
+        """Rayleigh damping with ratios ``z1, z2`` (-) at frequencies ``w1, w2`` (rad/s)."""
+        zs, ws = tuple(float(z) for z in ratios), tuple(float(w) for w in frequencies)
+        return cls(model, *rayleigh_coefficients(zs, ws), zs, ws)
+
+
+@dataclass
+class SolverSpec:
+    """The model's switches: the tension-only law, the first-order outer correction
+    ('none' | 'hinge') and PETSc options of its solvers (without the options prefix)."""
+
+    tension_only: bool = True
+    petsc_options: dict = field(default_factory=dict)
+    outer_correction: str = "none"
+
+
+@dataclass
+class BeamSpec:
+    """Mesh grading and shear stiffness of the reference rod (:mod:`cablefem.rod`)."""
+
+    layer_elements: float = 8.0
+    growth: float = 1.1
+    span_elements: int = 100
+    shear_stiffness: float | None = None
+
+
+@dataclass
+class CableSpec:
+    """A family of cables: a 1D group of the mesh, its section and pretension."""
+
+    group: str
+    section: str
+    pretension: float
+
+
+@dataclass
+class NetworkSpec:
+    """A cable network: the mesh file, the named sections and the cable families."""
+
+    mesh: Path
+    sections: dict[str, Section]
+    cables: list[CableSpec]
+
+
+@dataclass(kw_only=True)
+class CableDescription:
+    """Everything a model is built from (:class:`cablefem.cable.CableModel`,
+    :class:`cablefem.network.NetworkModel`, :class:`cablefem.rod.BeamModel`).
+
+    A single cable has two ``anchors``, a ``section`` and a ``geometry``; a network has
+    ``network`` (mesh, sections, cable families), anchors naming 0D groups of its mesh and
+    ``section`` its first cable family's. ``source`` names it in error messages; ``units``
+    ('SI' or 'dimensionless') only labels the outputs (:mod:`cablefem.units`).
+    """
+
+    section: Section | None
+    anchors: list[Anchor]
+    geometry: Geometry | None = None
+    gravity: Gravity = field(default_factory=Gravity)
+    mesh: MeshSpec = field(default_factory=MeshSpec)
+    loads: list[DistributedLoad] = field(default_factory=list)
+    point_masses: list[PointMass] = field(default_factory=list)
+    point_loads: list[PointLoad] = field(default_factory=list)
+    damping: Damping = field(default_factory=Damping)
+    solver: SolverSpec = field(default_factory=SolverSpec)
+    beam: BeamSpec = field(default_factory=BeamSpec)
+    network: NetworkSpec | None = None
+    source: str = "<python>"
+    units: str = "SI"
+
+
+def rayleigh_coefficients(ratios: tuple[float, float],
+                          frequencies: tuple[float, float]) -> tuple[float, float]:
+    """Rayleigh ``alpha`` (1/s), ``beta`` (s) giving damping ratios ``z1, z2`` at circular
+    frequencies ``w1 != w2`` (rad/s), from ``z(w) = alpha/(2 w) + beta w/2``:
+    ``alpha = 2 w1 w2 (z1 w2 - z2 w1)/(w2^2 - w1^2)``, ``beta = 2 (z2 w2 - z1 w1)/(w2^2 - w1^2)``.
+    """
+    (z1, z2), (w1, w2) = ratios, frequencies
+    d = w2**2 - w1**2
+    return 2.0 * w1 * w2 * (z1 * w2 - z2 * w1) / d, 2.0 * (z2 * w2 - z1 * w1) / d
+
+
+def stress_free_length(desc: CableDescription) -> float:
+    """Stress-free length l (m) of a single cable (the catenary's for tension/sag geometry)."""
+    geo = desc.geometry
+    if geo.kind in ("length", "polyline"):
+        return float(geo.length)
+    p, q = (np.asarray(a.position, float) for a in desc.anchors)
+    up = -np.asarray(desc.gravity.direction, float)
+    d = q - p
+    rise = float(d @ up)
+    span = float(np.linalg.norm(d - rise * up))
+    w = desc.section.mass * desc.gravity.g
+    if geo.kind == "horizontal_tension":
+        return catenary.length_for_horizontal_tension(span, rise, geo.value, w, desc.section.EA)
+    return catenary.length_for_sag_ratio(span, rise, geo.value, w, desc.section.EA)
+
+
+# ---------------------------------------------------------------------------------------------
+# Checks shared with the case parser.
+
+def zero_segments(points: np.ndarray) -> np.ndarray:
+    """Indices ``i`` of the polyline points that coincide with point ``i - 1``."""
+    scale = np.maximum(1.0, np.linalg.norm(points[1:], axis=1))
+    return np.flatnonzero(np.linalg.norm(np.diff(points, axis=0), axis=1) <= _TOL * scale) + 1
+
+
+def anchor_problems(anchors: list[Anchor], geometry: Geometry | None, gravity: Gravity | None,
+                    polyline_given: bool = False, key: str = "anchors") -> list[tuple[str, str]]:
+    """Cross-checks of a single cable's two anchors (with the geometry and gravity); fills in
+    what they leave out: a polyline's end as the position, the chord as a clamp's direction.
+    ``polyline_given``: a polyline was given but could not be read (no second report)."""
+    problems: list[tuple[str, str]] = []
+    if len(anchors) != 2:
+        return problems
+    a, b = anchors
+    if a.name is not None and a.name == b.name:
+        problems.append((f"{key}[1].name", f"duplicate anchor name {a.name!r} ({key}[0] has "
+                                           "it too)"))
+    polyline = geometry.polyline if geometry is not None else None
+    for i, (anchor, end) in enumerate(((a, 0), (b, -1))):
+        if anchor.position is None:
+            if polyline is not None:
+                anchor.position = polyline[end].copy()
+            elif not polyline_given:
+                problems.append((f"{key}[{i}].position", "missing required key (optional only "
+                                                         "with geometry.polyline)"))
+        if anchor.kind == "pinned" and anchor.direction is not None:
+            problems.append((f"{key}[{i}].direction", "direction only applies to clamped "
+                                                      "anchors"))
+    if a.position is None or b.position is None:
+        return problems
+    chord = b.position - a.position
+    distance = float(np.linalg.norm(chord))
+    scale = max(1.0, float(np.linalg.norm(a.position)), float(np.linalg.norm(b.position)))
+    if distance <= _TOL * scale:
+        problems.append((f"{key}[1].position", f"anchors {a.name!r} and {b.name!r} coincide "
+                                               f"(distance {distance:g} m)"))
+        return problems
+    for anchor, sign in ((a, 1.0), (b, -1.0)):
+        if anchor.kind == "clamped" and anchor.direction is None:
+            anchor.direction = sign * chord / distance + 0.0  # + 0.0: no -0.0 in outputs
+    if geometry is not None and geometry.kind in ("horizontal_tension", "sag_ratio") \
+            and gravity is not None:
+        name = f"geometry.{geometry.kind}"
+        if gravity.g == 0:
+            problems.append((name, "needs gravity.g > 0 (got 0)"))
+        elif np.linalg.norm(np.cross(chord / distance, gravity.direction)) <= _TOL:
+            problems.append((name, f"needs a chord not parallel to gravity (the chord from "
+                                   f"{a.name!r} to {b.name!r} is along gravity)"))
+    return problems
+
+
+def _check(problems: list, key: str, problem: str | None) -> bool:
+    if problem is not None:
+        problems.append((key, problem))
+    return problem is None
+
+
+def _vector(problems: list, key: str, value: Any, unit_vector: bool = False) -> np.ndarray | None:
+    if not _check(problems, key, vector_problem(value, 3, nonzero=unit_vector)):
+        return None
+    v = np.asarray(value, dtype=float)
+    return v / np.linalg.norm(v) if unit_vector else v
+
+
+def _anchors(problems: list, anchors: Any, network: bool) -> list[Anchor]:
+    """Type and value checks of the anchors (copies: the caller's objects stay as given)."""
+    out = []
+    if not is_sequence(anchors) and not isinstance(anchors, tuple):
+        problems.append(("anchors", f"expected a list of Anchor, got {show(anchors)}"))
+        return out
+    if not network and len(anchors) != 2:
+        problems.append(("anchors", f"expected exactly 2 anchors, got {len(anchors)}"))
+    for i, a in enumerate(anchors):
+        key = f"anchors[{i}]"
+        if not isinstance(a, Anchor):
+            problems.append((key, f"expected an Anchor, got {show(a)}"))
+            continue
+        ok = isinstance(a.name, str) and NAME.fullmatch(a.name) is not None
+        _check(problems, f"{key}.name", None if ok else
+               f"must be a string of the characters A-Z a-z 0-9 _ -, got {a.name!r}")
+        _check(problems, f"{key}.kind", None if a.kind in ANCHOR_KINDS else
+               f"must be one of {', '.join(map(repr, ANCHOR_KINDS))}, got {a.kind!r}")
+        position = direction = None
+        if a.position is not None:
+            if network:
+                problems.append((f"{key}.position", "a network's anchors are its mesh's nodes: "
+                                                    "give no position"))
+            else:
+                position = _vector(problems, f"{key}.position", a.position)
+        if a.direction is not None:
+            direction = _vector(problems, f"{key}.direction", a.direction, unit_vector=True)
+        ok = a.motion is None or all(callable(getattr(a.motion, m, None))
+                                     for m in ("displacement", "velocity", "acceleration"))
+        _check(problems, f"{key}.motion", None if ok else
+               f"expected a motion (cablefem.motion) or None, got {show(a.motion)}")
+        out.append(Anchor(a.name, position, a.kind, direction, a.motion))
+    return out
+
+
+def _items(problems: list, key: str, items: Any, cls: type, network: bool) -> list:
+    """Loads, point masses or point loads: type and value checks (copies)."""
+    if not isinstance(items, (list, tuple)):
+        problems.append((key, f"expected a list of {cls.__name__}, got {show(items)}"))
+        return []
+    out = []
+    for i, item in enumerate(items):
+        k = f"{key}[{i}]"
+        if not isinstance(item, cls):
+            problems.append((k, f"expected a {cls.__name__}, got {show(item)}"))
+            continue
+        new = cls(**vars(item))
+        if hasattr(item, "s"):
+            if network:
+                _check(problems, f"{k}.s", None if isinstance(item.s, str) else
+                       f"expected the name of a 0D group of the mesh, got {show(item.s)}")
+            else:
+                _check(problems, f"{k}.s", number_problem(item.s, "m", gt=0))
+        if hasattr(item, "mass"):
+            _check(problems, f"{k}.mass", number_problem(item.mass, "kg", gt=0))
+        if hasattr(item, "value"):
+            new.value = _vector(problems, f"{k}.value", item.value)
+        if hasattr(item, "time") and not isinstance(item.time, TimeFunction):
+            problems.append((f"{k}.time", f"expected a TimeFunction, got {show(item.time)}"))
+        out.append(new)
+    return out
+
+
+def _common(problems: list, *, gravity, elements, grading, loads, point_masses, point_loads,
+            damping, tension_only, outer_correction, petsc_options, network: bool) -> dict:
+    """The parts a single cable and a network share, checked."""
+    if not isinstance(gravity, Gravity):
+        problems.append(("gravity", f"expected a Gravity, got {show(gravity)}"))
+    else:
+        ok = _check(problems, "gravity.g", number_problem(gravity.g, "m/s^2", ge=0))
+        d = _vector(problems, "gravity.direction", gravity.direction, unit_vector=True)
+        gravity = Gravity(float(gravity.g), d) if ok and d is not None else None
+    ok = isinstance(elements, int) and not isinstance(elements, bool)
+    if not _check(problems, "elements", None if ok else f"expected an integer, got "
+                                                         f"{show(elements)}"):
+        pass
+    elif not 1 <= elements <= MAX_ELEMENTS:
+        problems.append(("elements", f"must be >= 1 and <= {MAX_ELEMENTS}, got {elements}"))
+    _check(problems, "grading", number_problem(grading, "", ge=1))
+    if damping is None:
+        damping = Damping()
+    elif not isinstance(damping, Damping):
+        problems.append(("damping", f"expected a Damping, got {show(damping)}"))
+    else:
+        _check(problems, "damping.model", None if damping.model in DAMPING_MODELS else
+               f"must be one of {', '.join(map(repr, DAMPING_MODELS))}, got {damping.model!r}")
+        _check(problems, "damping.alpha", number_problem(damping.alpha, "1/s", ge=0))
+        _check(problems, "damping.beta", number_problem(damping.beta, "s", ge=0))
+    _check(problems, "tension_only", None if isinstance(tension_only, bool) else
+           f"expected a boolean, got {show(tension_only)}")
+    _check(problems, "outer_correction", None if outer_correction in OUTER_CORRECTIONS else
+           f"must be one of {', '.join(map(repr, OUTER_CORRECTIONS))}, got {outer_correction!r}")
+    if not isinstance(petsc_options, dict):
+        problems.append(("petsc_options", f"expected a dict, got {show(petsc_options)}"))
+        petsc_options = {}
+    return dict(gravity=gravity, mesh=MeshSpec(elements, float(grading) if isinstance(
+        grading, (int, float)) else grading),
+        loads=_items(problems, "loads", loads, DistributedLoad, network),
+        point_masses=_items(problems, "point_masses", point_masses, PointMass, network),
+        point_loads=_items(problems, "point_loads", point_loads, PointLoad, network),
+        damping=damping, solver=SolverSpec(tension_only, dict(petsc_options),
+                                           outer_correction))
+
+
+def describe_cable(anchors: list[Anchor], section: Section, *, length: float | None = None,
+                   horizontal_tension: float | None = None, sag_ratio: float | None = None,
+                   polyline: Any = None, elements: int = 30, grading: float = 1.0,
+                   gravity: Gravity | None = None, loads=(), point_masses=(), point_loads=(),
+                   damping: Damping | None = None, tension_only: bool = True,
+                   outer_correction: str = "none", petsc_options: dict | None = None,
+                   beam: BeamSpec | None = None, units: str = "SI",
+                   source: str = "<python>") -> CableDescription:
+    """A checked description of a single cable (the arguments of
+    :func:`cablefem.create_cable`, which see).
+
+    Raises
+    ------
+    CaseError
+        With every problem, each under its argument's name (``sag_ratio``, ``anchors[1].kind``).
+    """
+    problems: list[tuple[str, str]] = []
+    if not isinstance(section, Section):
+        problems.append(("section", f"expected a Section, got {show(section)}"))
+    given = {k: v for k, v in (("length", length), ("horizontal_tension", horizontal_tension),
+                               ("sag_ratio", sag_ratio), ("polyline", polyline))
+             if v is not None}
+    geometry = None
+    if len(given) != 1:
+        got = " and ".join(given) if given else "none"
+        problems.append(("length", f"give exactly one of {', '.join(GEOMETRY_KINDS)}; got "
+                                   f"{got}"))
+    elif "polyline" in given:
+        points = np.asarray(polyline, dtype=float) if is_sequence(polyline) or isinstance(
+            polyline, np.ndarray) else None
+        if points is None or points.ndim != 2 or points.shape[1] != 3 or len(points) < 2 \
+                or not np.all(np.isfinite(points)):
+            problems.append(("polyline", f"expected at least 2 finite points [x, y, z], got "
+                                         f"{show(polyline)}"))
+        else:
+            problems += [(f"polyline[{i}]", f"zero-length segment: point {i} coincides with "
+                                            f"point {i - 1}") for i in zero_segments(points)]
+            length_p = float(np.sum(np.linalg.norm(np.diff(points, axis=0), axis=1)))
+            geometry = Geometry("polyline", length_p, points)
+    else:
+        kind, value = next(iter(given.items()))
+        if _check(problems, kind, number_problem(value, GEOMETRY_UNITS[kind],
+                                                 **GEOMETRY_BOUNDS[kind])):
+            geometry = Geometry(kind, float(value))
+    parts = _common(problems, gravity=Gravity() if gravity is None else gravity,
+                    elements=elements, grading=grading, loads=loads,
+                    point_masses=point_masses, point_loads=point_loads, damping=damping,
+                    tension_only=tension_only, outer_correction=outer_correction,
+                    petsc_options={} if petsc_options is None else petsc_options,
+                    network=False)
+    anchor_list = _anchors(problems, anchors, network=False)
+    if not problems:
+        problems += anchor_problems(anchor_list, geometry, parts["gravity"])
+        problems = [(k.replace("geometry.", ""), m) for k, m in problems]
+    if geometry is not None and geometry.length is not None and not problems:
+        for name in ("point_masses", "point_loads"):
+            for i, item in enumerate(parts[name]):
+                if item.s >= geometry.length:
+                    problems.append((f"{name}[{i}].s", f"must be < l = {geometry.length:g} "
+                                                       "(m), the stress-free length"))
+    if beam is not None and not isinstance(beam, BeamSpec):
+        problems.append(("beam", f"expected a BeamSpec, got {show(beam)}"))
+    if problems:
+        raise CaseError(problems, source)
+    return CableDescription(section=section, anchors=anchor_list, geometry=geometry,
+                            beam=beam or BeamSpec(), source=source, units=units, **parts)
+
+
+def describe_network(mesh_file: str | os.PathLike, sections: dict[str, Section],
+                     anchors: list[Anchor], *, cables: list[CableSpec],
+                     gravity: Gravity | None = None, loads=(), point_masses=(),
+                     point_loads=(), damping: Damping | None = None, tension_only: bool = True,
+                     petsc_options: dict | None = None, units: str = "SI",
+                     source: str = "<python>") -> CableDescription:
+    """A checked description of a cable network (the arguments of
+    :func:`cablefem.create_network`, which see); the mesh itself is read by the model."""
+    problems: list[tuple[str, str]] = []
+    mesh = Path(mesh_file) if isinstance(mesh_file, (str, os.PathLike)) else None
+    if mesh is None:
+        problems.append(("mesh_file", f"expected a path, got {show(mesh_file)}"))
+    elif not mesh.is_file():
+        problems.append(("mesh_file", f"no such file: {mesh}"))
+    if not isinstance(sections, dict) or not sections or not all(
+            isinstance(s, Section) for s in sections.values()):
+        problems.append(("sections", "expected a non-empty dict of name -> Section"))
+        sections = {}
+    if not isinstance(cables, (list, tuple)) or not cables:
+        problems.append(("cables", "expected a non-empty list of CableSpec"))
+        cables = []
+    for i, c in enumerate(cables):
+        if not isinstance(c, CableSpec):
+            problems.append((f"cables[{i}]", f"expected a CableSpec, got {show(c)}"))
+            continue
+        if sections and c.section not in sections:
+            problems.append((f"cables[{i}].section", f"unknown section {c.section!r}; known: "
+                                                     f"{sorted(sections)}"))
+        _check(problems, f"cables[{i}].pretension", number_problem(c.pretension, "N", ge=0))
+    parts = _common(problems, gravity=Gravity() if gravity is None else gravity, elements=1,
+                    grading=1.0, loads=loads, point_masses=point_masses,
+                    point_loads=point_loads, damping=damping, tension_only=tension_only,
+                    outer_correction="none",
+                    petsc_options={} if petsc_options is None else petsc_options,
+                    network=True)
+    anchor_list = _anchors(problems, anchors, network=True)
+    names = [a.name for a in anchor_list]
+    problems += [(f"anchors[{i}].name", f"duplicate anchor group {n!r}")
+                 for i, n in enumerate(names) if n in names[:i]]
+    if problems:
+        raise CaseError(problems, source)
+    first = sections[cables[0].section]
+    return CableDescription(section=first, anchors=anchor_list,
+                            network=NetworkSpec(mesh, dict(sections), list(cables)),
+                            source=source, units=units, **parts)
