@@ -15,6 +15,7 @@ from mpi4py import MPI
 
 from cablefem.anchor import Anchor
 from cablefem.description import (
+    BEAM_BOUNDS,
     BeamSpec,
     CableSpec,
     Damping,
@@ -105,14 +106,16 @@ def create_rod(comm: MPI.Comm, anchors: list[Anchor], section: Section, *,
     prefix = options.pop("petsc_options_prefix", "cable_")
     source = options.pop("name", "<python>")
     beam = BeamSpec(layer_elements, growth, span_elements, shear_stiffness)
-    checks = (("layer_elements", layer_elements, "", {"ge": 0.5, "le": 1000}),
-              ("growth", growth, "", {"gt": 1, "le": 2}), ("refine", refine, "", {"gt": 0}),
-              ("shear_stiffness", shear_stiffness, "N", {"gt": 0}))
-    problems = [(key, number_problem(value, unit, **bounds)) for key, value, unit, bounds
-                in checks if value is not None and number_problem(value, unit, **bounds)]
-    if not (isinstance(span_elements, int) and 1 <= span_elements <= 1_000_000):
-        problems.append(("span_elements", f"must be an integer >= 1 and <= 1000000, got "
-                                          f"{span_elements!r}"))
+    problems = []
+    for key, value in (("layer_elements", layer_elements), ("growth", growth),
+                       ("span_elements", span_elements), ("shear_stiffness", shear_stiffness)):
+        bounds, unit = BEAM_BOUNDS[key]
+        if key == "span_elements" and not (isinstance(value, int) and value >= 1):
+            problems.append((key, f"expected an integer >= 1, got {value!r}"))
+        elif value is not None and number_problem(value, unit, **bounds):
+            problems.append((key, number_problem(value, unit, **bounds)))
+    if number_problem(refine, "", gt=0):
+        problems.append(("refine", number_problem(refine, "", gt=0)))
     if problems:
         raise CaseError(problems, source)
     description = describe_cable(anchors, section, beam=beam, source=source, **options)

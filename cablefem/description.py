@@ -12,6 +12,7 @@ Pure Python/NumPy: no dolfinx import.
 
 from __future__ import annotations
 
+import numbers
 import os
 import re
 from dataclasses import dataclass, field
@@ -31,13 +32,17 @@ __all__ = ["Gravity", "Geometry", "MeshSpec", "DistributedLoad", "PointMass", "P
            "Damping", "SolverSpec", "BeamSpec", "CableSpec", "NetworkSpec", "CableDescription",
            "rayleigh_coefficients", "describe_cable", "describe_network", "anchor_problems",
            "zero_segments", "stress_free_length", "GEOMETRY_KINDS", "GEOMETRY_BOUNDS",
-           "DAMPING_MODELS", "OUTER_CORRECTIONS", "MAX_ELEMENTS"]
+           "BEAM_BOUNDS", "DAMPING_MODELS", "OUTER_CORRECTIONS", "MAX_ELEMENTS"]
 
 #: the ways to give the stress-free length, and the bounds of their values
 GEOMETRY_KINDS = ("length", "horizontal_tension", "sag_ratio", "polyline")
 GEOMETRY_BOUNDS = {"length": {"gt": 0}, "horizontal_tension": {"gt": 0},
                    "sag_ratio": {"gt": 0, "le": 10}}
 GEOMETRY_UNITS = {"length": "m", "horizontal_tension": "N", "sag_ratio": "-"}
+#: bounds of the reference rod's mesh options (:class:`BeamSpec`), and their units
+BEAM_BOUNDS = {"layer_elements": ({"ge": 0.5, "le": 1000}, ""), "growth": ({"gt": 1, "le": 2}, ""),
+               "span_elements": ({"ge": 1, "le": 1_000_000}, ""),
+               "shear_stiffness": ({"gt": 0}, "N")}
 DAMPING_MODELS = ("rayleigh", "rayleigh_k0", "axial", "none")
 OUTER_CORRECTIONS = ("none", "hinge")
 MAX_ELEMENTS = 10_000_000
@@ -365,12 +370,13 @@ def _common(problems: list, *, gravity, elements, grading, loads, point_masses, 
         ok = _check(problems, "gravity.g", number_problem(gravity.g, "m/s^2", ge=0))
         d = _vector(problems, "gravity.direction", gravity.direction, unit_vector=True)
         gravity = Gravity(float(gravity.g), d) if ok and d is not None else None
-    ok = isinstance(elements, int) and not isinstance(elements, bool)
-    if not _check(problems, "elements", None if ok else f"expected an integer, got "
-                                                         f"{show(elements)}"):
-        pass
+    ok = isinstance(elements, numbers.Integral) and not isinstance(elements, (bool, np.bool_))
+    if not ok:
+        problems.append(("elements", f"expected an integer, got {show(elements)}"))
     elif not 1 <= elements <= MAX_ELEMENTS:
         problems.append(("elements", f"must be >= 1 and <= {MAX_ELEMENTS}, got {elements}"))
+    else:
+        elements = int(elements)
     _check(problems, "grading", number_problem(grading, "", ge=1))
     if damping is None:
         damping = Damping()

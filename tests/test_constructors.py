@@ -29,8 +29,8 @@ from cablefem import (
     create_rod,
     solve_static,
 )
-from cablefem.case import load_case, parse_case
 from cablefem.cable import CableModel
+from cablefem.case import load_case, parse_case
 from cablefem.rod import BeamModel
 
 ROOT = Path(__file__).resolve().parents[1]

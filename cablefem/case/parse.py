@@ -36,6 +36,7 @@ from cablefem.case.schema import (
     rayleigh_coefficients,
 )
 from cablefem.description import (
+    BEAM_BOUNDS,
     GEOMETRY_BOUNDS,
     GEOMETRY_KINDS,
     NAME,
@@ -348,10 +349,8 @@ def parse_case(data: dict, base_dir: str | os.PathLike = Path("."),
     modal = ModalSpec(table("modal").integer("modes"))
     fatigue = _parse_fatigue(top.table("fatigue"), section)
     beam_r = table("beam")
-    beam = BeamSpec(beam_r.number("layer_elements", ge=0.5, le=1000),
-                    beam_r.number("growth", gt=1, le=2), beam_r.integer("span_elements",
-                                                                       le=1_000_000),
-                    beam_r.number("shear_stiffness", gt=0))
+    beam = BeamSpec(*(beam_r.integer(k, **BEAM_BOUNDS[k][0]) if k == "span_elements"
+                      else beam_r.number(k, **BEAM_BOUNDS[k][0]) for k in BEAM_BOUNDS))
     solver_r = table("solver")
     solver = SolverSpec(solver_r.boolean("tension_only"), _parse_petsc_options(solver_r),
                         solver_r.string("outer_correction", ("none", "hinge")))

@@ -78,12 +78,6 @@ class Case(CableDescription):
     #: lists them under ``warnings`` in summary.json (``--strict`` makes them fatal)
     warnings: list = field(default_factory=list, compare=False)
 
-    @property
-    def description(self) -> CableDescription:
-        """The description alone (the same objects), without the run settings."""
-        return CableDescription(**{f.name: getattr(self, f.name)
-                                   for f in fields(CableDescription)})
-
     def to_dict(self) -> dict:
         """JSON-serialisable echo of the inputs (motions and time functions via describe())."""
         out = _jsonable(self)
