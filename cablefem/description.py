@@ -240,10 +240,13 @@ def zero_segments(points: np.ndarray) -> np.ndarray:
 
 
 def anchor_problems(anchors: list[Anchor], geometry: Geometry | None, gravity: Gravity | None,
-                    polyline_given: bool = False, key: str = "anchors") -> list[tuple[str, str]]:
+                    polyline_given: bool = False, positions_given: tuple = (False, False),
+                    key: str = "anchors") -> list[tuple[str, str]]:
     """Cross-checks of a single cable's two anchors (with the geometry and gravity); fills in
     what they leave out: a polyline's end as the position, the chord as a clamp's direction.
-    ``polyline_given``: a polyline was given but could not be read (no second report)."""
+    ``polyline_given``: a polyline was given (if it is None, it could not be read);
+    ``positions_given[i]``: anchor i's position was given (if it is None, it could not be
+    read): both reported already, not reported as missing."""
     problems: list[tuple[str, str]] = []
     if len(anchors) != 2:
         return problems
@@ -253,7 +256,7 @@ def anchor_problems(anchors: list[Anchor], geometry: Geometry | None, gravity: G
                                            "it too)"))
     polyline = geometry.polyline if geometry is not None else None
     for i, (anchor, end) in enumerate(((a, 0), (b, -1))):
-        if anchor.position is None:
+        if anchor.position is None and not positions_given[i]:
             if polyline is not None:
                 anchor.position = polyline[end].copy()
             elif not polyline_given:

@@ -59,8 +59,6 @@ from cablefem.properties import Section
 # ---------------------------------------------------------------------------------------------
 # Parsing, table by table.
 
-_GEOMETRY_KINDS = GEOMETRY_KINDS
-_NAME = NAME
 _TOL = 1e-9  # relative tolerance for coincident points and parallel directions
 
 
@@ -79,10 +77,10 @@ def _parse_section(r: _Reader) -> Section | None:
 
 
 def _parse_geometry(r: _Reader) -> Geometry | None:
-    given = [k for k in _GEOMETRY_KINDS if r.has(k)]
+    given = [k for k in GEOMETRY_KINDS if r.has(k)]
     if len(given) != 1:
         got = " and ".join(given) if given else "none"
-        r.problems.append((r.path, f"give exactly one of {', '.join(_GEOMETRY_KINDS)}; "
+        r.problems.append((r.path, f"give exactly one of {', '.join(GEOMETRY_KINDS)}; "
                                    f"got {got}"))
     values = {k: r.number(k, **GEOMETRY_BOUNDS[k]) for k in given if k != "polyline"}
     points = _parse_polyline(r) if "polyline" in given else None
@@ -258,9 +256,8 @@ def _check_anchors(anchors: list[Anchor], readers: list[_Reader], geometry: Geom
     for a, r in zip(anchors, readers):  # given but unreadable: reported already, or here
         if a.kind == "pinned" and a.direction is None and r.has("direction"):
             r.add("direction", "direction only applies to clamped anchors")
-    problems += [(k, m) for k, m in anchor_problems(anchors, geometry, gravity, polyline_given)
-                 if not (k.endswith(".position") and m.startswith("missing")
-                         and readers[int(k[8])].has("position"))]
+    problems += anchor_problems(anchors, geometry, gravity, polyline_given,
+                                positions_given=tuple(r.has("position") for r in readers))
 
 
 def _check_positions_on_cable(items: list, readers: list[_Reader], length: float | None) -> None:
@@ -326,7 +323,7 @@ def parse_case(data: dict, base_dir: str | os.PathLike = Path("."),
     anchors = []
     for r in anchor_rs:
         name = r.string("name")
-        if name is not None and not _NAME.fullmatch(name):
+        if name is not None and not NAME.fullmatch(name):
             r.add("name", f"must use only the characters A-Z a-z 0-9 _ -, got {name!r}")
         anchors.append(Anchor(name, r.vector("position"), r.string("type", ("clamped", "pinned")),
                               r.vector("direction", unit_vector=True),
