@@ -26,7 +26,7 @@ _API = {
     "create_cable": "cablefem.create", "create_rod": "cablefem.create",
     "create_network": "cablefem.create", "Anchor": "cablefem.anchor",
     "Section": "cablefem.properties", "CableDescription": "cablefem.description",
-    "describe_cable": "cablefem.description", "describe_network": "cablefem.description",
+    "describe_cable": "cablefem.describe", "describe_network": "cablefem.describe",
     "Gravity": "cablefem.description", "DistributedLoad": "cablefem.description",
     "PointMass": "cablefem.description", "PointLoad": "cablefem.description",
     "Damping": "cablefem.description", "CableSpec": "cablefem.description",

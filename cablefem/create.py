@@ -14,14 +14,13 @@ from typing import Any
 from mpi4py import MPI
 
 from cablefem.anchor import Anchor
+from cablefem.describe import describe_cable, describe_network
 from cablefem.description import (
     BEAM_BOUNDS,
     BeamSpec,
     CableSpec,
     Damping,
     Gravity,
-    describe_cable,
-    describe_network,
 )
 from cablefem.errors import CaseError
 from cablefem.properties import Section

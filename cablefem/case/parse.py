@@ -35,14 +35,8 @@ from cablefem.case.schema import (
     SolverSpec,
     rayleigh_coefficients,
 )
-from cablefem.description import (
-    BEAM_BOUNDS,
-    GEOMETRY_BOUNDS,
-    GEOMETRY_KINDS,
-    NAME,
-    anchor_problems,
-    zero_segments,
-)
+from cablefem.describe import anchor_problems, zero_segments
+from cablefem.description import BEAM_BOUNDS, GEOMETRY_BOUNDS, GEOMETRY_KINDS, NAME
 from cablefem.errors import CaseError
 from cablefem.motion import (
     EllipseMotion,
