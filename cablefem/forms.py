@@ -26,7 +26,7 @@ Weak form (paper Eq. 16 in weak form), for all admissible ``δu``::
 from __future__ import annotations
 
 import ufl
-from ufl.algorithms import expand_derivatives
+from ufl.algorithms import estimate_total_polynomial_degree, expand_derivatives
 
 __all__ = ["CableForms", "reference_tangent", "ds_", "stretch_vector", "stretch", "axial_strain",
            "tension", "internal_force", "internal_work", "inertia_work", "load_work",
@@ -160,6 +160,9 @@ class CableForms:
         self.test, self.trial = test, trial
         self.shift_v, self.shift_a = shift_v, shift_a
         self.points = points  #: where output expressions are evaluated (the DG0 points)
+        #: the model's cell measure; one with a quadrature degree (the rod's one point) fixes
+        #: the rule of every cell integral (see :meth:`add`)
+        self.dx = ufl.dx
         self.internal = self.internal_bilateral = self.external = None
         self.inertia = self.damping = None
         self.user: dict[str, tuple[ufl.Form, str]] = {}  #: name -> (form, kind)
@@ -204,6 +207,7 @@ class CableForms:
             raise ValueError(f"term {name!r}: the form must be linear in the model's test "
                              f"function (model.du) and have no other argument; its arguments "
                              f"are {form.arguments()}")
+        self._check_rule(name, form)
         # derivatives applied now: a term given as a Gateaux derivative in the direction v
         # (beta dF/du [v]) must show v explicitly for the Jacobian's derivative in v
         form = expand_derivatives(form)
@@ -214,6 +218,24 @@ class CableForms:
                                  "no velocity or acceleration; add it with kind='dynamic'")
         self.user[name] = (form, kind)
         self._changes += 1
+
+    def _check_rule(self, name: str, form) -> None:
+        """A model that integrates its cells with one point (the rod: ``dx`` with quadrature
+        degree 0) takes user cell integrals of one point only: FFCx 0.5 fails to compile a
+        Jacobian whose cell integrals mix that rule with one of more points (it declares
+        the cell Jacobian twice)."""
+        fixed = self.dx.metadata().get("quadrature_degree")
+        if fixed is None:
+            return
+        for itg in form.integrals_by_type("cell"):
+            degree = itg.metadata().get("quadrature_degree")
+            if degree is None:
+                degree = estimate_total_polynomial_degree(expand_derivatives(itg.integrand()))
+            if degree > 1:  # one Gauss point integrates degree 1 exactly
+                raise ValueError(
+                    f"term {name!r}: this model integrates every cell term with one point; "
+                    f"integrate with model.forms.dx (a product of two P1 fields exactly: "
+                    f"cablefem.rod.p1_product), not a rule of degree {degree}")
 
     def remove(self, name: str) -> None:
         """Remove the user term ``name``."""

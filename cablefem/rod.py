@@ -68,7 +68,7 @@ from cablefem.case import Case, CaseError
 from cablefem.geometry import straight_cable
 
 __all__ = ["BeamModel", "beam_stations", "cayley_from_rotation", "cayley_rotation",
-           "rotation_matrix", "virtual_rotation_map", "rod_strains"]
+           "p1_product", "rotation_matrix", "virtual_rotation_map", "rod_strains"]
 
 log = logging.getLogger(__name__)
 
@@ -191,6 +191,10 @@ def _p1_product(a, b, t0, mesh):
     if len(a.ufl_shape) == 0:
         return a * b + h * h / 12.0 * ufl.dot(ufl.grad(a), t0) * ufl.dot(ufl.grad(b), t0)
     return ufl.inner(a, b) + h * h / 12.0 * ufl.inner(ufl.grad(a) * t0, ufl.grad(b) * t0)
+
+
+#: public name of the one-point exact product of two P1 fields (user terms on the rod)
+p1_product = _p1_product
 
 
 def energy_density(G, K, EA, GA, EI, GJ):
@@ -367,6 +371,7 @@ class BeamModel(CableModel):
                         F_weight=cc * self.m * ufl.inner(self.gravity, duu) * dxr,
                         F_inertia=F_inertia, du_t=duu, a_t=au, dx=dxr)
         # output fields (DG0 at the element midpoint, where the strains are sampled)
+        self.forms.dx = dxr  # user terms too: FFCx 0.5 cannot mix cell rules (forms.add)
         self.forms.outputs = {"tension": self.EA * G[2], "strain": G[2]}
         self._moment = self.EI * (K[0] * d[0] + K[1] * d[1]) + self.GJ * K[2] * d[2]
         vu, vq = split(self.v)
