@@ -103,8 +103,7 @@ def _free_end(model, load_term):
     tags = dmesh.meshtags(model.mesh, 0, verts.astype(np.int32),
                           np.full(verts.size, 7, dtype=np.int32))
     ds = ufl.Measure("ds", domain=model.mesh, subdomain_data=tags)(7)
-    model.F_static = model.F_static - load_term(ds)
-    model.J_static = ufl.derivative(model.F_static, model.u, model.dw)
+    model.forms.add("end load", -load_term(ds), kind="static")
     model.compile()
 
 
