@@ -392,10 +392,33 @@ class CableModel:
         self.forms.outputs = {
             "tension": forms.tension(u, t0, self.EA, self.tension_only, cc),
             "strain": forms.axial_strain(u, t0, cc)}
+        strain = forms.strain_energy_density(u, t0, self.EA, self.tension_only, cc) * ufl.dx
+        if self.case.solver.span_bending:
+            strain = strain + self._add_span_bending()
         self.forms.energies = (
-            0.5 * ufl.inner(v, v) * cc * self.m * ufl.dx,
-            forms.strain_energy_density(u, t0, self.EA, self.tension_only, cc) * ufl.dx,
+            0.5 * ufl.inner(v, v) * cc * self.m * ufl.dx, strain,
             -ufl.inner(cc * self.m * self.gravity, u) * ufl.dx)
+
+    def _add_span_bending(self):
+        """``solver.span_bending``: the span's own EI as the term ``span_bending`` of
+        :attr:`forms` (a bending energy on the turning angle at each interior vertex,
+        ``docs/theory.md`` §6a), off at the vertex next to a clamped anchor: the clamp's
+        rotation condition stays with the boundary layer, and the anchor node feels the
+        string's force only. Returns the bending energy (a form)."""
+        self.EI = fem.Constant(self.mesh, PETSc.ScalarType(self.case.section.EI))
+        self.span_bending_on = fem.Function(self.W, name="span_bending_on")
+        self.span_bending_on.x.array[:] = 1.0
+        c2v = self.mesh.topology.connectivity(0, 1)
+        for anc in self.anchors:
+            if anc.kind == "clamped":
+                for vtx in self._locate_node(anc.node):
+                    self.span_bending_on.x.array[c2v.links(vtx)] = 0.0
+        energy = forms.span_bending_energy(self.u, self.t0, self.EI, self.mesh, c=self.c,
+                                           active=self.span_bending_on) * self.dS
+        self.forms.add("span_bending", forms.span_bending_work(
+            self.u, self.du, self.t0, self.EI, self.mesh, self.dS, c=self.c,
+            active=self.span_bending_on), kind="static")
+        return energy
 
     def _axial_damping_work(self):
         """The "axial" damping model's virtual work (strain-rate damping along the axis)."""

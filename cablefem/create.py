@@ -35,8 +35,9 @@ def create_cable(comm: MPI.Comm, anchors: list[Anchor], section: Section, *,
                  grading: float = 1.0, gravity: Gravity | None = None, loads=(),
                  point_masses=(), point_loads=(), damping: Damping | None = None,
                  tension_only: bool = True, outer_correction: str = "none",
-                 petsc_options: dict | None = None, petsc_options_prefix: str = "cable_",
-                 units: str = "SI", name: str = "<python>"):
+                 span_bending: bool = False, petsc_options: dict | None = None,
+                 petsc_options_prefix: str = "cable_", units: str = "SI",
+                 name: str = "<python>"):
     """The extensible string of one cable between two anchors
     (:class:`cablefem.cable.CableModel`), ready for :func:`cablefem.statics.solve_static`.
 
@@ -66,6 +67,9 @@ def create_cable(comm: MPI.Comm, anchors: list[Anchor], section: Section, *,
         No compression (``T = EA max(strain, 0)``).
     outer_correction
         'none' or 'hinge' (the first-order outer correction, :mod:`cablefem.hinge`).
+    span_bending
+        The span's own bending stiffness EI in the string (``docs/theory.md`` §6a; the
+        clamps' rotation stays with the boundary layer).
     petsc_options, petsc_options_prefix
         Options of the model's solvers (without the prefix) and the prefix.
     units
@@ -87,7 +91,7 @@ def create_cable(comm: MPI.Comm, anchors: list[Anchor], section: Section, *,
         sag_ratio=sag_ratio, polyline=polyline, elements=elements, grading=grading,
         gravity=gravity, loads=loads, point_masses=point_masses, point_loads=point_loads,
         damping=damping, tension_only=tension_only, outer_correction=outer_correction,
-        petsc_options=petsc_options, units=units, source=name)
+        span_bending=span_bending, petsc_options=petsc_options, units=units, source=name)
     return _named(CableModel, comm, description, petsc_options_prefix)
 
 
@@ -96,8 +100,8 @@ def create_rod(comm: MPI.Comm, anchors: list[Anchor], section: Section, *,
                shear_stiffness: float | None = None, refine: float = 1.0, **options):
     """The reference rod (:class:`cablefem.rod.BeamModel`, geometrically exact, bending
     stiffness everywhere) of the same cable as :func:`create_cable` (same arguments, but
-    not a polyline; ``elements``, ``grading``, ``tension_only`` and ``outer_correction``
-    do not apply). Its mesh: ``layer_elements`` per layer length at a clamp, ``growth``
+    not a polyline; ``elements``, ``grading``, ``tension_only``, ``outer_correction`` and
+    ``span_bending`` do not apply). Its mesh: ``layer_elements`` per layer length at a clamp, ``growth``
     ratio of neighbouring elements, at most l / ``span_elements`` long, all scaled by
     ``refine``; ``shear_stiffness`` GA (N), default 1e5 times the largest tension."""
     from cablefem.rod import BeamModel

@@ -182,7 +182,8 @@ def _items(problems: list, key: str, items: Any, cls: type, network: bool) -> li
 
 
 def _common(problems: list, *, gravity, elements, grading, loads, point_masses, point_loads,
-            damping, tension_only, outer_correction, petsc_options, network: bool) -> dict:
+            damping, tension_only, outer_correction, petsc_options, network: bool,
+            span_bending: bool = False) -> dict:
     """The parts a single cable and a network share, checked."""
     if not isinstance(gravity, Gravity):
         problems.append(("gravity", f"expected a Gravity, got {show(gravity)}"))
@@ -211,6 +212,8 @@ def _common(problems: list, *, gravity, elements, grading, loads, point_masses, 
            f"expected a boolean, got {show(tension_only)}")
     _check(problems, "outer_correction", None if outer_correction in OUTER_CORRECTIONS else
            f"must be one of {', '.join(map(repr, OUTER_CORRECTIONS))}, got {outer_correction!r}")
+    _check(problems, "span_bending", None if isinstance(span_bending, bool) else
+           f"expected a boolean, got {show(span_bending)}")
     if not isinstance(petsc_options, dict):
         problems.append(("petsc_options", f"expected a dict, got {show(petsc_options)}"))
         petsc_options = {}
@@ -220,7 +223,7 @@ def _common(problems: list, *, gravity, elements, grading, loads, point_masses, 
         point_masses=_items(problems, "point_masses", point_masses, PointMass, network),
         point_loads=_items(problems, "point_loads", point_loads, PointLoad, network),
         damping=damping, solver=SolverSpec(tension_only, dict(petsc_options),
-                                           outer_correction))
+                                           outer_correction, span_bending))
 
 
 def describe_cable(anchors: list[Anchor], section: Section, *, length: float | None = None,
@@ -228,8 +231,8 @@ def describe_cable(anchors: list[Anchor], section: Section, *, length: float | N
                    polyline: Any = None, elements: int = 30, grading: float = 1.0,
                    gravity: Gravity | None = None, loads=(), point_masses=(), point_loads=(),
                    damping: Damping | None = None, tension_only: bool = True,
-                   outer_correction: str = "none", petsc_options: dict | None = None,
-                   beam: BeamSpec | None = None, units: str = "SI",
+                   outer_correction: str = "none", span_bending: bool = False,
+                   petsc_options: dict | None = None, beam: BeamSpec | None = None, units: str = "SI",
                    source: str = "<python>") -> CableDescription:
     """A checked description of a single cable (the arguments of
     :func:`cablefem.create_cable`, which see).
@@ -272,7 +275,7 @@ def describe_cable(anchors: list[Anchor], section: Section, *, length: float | N
                     point_masses=point_masses, point_loads=point_loads, damping=damping,
                     tension_only=tension_only, outer_correction=outer_correction,
                     petsc_options={} if petsc_options is None else petsc_options,
-                    network=False)
+                    network=False, span_bending=span_bending)
     anchor_list = _anchors(problems, anchors, network=False)
     if not problems:
         problems += anchor_problems(anchor_list, geometry, parts["gravity"])

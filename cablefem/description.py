@@ -134,11 +134,13 @@ class Damping:
 @dataclass
 class SolverSpec:
     """The model's switches: the tension-only law, the first-order outer correction
-    ('none' | 'hinge') and PETSc options of its solvers (without the options prefix)."""
+    ('none' | 'hinge'), the span's own bending (string only) and PETSc options of its
+    solvers (without the options prefix)."""
 
     tension_only: bool = True
     petsc_options: dict = field(default_factory=dict)
     outer_correction: str = "none"
+    span_bending: bool = False  #: the span's own EI in the string (docs/theory.md §6a)
 
 
 @dataclass

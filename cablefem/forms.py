@@ -30,7 +30,8 @@ from ufl.algorithms import estimate_total_polynomial_degree, expand_derivatives
 
 __all__ = ["CableForms", "reference_tangent", "ds_", "stretch_vector", "stretch", "axial_strain",
            "tension", "internal_force", "internal_work", "inertia_work", "load_work",
-           "strain_rate", "axial_damping_work", "strain_energy_density"]
+           "strain_rate", "axial_damping_work", "strain_energy_density",
+           "turning_cosine", "span_bending_energy", "span_bending_work"]
 
 
 def reference_tangent(mesh) -> ufl.core.expr.Expr:
@@ -114,6 +115,45 @@ def strain_energy_density(u, t0, EA, tension_only: bool = True, c=1.0):
     if tension_only:
         return ufl.conditional(ufl.gt(v3, 0.0), 0.5 * c * EA * v3 * v3, 0.0)
     return 0.5 * c * EA * v3 * v3
+
+
+# ----------------------------------------------------------------------------- span bending
+def turning_cosine(u, t0):
+    """Cosine of the angle between the deformed tangents of the two elements meeting at an
+    interior vertex, ``cos θ = σ e+ · e−`` with ``e = ∂s r / λ`` on each side (restricted
+    to ``("+")``/``("-")``: for a ``dS`` integral). ``σ = sign(t0+ · t0−)`` makes it
+    independent of how each cell of the mesh is oriented (``t0`` and ``e`` flip together)."""
+    g = stretch_vector(u, t0)
+    gp, gm = g("+"), g("-")
+    sigma = ufl.sign(ufl.dot(t0("+"), t0("-")))
+    return sigma * ufl.dot(gp, gm) / ufl.sqrt(ufl.dot(gp, gp) * ufl.dot(gm, gm))
+
+
+def span_bending_energy(u, t0, EI, mesh, c=1.0, active=1.0):
+    """Bending energy of the span at an interior vertex (integrate with ``dS``):
+    ``EI (1 − cos θ) / h̄`` with ``θ`` the turning angle between the neighbouring elements'
+    deformed tangents and ``h̄`` the mean stress-free length of the two elements
+    (``docs/theory.md`` §6a). It is ``EI θ² / (2 h̄)`` to ``O(θ⁴)``: the energy
+    ``∫ EI κ² / 2 ds`` of a curvature ``κ = θ / h̄`` lumped at the vertex.
+
+    ``active`` (a cell field, 1 or 0) switches the term off at a vertex where either
+    neighbouring cell has 0 (next to a clamped anchor); ``c`` is the stress-free length per
+    mesh length (a cell field or a number)."""
+    J = ufl.Jacobian(mesh)
+    h = ufl.sqrt(ufl.dot(J[:, 0], J[:, 0]))  # mesh length of the cell (reference cell [0, 1])
+    def side(f, s):  # a cell field takes the side's value; a constant is the same on both
+        return f(s) if isinstance(f, ufl.Coefficient) else f
+
+    hp, hm = h("+") * side(c, "+"), h("-") * side(c, "-")
+    on = side(active, "+") * side(active, "-")
+    return on * EI * (1.0 - turning_cosine(u, t0)) / (0.5 * (hp + hm))
+
+
+def span_bending_work(u, du, t0, EI, mesh, dS=ufl.dS, c=1.0, active=1.0):
+    """Virtual work of the span's bending: the Gateaux derivative of
+    :func:`span_bending_energy` summed over the interior vertices (its tangent is
+    symmetric)."""
+    return ufl.derivative(span_bending_energy(u, t0, EI, mesh, c, active) * dS, u, du)
 
 
 # ----------------------------------------------------------------------------- the residuals

@@ -209,6 +209,11 @@ CASE_KEYS: dict[str, KeyDoc | TableDoc] = {
             "string", "none", "", "'none' the string pinned at the clamped anchors (leading "
             "order) | 'hinge' the first-order correction: pinned at a virtual hinge about "
             "one layer length along each clamp (cablefem.hinge); the rod ignores it."),
+        "span_bending": KeyDoc(
+            "boolean", False, "", "String: the span's own bending stiffness EI (a bending "
+            "energy on the turning angle between neighbouring elements; the clamps' "
+            "rotation stays with the boundary layer); single cables only, the rod ignores "
+            "it."),
         "petsc_options": KeyDoc(
             "table of options", {}, "",
             "PETSc options without '-' (values string/number/boolean), e.g. ts_type, "

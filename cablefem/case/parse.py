@@ -344,7 +344,8 @@ def parse_case(data: dict, base_dir: str | os.PathLike = Path("."),
                       else beam_r.number(k, **BEAM_BOUNDS[k][0]) for k in BEAM_BOUNDS))
     solver_r = table("solver")
     solver = SolverSpec(solver_r.boolean("tension_only"), _parse_petsc_options(solver_r),
-                        solver_r.string("outer_correction", ("none", "hinge")))
+                        solver_r.string("outer_correction", ("none", "hinge")),
+                        solver_r.boolean("span_bending"))
     if problems:
         raise CaseError(problems, source)
     parts = [title, section, gravity, geometry, mesh.elements, mesh.grading, damping,
@@ -426,6 +427,8 @@ def _parse_network_case(data: dict, base_dir: Path, source: str) -> Case:
     solver_r = table("solver")
     solver = SolverSpec(solver_r.boolean("tension_only"), _parse_petsc_options(solver_r),
                         solver_r.string("outer_correction", ("none", "hinge")))
+    if solver_r.boolean("span_bending"):
+        solver_r.add("span_bending", "a network has no span bending yet (single cables only)")
     first = sections.get(cables[0].section) if cables else None
     fatigue = _parse_fatigue(top.table("fatigue"), first)
     if problems:
