@@ -400,25 +400,27 @@ class CableModel:
             -ufl.inner(cc * self.m * self.gravity, u) * ufl.dx)
 
     def _add_span_bending(self):
-        """``solver.span_bending``: the span's own EI as the term ``span_bending`` of
-        :attr:`forms` (a bending energy on the turning angle at each interior vertex,
-        ``docs/theory.md`` §6a), off at the vertex next to a clamped anchor: the clamp's
-        rotation condition stays with the boundary layer, and the anchor node feels the
-        string's force only. Returns the bending energy (a form)."""
+        """``solver.span_bending``: the span's own EI (``docs/theory.md`` §6a) as the terms
+        ``span_bending`` (a bending energy on the turning angle at every interior vertex)
+        and ``end_moments`` (at each clamped anchor the moment ``EI κ_s`` of the outer
+        curvature, handed over by the layer; the clamp's rotation stays with the layer).
+        Returns the bending energy (a form)."""
         self.EI = fem.Constant(self.mesh, PETSc.ScalarType(self.case.section.EI))
-        self.span_bending_on = fem.Function(self.W, name="span_bending_on")
-        self.span_bending_on.x.array[:] = 1.0
-        c2v = self.mesh.topology.connectivity(0, 1)
-        for anc in self.anchors:
-            if anc.kind == "clamped":
-                for vtx in self._locate_node(anc.node):
-                    self.span_bending_on.x.array[c2v.links(vtx)] = 0.0
-        energy = forms.span_bending_energy(self.u, self.t0, self.EI, self.mesh, c=self.c,
-                                           active=self.span_bending_on) * self.dS
         self.forms.add("span_bending", forms.span_bending_work(
-            self.u, self.du, self.t0, self.EI, self.mesh, self.dS, c=self.c,
-            active=self.span_bending_on), kind="static")
-        return energy
+            self.u, self.du, self.t0, self.EI, self.mesh, self.dS, c=self.c), kind="static")
+        clamped = [(i + 1, anc) for i, anc in enumerate(self.anchors) if anc.kind == "clamped"]
+        if clamped:
+            ds = ufl.Measure("ds", domain=self.mesh, subdomain_data=self._vertex_tags(
+                {anc.node: tag for tag, anc in clamped}))
+            T = forms.tension(self.u, self.t0, self.EA, self.tension_only, self.c)
+            q = -(self.m * self.gravity + sum((f for f, _ in self.loads), 0.0 * self.gravity))
+            work = sum(forms.end_moment_work(
+                self.u, self.du, self.t0, self.EI, T, q,
+                fem.Constant(self.mesh, np.asarray(anc.direction, dtype=PETSc.ScalarType)),
+                ds(tag)) for tag, anc in clamped)
+            self.forms.add("end_moments", work, kind="static")
+        return forms.span_bending_energy(self.u, self.t0, self.EI, self.mesh, c=self.c) * \
+            self.dS
 
     def _axial_damping_work(self):
         """The "axial" damping model's virtual work (strain-rate damping along the axis)."""

@@ -31,7 +31,7 @@ from ufl.algorithms import estimate_total_polynomial_degree, expand_derivatives
 __all__ = ["CableForms", "reference_tangent", "ds_", "stretch_vector", "stretch", "axial_strain",
            "tension", "internal_force", "internal_work", "inertia_work", "load_work",
            "strain_rate", "axial_damping_work", "strain_energy_density",
-           "turning_cosine", "span_bending_energy", "span_bending_work"]
+           "turning_cosine", "span_bending_energy", "span_bending_work", "end_moment_work"]
 
 
 def reference_tangent(mesh) -> ufl.core.expr.Expr:
@@ -154,6 +154,23 @@ def span_bending_work(u, du, t0, EI, mesh, dS=ufl.dS, c=1.0, active=1.0):
     :func:`span_bending_energy` summed over the interior vertices (its tangent is
     symmetric)."""
     return ufl.derivative(span_bending_energy(u, t0, EI, mesh, c, active) * dS, u, du)
+
+
+def end_moment_work(u, du, t0, EI, T, q, direction, ds):
+    """The residual term of the moment ``EI κ_s`` that a clamp's boundary layer hands to the
+    span at its end (``docs/theory.md`` §6a), on the first element (``ds``: its anchor
+    vertex). ``κ_s = e × q / T`` is the string's own curvature at the anchor
+    (:func:`cablefem.asymptotics.string_curvature`, ``q = m a − f`` per stress-free length,
+    ``e`` the tangent into the span, ``T`` the first element's tension); its virtual work on
+    the element's rotation ``e × δe`` is ``(EI/T) q⊥ · δe``. ``direction`` (the clamp's,
+    into the span) orients the element. A slack element (``T = 0``) gets none."""
+    g = stretch_vector(u, t0)
+    lam = ufl.sqrt(ufl.dot(g, g))
+    e = g / lam
+    sgn = ufl.sign(ufl.dot(t0, direction))
+    q_perp = q - ufl.dot(q, e) * e
+    coeff = ufl.conditional(ufl.gt(T, 0.0), EI / T, 0.0)
+    return sgn * coeff * ufl.dot(q_perp, ds_(du, t0)) / lam * ds
 
 
 # ----------------------------------------------------------------------------- the residuals

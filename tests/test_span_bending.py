@@ -1,0 +1,234 @@
+"""The span's own bending in the string (solver.span_bending, docs/theory.md §6a): a taut
+pinned beam exactly and in the limit, a sagging cable against the rod, and statics that
+move by O(eps^2) only."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from conftest import level_case, observed_order
+from mpi4py import MPI
+
+from cablefem.cable import CableModel
+from cablefem.case import CaseError, load_case, parse_case
+from cablefem.modal import solve_modes
+from cablefem.moments import anchor_moments
+from cablefem.rod import BeamModel
+from cablefem.statics import solve_static
+
+DEMOS = Path(__file__).resolve().parents[1] / "demos"
+
+
+# ----------------------------------------------------------------------------- taut beam
+def taut_beam(n: int, EI: float, EA=1e4, l=1.0, L=1.0001, m=1.0):
+    d = level_case(EA=EA, EI=EI, mass=m, g=0.0, length=l, chord=L, elements=n,
+                   solver={"span_bending": True})
+    for anc in d["anchors"]:
+        anc["type"] = "pinned"
+        del anc["direction"]
+    model = CableModel(MPI.COMM_WORLD, parse_case(d))
+    solve_static(model)
+    return model
+
+
+def taut_beam_discrete(n_el, k, T, lam, EI, m, l):
+    """Transverse frequencies of the discrete pinned beam, exact: sin(k pi s_i / l) is a
+    mode of the P1 string (stiffness (T/lam) x/h per node, consistent mass m h (2 + cos)/3,
+    x = 2 - 2 cos theta, theta = k pi h/l) and of the turning-angle energy EI theta_i^2 /
+    (2 h) with theta_i = (w_i+1 - 2 w_i + w_i-1)/(lam h), whose stiffness is EI x^2/(lam^2
+    h^3); no term at the pinned ends (the vertex sum stops there, as the sine does)."""
+    h = l / n_el
+    th = k * np.pi * h / l
+    x = 2.0 - 2.0 * np.cos(th)
+    K = T / lam * x / h + EI * x * x / (lam * lam * h ** 3)
+    return np.sqrt(K / (m * h * (2.0 + np.cos(th)) / 3.0))
+
+
+EPS = 0.05  # EI = eps^2 with T = w = l = 1: (4 pi)^2 EI/T = 0.39 in mode 4
+
+
+def test_taut_pinned_beam_discrete_exact():
+    """Modes 1..4 of the taut string with span bending equal the discrete closed form to
+    1e-8 (eigen tolerance 1e-12; the static stretch is solved to ~1e-10)."""
+    n, EA, l, L, m, EI = 24, 1e4, 1.0, 1.0001, 1.0, EPS ** 2
+    model = taut_beam(n, EI, EA, l, L, m)
+    res = solve_modes(model, 8)
+    T, lam = EA * (L / l - 1), L / l
+    expected = np.repeat([taut_beam_discrete(n, k, T, lam, EI, m, l) for k in (1, 2, 3, 4)], 2)
+    np.testing.assert_allclose(res.omegas, expected, rtol=1e-8)
+
+
+def test_taut_pinned_beam_converges_to_the_beam():
+    """omega_n -> (n pi/L) sqrt(T/m) sqrt(1 + (n pi)^2 EI/(T L^2)) at second order in h.
+
+    The discrete form above expands to omega_h/omega = 1 + (theta^2/24) T/(T + EI k^2)
+    + O(theta^4) (k = n pi/l): the string's consistent-mass error, damped by the share of
+    bending in the stiffness (the turning-angle energy is exact to O(theta^2) against the
+    mass's error). The model's continuum limit is k sqrt((T/lam + EI k^2/lam^2)/m); it
+    differs from the formula in L by O(lam - 1) = 1e-4 relative, and the tests below
+    compare with the formula in L within the mesh's own error."""
+    EA, l, L, m, EI = 1e4, 1.0, 1.0001, 1.0, EPS ** 2
+    T, lam = EA * (L / l - 1), L / l
+    ns = np.array([16, 32, 64])
+    modes = np.arange(1, 5)
+    k = modes * np.pi / l
+    exact = k * np.sqrt((T / lam + EI * k * k / lam ** 2) / m)
+    errors = []
+    for n in ns:
+        om = solve_modes(taut_beam(int(n), EI, EA, l, L, m), 8).omegas[::2]
+        err = om / exact - 1.0
+        th = modes * np.pi / n
+        lead = th ** 2 / 24 * T / (T + EI * k * k / lam)
+        np.testing.assert_allclose(err, lead, rtol=0.05)  # the O(theta^4) rest: < 2 %
+        errors.append(err)
+        # the brief's formula, in the current length L and mass per current length
+        formula = modes * np.pi / L * np.sqrt(T / (m * l / L)) * np.sqrt(
+            1 + (modes * np.pi) ** 2 * EI / (T * L * L))
+        assert np.all(np.abs(om / formula - 1) < lead + 2e-4)
+    errors = np.array(errors)
+    for j in range(len(modes)):
+        assert 1.9 < observed_order(1.0 / ns, errors[:, j]) < 2.1
+
+
+# ----------------------------------------------------------------------------- vs the rod
+def sagging(EI: float, kind: str, span_bending: bool = False, EA=1e4, elements=100,
+            poly_first: float | None = None) -> dict:
+    """A level cable of 10 % sag (l = w = 1 scale: span 1, m = g = 1) with both anchors
+    ``kind``; ``poly_first``: a mesh whose two end elements are that long (a clamped
+    string with the virtual hinge needs an end element longer than 2 sigma_h)."""
+    from cablefem.catenary import length_for_sag_ratio
+
+    d = {"title": "sag", "section": {"EA": EA, "EI": EI, "mass": 1.0}, "gravity": {"g": 1.0},
+         "anchors": [{"name": "p", "position": [0.0, 0, 0], "type": kind},
+                     {"name": "q", "position": [1.0, 0, 0], "type": kind}],
+         "solver": {"span_bending": span_bending}}
+    if kind == "clamped":  # clamped along the chord, which is horizontal
+        d["anchors"][0]["direction"] = [1.0, 0, 0]
+        d["anchors"][1]["direction"] = [-1.0, 0, 0]
+        d["solver"]["outer_correction"] = "hinge"
+    if poly_first is None:
+        d["geometry"] = {"sag_ratio": 0.1}
+        d["mesh"] = {"elements": elements}
+    else:
+        l = length_for_sag_ratio(1.0, 0.0, 0.1, 1.0, EA)
+        s = np.concatenate([[0.0], np.linspace(poly_first, l - poly_first, elements - 1), [l]])
+        d["geometry"] = {"polyline": [[x, 0.0, 0.0] for x in s]}
+        d["mesh"] = {"elements": 1}
+    return d
+
+
+LABELS = {"IP sym": ("in-plane", "symmetric"), "IP anti": ("in-plane", "antisymmetric"),
+          "OOP sym": ("out-of-plane", "symmetric"), "OOP anti": ("out-of-plane", "antisymmetric")}
+
+
+def first_modes(model) -> dict[str, float]:
+    """The first frequency of each kind (cablefem.modal's labels)."""
+    st = solve_static(model)
+    res = solve_modes(model, 8)
+    out = {}
+    for w, lab in zip(res.omegas, res.labels):
+        for name, key in LABELS.items():
+            if (lab.get("plane"), lab.get("symmetry")) == key:
+                out.setdefault(name, float(w))
+    assert set(out) == set(LABELS), res.labels
+    out["H"] = float(st.anchor_forces[0][0])
+    return out
+
+
+def rod_modes(EI: float, kind: str, refine: float = 2.0) -> dict[str, float]:
+    return first_modes(BeamModel(MPI.COMM_WORLD, parse_case(sagging(EI, kind)), refine=refine))
+
+
+@pytest.mark.parametrize("eps", [0.03, 0.05])
+def test_sagging_pinned_cable_against_the_rod(eps):
+    """A 10 %-sag cable pinned at both ends: the string with span bending gives the rod's
+    first four frequencies (in-plane symmetric and antisymmetric, out of plane) within
+    0.5 % (measured: <= 0.2 %; the rod at refine 2 moves by < 4e-4 from refine 1, the string
+    of 100 elements by < 2e-4 from 200). Without span bending the in-plane symmetric one
+    is 2.5 % (eps 0.03) to 7 % (eps 0.05) low: more than 2 %."""
+    EI = eps ** 2
+    rod = rod_modes(EI, "pinned")
+    bent = first_modes(CableModel(MPI.COMM_WORLD, parse_case(sagging(EI, "pinned", True))))
+    plain = first_modes(CableModel(MPI.COMM_WORLD, parse_case(sagging(EI, "pinned"))))
+    for name in LABELS:
+        assert abs(bent[name] / rod[name] - 1) < 5e-3, (name, bent, rod)
+    assert plain["IP sym"] / rod["IP sym"] - 1 < -2e-2
+
+
+@pytest.mark.xfail(strict=True, reason="the clamped string's in-plane modes lag the rod by "
+                   "1-5 % with or without span bending: the virtual hinge is fixed in a modal "
+                   "analysis (the layer's length change with the anchor angle is left out) "
+                   "and the result depends on the end element's length (issue 12, the outer "
+                   "correction)")
+@pytest.mark.parametrize("eps", [0.03, 0.05])
+def test_sagging_clamped_cable_against_the_rod(eps):
+    """The same cable clamped along the chord (horizontal), with the virtual hinge (end
+    elements of 0.1 l): the issue's target, 0.5 % in the first in-plane modes."""
+    EI = eps ** 2
+    rod = rod_modes(EI, "clamped")
+    bent = first_modes(CableModel(MPI.COMM_WORLD, parse_case(
+        sagging(EI, "clamped", True, poly_first=0.1))))
+    for name in ("IP sym", "IP anti"):
+        assert abs(bent[name] / rod[name] - 1) < 5e-3, (name, bent, rod)
+
+
+# ----------------------------------------------------------------------------- statics
+@pytest.mark.parametrize("eps", [0.03, 0.05])
+def test_statics_of_a_clamped_sagging_cable_move_at_order_eps2(eps):
+    """The anchor force of the clamped 10 %-sag cable (virtual hinge) changes by
+    O(eps^2) with span bending: the layer's moment EI kappa_s handed to the span (the
+    term end_moments) cancels the end element's shear, so what is left is the bending of
+    the span itself, |dN| ~ EI kappa_s^2 l with kappa_s ~ w/H (measured 1.1 eps^2 at 0.03
+    and 1.9 eps^2 at 0.05, relative): bounded by 3 eps^2. Without the end moment the end
+    element's shear EI kappa_s / h_1 moves it by 1 % at eps = 0.03."""
+    EI = eps ** 2
+    forces = []
+    for bend in (False, True):
+        model = CableModel(MPI.COMM_WORLD, parse_case(sagging(EI, "clamped", bend,
+                                                               poly_first=0.1)))
+        forces.append(solve_static(model).anchor_forces[:, :3])
+    rel = np.linalg.norm(forces[1] - forces[0], axis=1) / np.linalg.norm(forces[0], axis=1)
+    assert np.all(rel < 3 * eps ** 2), rel
+
+
+def test_case_A_anchor_moment_changes_less_than_the_estimate():
+    """Case A (eps = 0.02, sag 0.5 %): the static anchor force moves by O(eps^2 (w l/T)^2)
+    relative; the anchor moment M ~ sqrt(EI T) Delta follows with dM/M = dN_perp/(T Delta)
+    + dT/(2T). Estimate from the measured force change: the moment changes by less than
+    twice that, and by less than 1e-3 (the issue's accuracy target for the moment is
+    0.1 %)."""
+    case = load_case(DEMOS / "paper_inplane.toml")
+    out = []
+    for bend in (False, True):
+        case.solver.span_bending = bend
+        model = CableModel(MPI.COMM_WORLD, case)
+        F = solve_static(model).anchor_forces[0, :3]
+        anc = model.anchors[0]
+        sec = case.section
+        mom = anchor_moments(F[None, :], anc.direction, sec.EI, sec.EA, sec.mass,
+                             np.zeros((1, 3)), sec.mass * model.g_vec, model.length)
+        out.append((F, float(mom["moment"][0]), float(mom["delta"][0])))
+    (F0, M0, D0), (F1, M1, _) = out
+    T = np.linalg.norm(F0)
+    c = model.anchors[0].direction
+    dN = F1 - F0
+    perp = np.linalg.norm(dN - (dN @ c) * c)
+    estimate = perp / (T * D0) + abs(dN @ F0) / T ** 2 / 2
+    assert abs(M1 / M0 - 1) < max(2 * estimate, 1e-12)
+    assert abs(M1 / M0 - 1) < 1e-3
+
+
+# ----------------------------------------------------------------------------- the switch
+def test_span_bending_is_a_term_of_the_forms_and_off_by_default():
+    d = level_case(elements=10)
+    model = CableModel(MPI.COMM_WORLD, parse_case(d))
+    assert "span_bending" not in model.forms.user
+    d["solver"] = {"span_bending": True}
+    model = CableModel(MPI.COMM_WORLD, parse_case(d))
+    assert model.forms.user["span_bending"][1] == "static"
+    assert model.forms.user["end_moments"][1] == "static"  # both anchors clamped
+    d["solver"] = {"span_bending": "yes"}
+    with pytest.raises(CaseError, match="solver.span_bending"):
+        parse_case(d)
