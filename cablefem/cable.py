@@ -400,7 +400,7 @@ class CableModel:
             -ufl.inner(cc * self.m * self.gravity, u) * ufl.dx)
 
     def _add_span_bending(self):
-        """``solver.span_bending``: the span's own EI (``docs/theory.md`` §6a) as the terms
+        """``solver.span_bending``: the span's own EI (``docs/theory.md`` §6.1) as the terms
         ``span_bending`` (a bending energy on the turning angle at every interior vertex)
         and ``end_moments`` (at each clamped anchor the moment ``EI κ_s`` of the outer
         curvature, handed over by the layer; the clamp's rotation stays with the layer).

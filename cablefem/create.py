@@ -68,7 +68,7 @@ def create_cable(comm: MPI.Comm, anchors: list[Anchor], section: Section, *,
     outer_correction
         'none' or 'hinge' (the first-order outer correction, :mod:`cablefem.hinge`).
     span_bending
-        The span's own bending stiffness EI in the string (``docs/theory.md`` §6a; the
+        The span's own bending stiffness EI in the string (``docs/theory.md`` §6.1; the
         clamps' rotation stays with the boundary layer).
     petsc_options, petsc_options_prefix
         Options of the model's solvers (without the prefix) and the prefix.
@@ -101,9 +101,9 @@ def create_rod(comm: MPI.Comm, anchors: list[Anchor], section: Section, *,
     """The reference rod (:class:`cablefem.rod.BeamModel`, geometrically exact, bending
     stiffness everywhere) of the same cable as :func:`create_cable` (same arguments, but
     not a polyline; ``elements``, ``grading``, ``tension_only``, ``outer_correction`` and
-    ``span_bending`` do not apply). Its mesh: ``layer_elements`` per layer length at a clamp, ``growth``
-    ratio of neighbouring elements, at most l / ``span_elements`` long, all scaled by
-    ``refine``; ``shear_stiffness`` GA (N), default 1e5 times the largest tension."""
+    ``span_bending`` do not apply). Its mesh: ``layer_elements`` per layer length at a
+    clamp, ``growth`` ratio of neighbouring elements, at most l / ``span_elements`` long,
+    all scaled by ``refine``; ``shear_stiffness`` GA (N), default 1e5 times the largest tension."""
     from cablefem.rod import BeamModel
 
     prefix = options.pop("petsc_options_prefix", "cable_")

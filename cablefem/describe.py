@@ -232,8 +232,8 @@ def describe_cable(anchors: list[Anchor], section: Section, *, length: float | N
                    gravity: Gravity | None = None, loads=(), point_masses=(), point_loads=(),
                    damping: Damping | None = None, tension_only: bool = True,
                    outer_correction: str = "none", span_bending: bool = False,
-                   petsc_options: dict | None = None, beam: BeamSpec | None = None, units: str = "SI",
-                   source: str = "<python>") -> CableDescription:
+                   petsc_options: dict | None = None, beam: BeamSpec | None = None,
+                   units: str = "SI", source: str = "<python>") -> CableDescription:
     """A checked description of a single cable (the arguments of
     :func:`cablefem.create_cable`, which see).
 

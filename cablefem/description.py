@@ -140,7 +140,7 @@ class SolverSpec:
     tension_only: bool = True
     petsc_options: dict = field(default_factory=dict)
     outer_correction: str = "none"
-    span_bending: bool = False  #: the span's own EI in the string (docs/theory.md §6a)
+    span_bending: bool = False  #: the span's own EI in the string (docs/theory.md §6.1)
 
 
 @dataclass

@@ -133,7 +133,7 @@ def span_bending_energy(u, t0, EI, mesh, c=1.0, active=1.0):
     """Bending energy of the span at an interior vertex (integrate with ``dS``):
     ``EI (1 − cos θ) / h̄`` with ``θ`` the turning angle between the neighbouring elements'
     deformed tangents and ``h̄`` the mean stress-free length of the two elements
-    (``docs/theory.md`` §6a). It is ``EI θ² / (2 h̄)`` to ``O(θ⁴)``: the energy
+    (``docs/theory.md`` §6.1). It is ``EI θ² / (2 h̄)`` to ``O(θ⁴)``: the energy
     ``∫ EI κ² / 2 ds`` of a curvature ``κ = θ / h̄`` lumped at the vertex.
 
     ``active`` (a cell field, 1 or 0) switches the term off at a vertex where either
@@ -158,7 +158,7 @@ def span_bending_work(u, du, t0, EI, mesh, dS=ufl.dS, c=1.0, active=1.0):
 
 def end_moment_work(u, du, t0, EI, T, q, direction, ds):
     """The residual term of the moment ``EI κ_s`` that a clamp's boundary layer hands to the
-    span at its end (``docs/theory.md`` §6a), on the first element (``ds``: its anchor
+    span at its end (``docs/theory.md`` §6.1), on the first element (``ds``: its anchor
     vertex). ``κ_s = e × q / T`` is the string's own curvature at the anchor
     (:func:`cablefem.asymptotics.string_curvature`, ``q = m a − f`` per stress-free length,
     ``e`` the tangent into the span, ``T`` the first element's tension); its virtual work on
