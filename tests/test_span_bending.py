@@ -205,6 +205,7 @@ def test_case_A_anchor_moment_changes_less_than_the_estimate():
     for bend in (False, True):
         case.solver.span_bending = bend
         model = CableModel(MPI.COMM_WORLD, case)
+        assert ("span_bending" in model.forms.user) == bend
         F = solve_static(model).anchor_forces[0, :3]
         anc = model.anchors[0]
         sec = case.section
