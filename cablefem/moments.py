@@ -22,26 +22,19 @@ tension times the unit tangent from the anchor into the span (``docs/post.md``).
 
 from __future__ import annotations
 
-import csv
-from dataclasses import dataclass
-from pathlib import Path
-
 import numpy as np
 
 from cablefem import asymptotics
+from cablefem.io.anchorcsv import ANCHOR_COLUMNS, MOMENT_COLUMNS
 
-__all__ = ["ANCHOR_COLUMNS", "MOMENT_COLUMNS", "MAX_ANCHOR_ANGLE", "anchor_moments",
-           "read_anchor_forces", "AnchorHistory"]
+__all__ = ["ANCHOR_COLUMNS", "MOMENT_COLUMNS", "MAX_ANCHOR_ANGLE", "anchor_moments"]
 
-ANCHOR_COLUMNS = ["time", "anchor", "Nx", "Ny", "Nz", "tension"]
 #: Largest angle Delta between the clamp direction and the anchor force that the layer
 #: describes. The clamp turns the cable by Delta within the layer; beyond 90 degrees the
 #: cable would leave the clamp backwards, which no taut cable does: such a force has the
 #: wrong sign (the anchor's reaction instead of the span's force) or comes from a
 #: mis-oriented clamp.
 MAX_ANCHOR_ANGLE = np.pi / 2
-MOMENT_COLUMNS = ["delta", "moment", "Mx", "My", "Mz", "psi0", "layer_length",
-                  "moment_layer", "valid"]
 
 
 def anchor_moments(forces: np.ndarray, direction: np.ndarray, EI: float, EA: float,
@@ -82,55 +75,6 @@ def anchor_moments(forces: np.ndarray, direction: np.ndarray, EI: float, EA: flo
             "moment_layer": lay.moment, "valid": valid.astype(int),
             "invalid_reason": reason, "tension": lay.tension, "normal": lay.normal,
             "slack": lay.slack}
-
-
-@dataclass
-class AnchorHistory:
-    """Anchor-force histories read from a CSV: ``forces[name]`` is (n, 3), ``times`` (n,)."""
-
-    times: np.ndarray
-    forces: dict[str, np.ndarray]
-
-
-def read_anchor_forces(path: str | Path) -> AnchorHistory:
-    """Read a long-format CSV with columns ``time, anchor, Nx, Ny, Nz`` (others ignored),
-    one row per time and anchor, as cablefem writes and as other tools can export.
-
-    Raises ``ValueError`` naming the file, line and column on malformed input.
-    """
-    path = Path(path)
-    if not path.is_file():
-        raise ValueError(f"{path}: no such file")
-    rows: dict[str, list[tuple[float, float, float, float]]] = {}
-    with path.open(newline="") as fh:
-        reader = csv.DictReader(fh)
-        need = {"time", "anchor", "Nx", "Ny", "Nz"}
-        if reader.fieldnames is None or not need <= {f.strip() for f in reader.fieldnames}:
-            raise ValueError(f"{path}: header must contain time, anchor, Nx, Ny, Nz "
-                             f"(got {reader.fieldnames})")
-        for lineno, row in enumerate(reader, start=2):
-            row = {k.strip(): (v or "").strip() for k, v in row.items() if k}
-            try:
-                vals = tuple(float(row[k]) for k in ("time", "Nx", "Ny", "Nz"))
-            except ValueError:
-                raise ValueError(f"{path}:{lineno}: time, Nx, Ny, Nz must be numbers") from None
-            if not np.all(np.isfinite(vals)):
-                raise ValueError(f"{path}:{lineno}: non-finite value")
-            rows.setdefault(row["anchor"], []).append(vals)
-    if not rows:
-        raise ValueError(f"{path}: no data rows")
-    times = None
-    forces = {}
-    for name, r in rows.items():
-        a = np.array(r)
-        if np.any(np.diff(a[:, 0]) <= 0):
-            raise ValueError(f"{path}: times of anchor '{name}' are not strictly increasing")
-        if times is None:
-            times = a[:, 0]
-        elif a.shape[0] != times.size or not np.allclose(a[:, 0], times):
-            raise ValueError(f"{path}: anchor '{name}' has other times than the first anchor")
-        forces[name] = a[:, 1:]
-    return AnchorHistory(times, forces)
 
 
 def composite_field(node_s: np.ndarray, r: np.ndarray, a: np.ndarray, EA: float, EI: float,

@@ -28,7 +28,7 @@ from mpi4py import MPI
 from cablefem import __version__
 from cablefem.app.plots import MAX_PANELS
 from cablefem.app.run import steady_state_stats
-from cablefem.fatigue import read_anchor_csv
+from cablefem.io.anchorcsv import read_moments
 from cablefem.io.series import jsonable, write_json
 
 __all__ = ["compare_runs", "format_table", "history_error", "start_warnings", "FRACTION",
@@ -96,12 +96,7 @@ def _read_run(folder: Path) -> dict:
     if model not in ("string", "beam"):
         raise ValueError(f"{path}: 'model' must be 'string' or 'beam', got {model!r}")
     csv_path = folder / "anchors.csv"
-    if not csv_path.is_file():
-        raise ValueError(f"{csv_path}: no such file")
-    try:
-        data = read_anchor_csv(csv_path)
-    except UnicodeDecodeError:
-        raise ValueError(f"{csv_path}: not a text file") from None
+    data = read_moments(csv_path)  # ValueError: no such file, not a text file, file:line
     unknown = sorted(set(data) - set(anchors))
     if unknown:
         raise ValueError(f"{csv_path}: anchors {unknown} are not in {path} "

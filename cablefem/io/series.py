@@ -31,11 +31,10 @@ from dolfinx.io import XDMFFile
 from mpi4py import MPI
 
 from cablefem.errors import OutputError
-from cablefem.io.anchorcsv import AnchorCSV
 from cablefem.io.faults import kill_point
 from cablefem.io.summary import jsonable, write_json
 
-__all__ = ["StringWriter", "AnchorCSV", "MomentsWriter", "Series", "OutputError",
+__all__ = ["StringWriter", "MomentsWriter", "Series", "OutputError",
            "write_json", "write_modes", "jsonable", "clean_outputs", "remove_temporaries",
            "SERIES"]
 
