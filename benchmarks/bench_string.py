@@ -184,12 +184,12 @@ def main() -> None:
            "load_average_1min": round(os.getloadavg()[0], 2)}
     if args.repeat > 0:
         out["in_process"] = in_process(args.repeat)
-    if args.runs > 0 and args.baseline.lower() != "none":
-        out["whole_run"] = whole_run(args.baseline, args.runs)
-    out["load_average_1min_after"] = round(os.getloadavg()[0], 2)
-    text = json.dumps(out, indent=2)
     from mpi4py import MPI
 
+    if args.runs > 0 and args.baseline.lower() != "none" and MPI.COMM_WORLD.size == 1:
+        out["whole_run"] = whole_run(args.baseline, args.runs)  # serial runs only
+    out["load_average_1min_after"] = round(os.getloadavg()[0], 2)
+    text = json.dumps(out, indent=2)
     if MPI.COMM_WORLD.rank == 0:
         print(text)
         if args.json:
