@@ -18,8 +18,10 @@ the frequencies (the span turns about H, not about A).
   fraction ``sigma_h / K`` (its coefficient ``c``, stress-free length per mesh length). The
   region's nodes are free: under tension they lie on the far-field line between H and the
   region's end, which is all the outer problem needs (the layer's shape is the boundary
-  layer's business). The anchor force and moment do not depend on how many elements share
-  the cut (a test checks it from 10 elements to many times finer than the layer);
+  layer's business). The region is kept across the statics iterations (it grows only past
+  GROW x REGION_FRACTION). The anchor force and moment do not depend on how many elements
+  share the cut beyond the elements' O(L^2) (a test checks it from 10 elements to many times
+  finer than the layer);
 * the layer's own weight and inertia, ``m sigma_h (g - a_A)``, are added to the hinge
   force, so that the anchor force is the force at the real anchor
   (:meth:`cablefem.reactions.AnchorForces.compute`); the boundary layer (the anchor moment)
@@ -42,7 +44,8 @@ the first element is stiff (EA/L), and EA/L times that compliance is ~2.4 in cas
 sigma updated from the last step's tension blew up within 15 steps. It goes into the
 region's law instead, linearised about the current tension, as a compliance in series
 (each element of stress-free length s gets EA' and a stress-free length R, exact at that
-tension; the layer's mass is K - sum R), so that each step solves the layer's response to
+tension, each element its share p = s/K of the layer; the layer's mass is K - sum R), so
+that each step solves the layer's response to
 its own tension implicitly.
 
 Low tension (the fallback). The layer length grows as T^-1/2 and the series compliance as
@@ -278,10 +281,10 @@ class VirtualHinges:
         sigma(T, Delta) = sigma_far(T, Delta) + shift is linearised in T about the current
         T and put into the region's law as a compliance in series, so that the next step
         solves the layer's response to its own tension implicitly: an element of full
-        stress-free length s, of which s sigma/K is removed, has length s (1 - sigma(T)/K)
-        (1 + T/EA) = R (1 + T/EA') to first order, with R = s (1 - (sigma - sigma_T T)/K)
-        and EA' = R / (s (1 - sigma/K)/EA - s sigma_T/K); the layer's mass is sigma -
-        sigma_T T. Below the floor tension, or where sigma cannot be followed, the
+        stress-free length s and share p, of which p sigma is removed, has length (s - p
+        sigma(T)) (1 + T/EA) = R (1 + T/EA') to first order, with R = s - p (sigma -
+        sigma_T T) and EA' = R / ((s - p sigma)/EA - p sigma_T); the layer's mass is sigma
+        - sigma_T T. Below the floor tension, or where sigma cannot be followed, the
         fallback of the module docs (never an error)."""
         T, delta = self._measure(u)
         for hg, t_k, d_k in zip(self.items, T, delta):
@@ -295,7 +298,7 @@ class VirtualHinges:
     def _law(self, hg: _Hinge, state: tuple[float, float], check: bool) -> bool:
         """Set the region's law from ``state`` = (T, Delta) (T < 0: the law at -T without
         the compliance); with ``check``, refuse (False, nothing set) a sigma outside (0,
-        MAX_FRACTION K]."""
+        MAX_FRACTION K] (K = s/p, the region's length)."""
         t_k, d_k = state
         T = abs(t_k)
         sig = self._sigma_far(hg, T, d_k) + hg.shift

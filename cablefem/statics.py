@@ -117,23 +117,67 @@ def _hinge_iterations(model, snes, x, history, reaction, forces, tol: float | No
             raise CaseError([("solver.outer_correction", str(err))],
                             model.case.source) from None
 
-    its_total = 0
-    Z, G = [], []  # iterates and their images
-    z = place(forces)
-    scale = float(z[:, 1].max())  # lengths in units of the first sigma_h (fixed)
-    change_F = change_z = np.inf
-    for it in range(1, max_iterations + 1):
+    def apply(z):
         try:
             hinges.apply(z)
         except HingeError as err:
             raise CaseError([("solver.outer_correction", str(err))],
                             model.case.source) from None
         model.set_time(0.0)
+
+    bilateral = []  # a SNES with compression allowed, made on first need
+
+    def solve(it):
         ok, its = _try(snes, x, history)
+        if not ok and model.tension_only:
+            # as for the leading order: an element the hinge step leaves slack (H is ~h into
+            # the first element; a cable's strain T/EA can be far smaller) can make the
+            # tension-only Jacobian singular; compression allowed first, then tension-only
+            last.copy(x)
+            if not bilateral:
+                bilateral.append(_make_snes(model, history, bilateral=True)[0])
+            ok2, its2 = _try(bilateral[0], x, history)
+            its += its2
+            if ok2:
+                ok, its3 = _try(snes, x, history)
+                its += its3
+        if not ok and history.norms and history.norms[-1][1] <= 100.0 * atol:
+            ok = True  # stagnated at round-off near Newton's tolerance (a fine mesh)
+            log.info("statics: virtual hinges, iteration %d: Newton stagnated at |F| = "
+                     "%.2e (atol %.2e), accepted", it, history.norms[-1][1], atol)
+        return ok, its
+
+    its_total = 0
+    Z, G = [], []  # iterates and their images
+    z = place(forces)
+    scale = float(z[:, 1].max())  # lengths in units of the first sigma_h (fixed)
+    change_F = change_z = np.inf
+    z_done, last = hinges.current(), x.copy()  # the last hinges with an equilibrium
+    for it in range(1, max_iterations + 1):
+        apply(z)  # sets the region for z (kept by the partial steps below)
+        ok, its = solve(it)
         its_total += its
-        if not ok:
-            raise StaticError(f"static equilibrium with the virtual hinges (iteration {it}) "
-                              f"not found: Newton history {history.text()}")
+        theta, step, z0 = 0.0, 0.5, z_done
+        while not ok:  # continuation from the last equilibrium's hinges towards z
+            if step < 1.0 / 64:
+                raise StaticError(f"static equilibrium with the virtual hinges (iteration "
+                                  f"{it}) not found, also in steps towards them: Newton "
+                                  f"history {history.text()}")
+            last.copy(x)
+            apply(z0 + min(1.0, theta + step) * (z - z0))
+            ok, its = solve(it)
+            its_total += its
+            if ok:
+                x.copy(last)
+                theta = min(1.0, theta + step)
+                step *= 1.5
+                ok = theta >= 1.0
+                if not ok:
+                    continue
+            else:
+                step *= 0.5
+        z_done = hinges.current()
+        x.copy(last)
         copy_in(x, model.u)
         old = forces.copy()
         forces[:] = reaction.compute(0.0, dynamic=False)
@@ -145,6 +189,8 @@ def _hinge_iterations(model, snes, x, history, reaction, forces, tol: float | No
                  "%.2e), hinge change %.2e of sigma_h, %d Newton iterations", it, change_F,
                  tol_F, change_z, its)
         if it > 1 and (change_F <= tol_F or change_z < 1e-10):
+            for b in bilateral:
+                b.destroy()
             return its_total
         Z.append(z.ravel() / scale)
         G.append(g.ravel() / scale)

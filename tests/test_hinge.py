@@ -20,7 +20,7 @@ from cablefem.case import CaseError, load_case, parse_case
 from cablefem.modal import solve_modes
 from cablefem.moments import anchor_moments
 from cablefem.rod import BeamModel
-from cablefem.statics import StaticError, solve_static
+from cablefem.statics import solve_static
 
 DEMOS = Path(__file__).resolve().parents[1] / "demos"
 
