@@ -59,7 +59,8 @@ anchor's *fallback* steps: :meth:`VirtualHinges.fallback` flags them, and the ru
 
 Only the string model has hinges (``solver.outer_correction = "hinge"``); the rod resolves
 its layers itself. A hinge that cannot be placed in statics (slack anchor, anchor angle
-above ~120 deg, a layer longer than half the cable) raises :class:`HingeError`.
+above ~120 deg, a layer longer than REGION_FRACTION of half the cable) raises
+:class:`HingeError` (statics makes it an input error naming ``solver.outer_correction``).
 """
 
 from __future__ import annotations
@@ -76,8 +77,8 @@ __all__ = ["VirtualHinges", "HingeError", "MAX_FRACTION", "REGION_FRACTION", "FL
 #: Largest fraction of the region's stress-free length the layer may take (dynamics).
 MAX_FRACTION = 0.5
 #: In statics the region is chosen so that sigma_h is at most this fraction of it: room for
-#: the layer to grow to 4 sigma_h^2 ... (twice its length, a quarter of the tension) in
-#: dynamics before MAX_FRACTION is reached.
+#: the layer to grow to twice its length (sigma ~ T^-1/2: a quarter of the tension, FLOOR)
+#: in dynamics before MAX_FRACTION is reached.
 REGION_FRACTION = 0.25
 #: Statics keeps its region while sigma_h stays below GROW x REGION_FRACTION of it (a
 #: region that changed with every iteration would make the fixed point hop).
@@ -220,16 +221,6 @@ class VirtualHinges:
     def current(self) -> np.ndarray:
         """(n_hinges, 2): the h and sigma_h in the model."""
         return np.array([(hg.h, hg.sigma) for hg in self.items], float).reshape(-1, 2)
-
-    def update(self, forces: np.ndarray) -> float:
-        """Place every hinge from the anchor forces (the plain fixed-point step); returns
-        the largest change of h or sigma_h relative to sigma_h (inf the first time)."""
-        old = self.current()
-        z = self.place(forces)
-        change = float(np.max(np.abs(z - old).max(axis=1) / z[:, 1])) \
-            if np.all(old[:, 1] > 0) else np.inf
-        self.apply(z)
-        return change
 
     def regions(self) -> dict[str, int]:
         """Per anchor: the number of elements the layer's length is taken from."""
