@@ -32,7 +32,7 @@ CASE = Path(__file__).resolve().parents[1] / "demos" / "paper_inplane.toml"
 
 def bare(case) -> tuple[float, int, int]:
     t0 = time.perf_counter()
-    model = CableModel(case, MPI.COMM_WORLD)
+    model = CableModel(MPI.COMM_WORLD, case)
     solve_static(model)
     dyn = case.dynamics
     stats = DynamicsStats()

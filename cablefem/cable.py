@@ -1,6 +1,7 @@
 """A cable model: mesh, function spaces, unknowns, anchors and the string's forms.
 
-:class:`CableModel` turns a validated :class:`cablefem.case.Case` into dolfinx objects and
+:class:`CableModel` turns a :class:`cablefem.description.CableDescription` (built by
+:func:`cablefem.create_cable`, or a :class:`cablefem.case.Case`) into dolfinx objects and
 keeps them in the open: ``model.mesh``, ``model.V``, the unknowns ``model.u``, ``model.v``,
 ``model.a``, the boundary conditions ``model.bcs`` and the UFL residuals
 ``model.F_static`` / ``model.F_dynamic`` with their Jacobians. A user may add a term to a
@@ -22,12 +23,13 @@ from petsc4py import PETSc
 from ufl.algorithms import expand_derivatives
 
 from cablefem import catenary, forms
-from cablefem.case import Case, CaseError
+from cablefem.description import CableDescription
+from cablefem.errors import CaseError
 from cablefem.geometry import create_line_mesh, graded_stations, polyline_cable, straight_cable
 from cablefem.jit import quiet_compiler
 from cablefem.motion import Motion
 
-__all__ = ["CableModel", "AnchorBC"]
+__all__ = ["CableModel", "AnchorBC", "comm_first"]
 
 log = logging.getLogger(__name__)
 
@@ -93,6 +95,17 @@ class AnchorBC:
         return np.zeros(3) if self.motion is None else np.asarray(self.motion.acceleration(t))
 
 
+def comm_first(comm, description) -> tuple[MPI.Comm, CableDescription]:
+    """``(comm, description)`` from the arguments of a model's constructor, also in the
+    order of version 0.2 (description, comm); anything else is a TypeError."""
+    if isinstance(comm, CableDescription) and isinstance(description, MPI.Comm):
+        comm, description = description, comm
+    if not isinstance(comm, MPI.Comm) or not isinstance(description, CableDescription):
+        raise TypeError(f"expected (comm, description), got ({type(comm).__name__}, "
+                        f"{type(description).__name__})")
+    return comm, description
+
+
 def _chord_frame(p: np.ndarray, q: np.ndarray, gdir: np.ndarray) -> tuple[float, float]:
     """Horizontal span and rise of the chord p -> q in the vertical plane of gravity."""
     d = q - p
@@ -127,17 +140,22 @@ class CableModel:
 
     Parameters
     ----------
-    case
-        A validated case (:func:`cablefem.case.load_case`).
     comm
         MPI communicator; the mesh is partitioned over it.
+    description
+        What to build (:func:`cablefem.description.describe_cable`, or a case from
+        :func:`cablefem.case.load_case`: a case is a description). ``model.case`` is it.
     prefix
         PETSc options prefix of every solver of this model (``cable_`` by default, so that
         ``-cable_ts_type`` or ``-cable_static_snes_rtol`` reach them).
+
+    :func:`cablefem.create_cable` checks its arguments and builds one. The order of
+    version 0.2, ``CableModel(case, comm)``, is still accepted (:func:`comm_first`).
     """
 
-    def __init__(self, case: Case, comm: MPI.Comm = MPI.COMM_WORLD, prefix: str = "cable_"):
-        self.case = case
+    def __init__(self, comm: MPI.Comm, description: CableDescription, prefix: str = "cable_"):
+        comm, case = comm_first(comm, description)
+        self.case = case  #: the description (named ``case`` as in version 0.2)
         self.comm = comm
         self.prefix = prefix
         #: (key, message) pairs for derived quantities that are physically implausible

@@ -63,8 +63,9 @@ from dolfinx import fem
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from cablefem.cable import CableModel
-from cablefem.case import Case, CaseError
+from cablefem.cable import CableModel, comm_first
+from cablefem.description import CableDescription
+from cablefem.errors import CaseError
 from cablefem.geometry import straight_cable
 
 __all__ = ["BeamModel", "beam_stations", "cayley_from_rotation", "cayley_rotation",
@@ -220,8 +221,9 @@ class BeamModel(CableModel):
     #: then takes tiny steps and stagnates ("cp" too); full Newton steps converge
     static_options = {"snes_linesearch_type": "basic", "snes_divergence_tolerance": -1}
 
-    def __init__(self, case: Case, comm: MPI.Comm = MPI.COMM_WORLD, prefix: str = "cable_",
+    def __init__(self, comm: MPI.Comm, description: CableDescription, prefix: str = "cable_",
                  refine: float = 1.0):
+        comm, case = comm_first(comm, description)
         problems = []
         if case.network is not None:
             problems.append(("network", "the beam model takes single cables, not networks"))
@@ -234,7 +236,7 @@ class BeamModel(CableModel):
             raise CaseError(problems, case.source)
         self.refine = float(refine)
         self.spec = case.beam
-        super().__init__(case, comm, prefix)
+        super().__init__(comm, case, prefix)
         self.tension_only = False  # a rod carries compression (bending stiffness)
 
     # ------------------------------------------------------------------ geometry

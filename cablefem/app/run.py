@@ -46,8 +46,8 @@ from cablefem.network import NetworkModel
 from cablefem.statics import solve_static
 from cablefem.units import unit
 
-__all__ = ["RunResult", "RunError", "RunInterrupted", "run_case", "steady_state_stats", "warn",
-           "static_sag_ratio", "rod_moment_columns"]
+__all__ = ["RunResult", "RunError", "RunInterrupted", "run_case", "model_from_case",
+           "steady_state_stats", "warn", "static_sag_ratio", "rod_moment_columns"]
 
 log = logging.getLogger(__name__)
 
@@ -350,6 +350,21 @@ class _Emitter:
                 self.moments.close()
 
 
+def model_from_case(comm: MPI.Comm, case: Case, *, model: str = "string",
+                    refine: float = 1.0) -> CableModel:
+    """The model of a case: its description (a case is one) built as the string
+    (:class:`CableModel`, a :class:`NetworkModel` for a network) or, with
+    ``model="beam"``, the reference rod (:class:`cablefem.rod.BeamModel`, mesh density
+    scaled by ``refine``). Collective on ``comm``."""
+    if model not in ("string", "beam"):
+        raise ValueError(f"model must be 'string' or 'beam', got {model!r}")
+    if model == "beam":
+        from cablefem.rod import BeamModel
+
+        return BeamModel(comm, case, refine=refine)
+    return (NetworkModel if case.network is not None else CableModel)(comm, case)
+
+
 def run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, **kwargs
              ) -> RunResult:
     """Run a case (see :func:`_run_case` for the keywords and what is written), the C
@@ -439,16 +454,7 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
         outdir.mkdir(parents=True, exist_ok=True)
     comm.Barrier()
     kind = model
-    if kind not in ("string", "beam"):
-        raise ValueError(f"model must be 'string' or 'beam', got {kind!r}")
-    if kind == "beam":
-        from cablefem.rod import BeamModel
-
-        model = BeamModel(case, comm, refine=refine)
-    elif case.network is not None:
-        model = NetworkModel(case, comm)
-    else:
-        model = CableModel(case, comm)
+    model = model_from_case(comm, case, model=kind, refine=refine)
     t_build = time.perf_counter() - wall0
     if restart:  # what a kill left half-written (the series' own parts: see io.Series)
         remove_temporaries(outdir, comm)
