@@ -145,6 +145,9 @@ class _Emitter:
         self.forces: dict[str, list[np.ndarray]] = {a.name: [] for a in model.anchors}
         self.columns: dict[str, dict[str, list]] = {
             a.name: {k: [] for k in MOMENT_COLUMNS} for a in self.clamped}
+        #: per clamped anchor with a virtual hinge: the rows whose layer was in its
+        #: low-tension fallback (cablefem.hinge; this process's rows, not a resumed run's)
+        self.fallback: dict[str, list[bool]] = {}
         if resume_after is not None:
             self._load_history(outdir / "anchors.csv")
         frames = frames or {}
@@ -257,6 +260,9 @@ class _Emitter:
     def add(self, t: float, forces: np.ndarray) -> None:
         """Record the anchor forces at ``t`` (written in batches)."""
         self.times.append(t)
+        if getattr(self.model, "hinges", None):  # the law the row's step was solved with
+            for name, flag in self.model.hinges.fallback().items():
+                self.fallback.setdefault(name, []).append(flag)
         for anc, N in zip(self.model.anchors, forces):
             self.forces[anc.name].append(np.asarray(N[:3], float))
             if anc.name in self.rod:
@@ -680,6 +686,13 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
                 warn(summary, f"anchors.{a.name}", f"{backwards} of {len(times)} rows have "
                      "the anchor force more than 90 degrees from the clamp direction: "
                      "outside the method, valid = 0 (check anchors.direction)")
+            fb = emitter.fallback.get(a.name)
+            if fb and any(fb):
+                entry["outer_fallback_fraction"] = float(np.mean(fb))
+                warn(summary, f"anchors.{a.name}", f"{sum(fb)} of {len(fb)} rows with the "
+                     "virtual hinge's layer in its low-tension fallback (it stops following "
+                     "the tension below a quarter of the static one): the first-order "
+                     "correction is only partial there")
             if len(times) > 1:
                 entry["steady_state_moment"] = steady_state_stats(times, mo["moment"])
         summary["anchors"][a.name] = entry
