@@ -58,7 +58,7 @@ def worker(n: int, steps: int) -> None:
     comm.Barrier()
     t0 = time.perf_counter()
     case = load_case(tmp / "case.toml")
-    model = NetworkModel(case, comm)
+    model = NetworkModel(comm, case)
     t_build = time.perf_counter() - t0
     t0 = time.perf_counter()
     solve_static(model)

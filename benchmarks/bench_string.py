@@ -49,7 +49,7 @@ def bare(case) -> tuple[float, int, int]:
     from cablefem.statics import solve_static
 
     t0 = time.perf_counter()
-    model = CableModel(case, MPI.COMM_WORLD)
+    model = CableModel(MPI.COMM_WORLD, case)
     solve_static(model)
     dyn = case.dynamics
     stats = DynamicsStats()

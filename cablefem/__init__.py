@@ -21,6 +21,18 @@ _API = {
     "load_case": "cablefem.case", "parse_case": "cablefem.case",
     "CableModel": "cablefem.cable", "NetworkModel": "cablefem.network",
     "BeamModel": "cablefem.rod", "run_case": "cablefem.app.run",
+    "model_from_case": "cablefem.app.run",
+    # building models in Python (docs/python-api.md)
+    "create_cable": "cablefem.create", "create_rod": "cablefem.create",
+    "create_network": "cablefem.create", "Anchor": "cablefem.anchor",
+    "Section": "cablefem.properties", "CableDescription": "cablefem.description",
+    "describe_cable": "cablefem.describe", "describe_network": "cablefem.describe",
+    "Gravity": "cablefem.description", "DistributedLoad": "cablefem.description",
+    "PointMass": "cablefem.description", "PointLoad": "cablefem.description",
+    "Damping": "cablefem.description", "CableSpec": "cablefem.description",
+    "HarmonicMotion": "cablefem.motion", "EllipseMotion": "cablefem.motion",
+    "TableMotion": "cablefem.motion", "TimeFunction": "cablefem.motion",
+    "solve_static": "cablefem.statics",
 }
 
 __all__ = ["__version__", *_API]

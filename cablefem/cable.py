@@ -1,10 +1,12 @@
 """A cable model: mesh, function spaces, unknowns, anchors and the string's forms.
 
-:class:`CableModel` turns a validated :class:`cablefem.case.Case` into dolfinx objects and
+:class:`CableModel` turns a :class:`cablefem.description.CableDescription` (built by
+:func:`cablefem.create_cable`, or a :class:`cablefem.case.Case`) into dolfinx objects and
 keeps them in the open: ``model.mesh``, ``model.V``, the unknowns ``model.u``, ``model.v``,
-``model.a``, the boundary conditions ``model.bcs`` and the UFL residuals
-``model.F_static`` / ``model.F_dynamic`` with their Jacobians. A user may add a term to a
-residual and call :meth:`CableModel.compile` again before solving.
+``model.a``, the boundary conditions ``model.bcs`` and the residual's terms ``model.forms``
+(:class:`cablefem.forms.CableForms`), from which ``model.F_static``, ``model.F_dynamic``, their
+Jacobians and the mass form are derived. A user adds a term with ``model.forms.add`` and
+calls :meth:`CableModel.compile` again before solving (``docs/extending.md``).
 """
 
 from __future__ import annotations
@@ -22,12 +24,13 @@ from petsc4py import PETSc
 from ufl.algorithms import expand_derivatives
 
 from cablefem import catenary, forms
-from cablefem.case import Case, CaseError
+from cablefem.description import CableDescription
+from cablefem.errors import CaseError
 from cablefem.geometry import create_line_mesh, graded_stations, polyline_cable, straight_cable
 from cablefem.jit import quiet_compiler
 from cablefem.motion import Motion
 
-__all__ = ["CableModel", "AnchorBC"]
+__all__ = ["CableModel", "AnchorBC", "comm_first"]
 
 log = logging.getLogger(__name__)
 
@@ -93,6 +96,17 @@ class AnchorBC:
         return np.zeros(3) if self.motion is None else np.asarray(self.motion.acceleration(t))
 
 
+def comm_first(comm, description) -> tuple[MPI.Comm, CableDescription]:
+    """``(comm, description)`` from the arguments of a model's constructor, also in the
+    order of version 0.2 (description, comm); anything else is a TypeError."""
+    if isinstance(comm, CableDescription) and isinstance(description, MPI.Comm):
+        comm, description = description, comm
+    if not isinstance(comm, MPI.Comm) or not isinstance(description, CableDescription):
+        raise TypeError(f"expected (comm, description), got ({type(comm).__name__}, "
+                        f"{type(description).__name__})")
+    return comm, description
+
+
 def _chord_frame(p: np.ndarray, q: np.ndarray, gdir: np.ndarray) -> tuple[float, float]:
     """Horizontal span and rise of the chord p -> q in the vertical plane of gravity."""
     d = q - p
@@ -127,17 +141,22 @@ class CableModel:
 
     Parameters
     ----------
-    case
-        A validated case (:func:`cablefem.case.load_case`).
     comm
         MPI communicator; the mesh is partitioned over it.
+    description
+        What to build (:func:`cablefem.description.describe_cable`, or a case from
+        :func:`cablefem.case.load_case`: a case is a description). ``model.case`` is it.
     prefix
         PETSc options prefix of every solver of this model (``cable_`` by default, so that
         ``-cable_ts_type`` or ``-cable_static_snes_rtol`` reach them).
+
+    :func:`cablefem.create_cable` checks its arguments and builds one. The order of
+    version 0.2, ``CableModel(case, comm)``, is still accepted (:func:`comm_first`).
     """
 
-    def __init__(self, case: Case, comm: MPI.Comm = MPI.COMM_WORLD, prefix: str = "cable_"):
-        self.case = case
+    def __init__(self, comm: MPI.Comm, description: CableDescription, prefix: str = "cable_"):
+        comm, case = comm_first(comm, description)
+        self.case = case  #: the description (named ``case`` as in version 0.2)
         self.comm = comm
         self.prefix = prefix
         #: (key, message) pairs for derived quantities that are physically implausible
@@ -359,8 +378,9 @@ class CableModel:
 
     # ------------------------------------------------------------------ forms
     def build_forms(self) -> None:
-        """Build the UFL residuals and Jacobians (override or extend, then :meth:`compile`)."""
-        u, a, du, t0, cc = self.u, self.a, self.du, self.t0, self.c
+        """Build the model's terms of the residual in :attr:`forms` (a
+        :class:`cablefem.forms.CableForms`; users add theirs with ``model.forms.add``)."""
+        u, v, a, du, t0, cc = self.u, self.v, self.a, self.du, self.t0, self.c
         self._set_forms(
             F_int=forms.internal_work(u, du, t0, self.EA, self.tension_only, c=cc),
             F_weight=forms.load_work(self.m * self.gravity, du, c=cc),
@@ -369,6 +389,13 @@ class CableModel:
             # the same with compression allowed: statics uses it to get off a guess on
             # which every element is slack (zero tangent stiffness under tension only)
             bilateral=forms.internal_work(u, du, t0, self.EA, False, c=cc))
+        self.forms.outputs = {
+            "tension": forms.tension(u, t0, self.EA, self.tension_only, cc),
+            "strain": forms.axial_strain(u, t0, cc)}
+        self.forms.energies = (
+            0.5 * ufl.inner(v, v) * cc * self.m * ufl.dx,
+            forms.strain_energy_density(u, t0, self.EA, self.tension_only, cc) * ufl.dx,
+            -ufl.inner(cc * self.m * self.gravity, u) * ufl.dx)
 
     def _axial_damping_work(self):
         """The "axial" damping model's virtual work (strain-rate damping along the axis)."""
@@ -377,7 +404,8 @@ class CableModel:
 
     def _set_forms(self, F_int, F_weight, F_inertia, du_t, a_t, dx, bilateral=None) -> None:
         """What the string and the rod share: the extra loads (ramped by statics through
-        ``load_factor``), point masses, damping, the residuals and their Jacobians.
+        ``load_factor``), point masses and damping; creates :attr:`forms` with the model's
+        terms.
 
         ``F_int``, ``F_weight``, ``F_inertia``: the model's internal work, own weight and
         distributed inertia; ``du_t``, ``a_t``: the translational parts of the test function
@@ -385,7 +413,6 @@ class CableModel:
         the internal work with compression allowed (default ``F_int``)."""
         u, v, a, dw = self.u, self.v, self.a, self.dw
         case, cc = self.case, self.c
-        self.F_internal = F_int
         extra = [forms.load_work(q, du_t, dx=dx, c=cc) for q, _ in self.loads]
         extra += [pm.mass * ufl.inner(self.gravity, du_t("+")) * self.dS(tag)
                   for pm in case.point_masses for tag in self._item_tags(pm)]
@@ -396,12 +423,10 @@ class CableModel:
             F_ext = self.load_factor * sum(extra, F_weight)
         elif extra:
             F_ext = F_weight + self.load_factor * sum(extra[1:], extra[0])
-        self.F_external = F_ext
 
         for pm in case.point_masses:
             for tag in self._item_tags(pm):
                 F_inertia = F_inertia + pm.mass * ufl.inner(a_t("+"), du_t("+")) * self.dS(tag)
-        self.F_inertia = F_inertia
 
         damp = case.damping
         # Constants, not floats: one compiled form serves every value (FFCx caches by code)
@@ -421,49 +446,24 @@ class CableModel:
                 F_damp = F_damp + self.beta * ufl.action(K0, v)
         elif damp.model == "axial" and damp.beta > 0:
             F_damp = self._axial_damping_work()
-        self.F_damping = F_damp
 
-        self.F_static = F_int - F_ext
-        self.F_static_bilateral = (bilateral if bilateral is not None else F_int) - F_ext
-        self.F_dynamic = F_inertia + F_int - F_ext
-        if F_damp is not None:
-            self.F_dynamic = self.F_dynamic + F_damp
-        self.J_static = ufl.derivative(self.F_static, u, dw)
-        J = ufl.derivative(self.F_dynamic, u, dw) + self.shift_a * ufl.derivative(
-            self.F_dynamic, a, dw)
-        if F_damp is not None:
-            J = J + self.shift_v * ufl.derivative(self.F_dynamic, v, dw)
-        self.J_dynamic = J
-        self.M_form = ufl.derivative(F_inertia, a, dw)
+        self.forms = forms.CableForms(u, v, a, self.du, dw, self.shift_v, self.shift_a,
+                                      self.W.element.interpolation_points())
+        self.forms.set_model_terms(F_int, F_ext, F_inertia, F_damp, bilateral)
 
     def compile(self) -> None:
-        """JIT-compile the forms (FFCx caches them: later runs take milliseconds).
+        """Derive every residual, Jacobian and mass form from the terms of :attr:`forms`
+        and JIT-compile them (FFCx caches them: later runs take milliseconds).
 
         The C compiler's messages (setuptools logs them through the root logger) are kept
         off the console meanwhile (:func:`cablefem.jit.quiet_compiler`)."""
+        self.forms.compile()
         with quiet_compiler():
             self._compile()
 
     def _compile(self) -> None:
-        self.f_static = fem.form(self.F_static)
-        self.j_static = fem.form(self.J_static)
-        self.f_static_bilateral = fem.form(self.F_static_bilateral)
-        self.j_static_bilateral = fem.form(ufl.derivative(self.F_static_bilateral, self.u,
-                                                          self.dw))
-        self.f_dynamic = fem.form(self.F_dynamic)
-        self.j_dynamic = fem.form(self.J_dynamic)
-        self.m_form = fem.form(self.M_form)
-        self.tension_expr = fem.Expression(
-            forms.tension(self.u, self.t0, self.EA, self.tension_only, self.c),
-            self.W.element.interpolation_points())
-        self.strain_expr = fem.Expression(forms.axial_strain(self.u, self.t0, self.c),
-                                          self.W.element.interpolation_points())
-        self.energy_forms = (
-            fem.form(0.5 * ufl.inner(self.v, self.v) * self.c * self.m * ufl.dx),
-            fem.form(forms.strain_energy_density(self.u, self.t0, self.EA, self.tension_only,
-                                                  self.c)
-                     * ufl.dx),
-            fem.form(-ufl.inner(self.c * self.m * self.gravity, self.u) * ufl.dx))
+        """What a model compiles beyond :attr:`forms` (nothing for the string)."""
+
 
     # ------------------------------------------------------------------ time
     def set_time(self, t: float) -> None:
@@ -573,3 +573,24 @@ class CableModel:
         from cablefem.properties import dimensionless_groups
 
         return dimensionless_groups(self.case.section, self.length, self.case.gravity.g)
+
+
+def _forwarded(name: str) -> property:
+    """``model.<name>``: the form of ``model.forms`` (derived from its terms, read-only)."""
+
+    def get(self):
+        return getattr(self.forms, name)
+
+    def refuse(self, value):
+        raise AttributeError(f"model.{name} is derived from the terms of model.forms: add a "
+                             "term with model.forms.add(name, form, kind) (docs/extending.md)")
+
+    return property(get, refuse, doc=f"``{name}`` of :attr:`CableModel.forms` (read-only).")
+
+
+for _name in forms.COMPILED + ("F_static", "J_static", "F_static_bilateral",
+                               "J_static_bilateral", "F_dynamic", "J_dynamic", "M_form"):
+    setattr(CableModel, _name, _forwarded(_name))
+for _name, _term in (("F_internal", "internal"), ("F_external", "external"),
+                     ("F_inertia", "inertia"), ("F_damping", "damping")):
+    setattr(CableModel, _name, _forwarded(_term))

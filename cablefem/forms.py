@@ -1,8 +1,9 @@
 """UFL forms of the 3D extensible string (``docs/theory.md`` §2).
 
 Nothing else lives here: no meshes, no solvers. Every function takes UFL objects and returns
-UFL expressions or forms, so that users can add terms (drag, buoyancy, ...) to the residual
-that :class:`cablefem.cable.CableModel` exposes.
+UFL expressions or forms. :class:`CableForms` holds a model's residual as named terms (the
+model's own and a user's: drag, buoyancy, a dashpot, ...) and derives every residual,
+Jacobian and mass form the solvers use from them (``model.forms``, ``docs/extending.md``).
 
 Kinematics on a 1D mesh embedded in 3D, with ``s`` the arc length of the mesh (the
 reference configuration). A single cable's mesh is its stress-free geometry; a network's
@@ -25,8 +26,9 @@ Weak form (paper Eq. 16 in weak form), for all admissible ``δu``::
 from __future__ import annotations
 
 import ufl
+from ufl.algorithms import estimate_total_polynomial_degree, expand_derivatives
 
-__all__ = ["reference_tangent", "ds_", "stretch_vector", "stretch", "axial_strain",
+__all__ = ["CableForms", "reference_tangent", "ds_", "stretch_vector", "stretch", "axial_strain",
            "tension", "internal_force", "internal_work", "inertia_work", "load_work",
            "strain_rate", "axial_damping_work", "strain_energy_density"]
 
@@ -112,3 +114,238 @@ def strain_energy_density(u, t0, EA, tension_only: bool = True, c=1.0):
     if tension_only:
         return ufl.conditional(ufl.gt(v3, 0.0), 0.5 * c * EA * v3 * v3, 0.0)
     return 0.5 * c * EA * v3 * v3
+
+
+# ----------------------------------------------------------------------------- the residuals
+#: kinds of a user term: where it acts (:meth:`CableForms.add`)
+KINDS = ("static", "dynamic")
+#: names of the model's own terms (reserved)
+MODEL_TERMS = ("internal", "external", "inertia", "damping")
+#: the compiled objects, as :meth:`CableForms.compile` names them
+COMPILED = ("f_static", "j_static", "f_static_bilateral", "j_static_bilateral", "f_dynamic",
+            "j_dynamic", "m_form", "tension_expr", "strain_expr", "energy_forms")
+
+
+def _depends_on(form, w, trial) -> bool:
+    """True when ``form`` varies with the coefficient ``w`` (its Gateaux derivative is not
+    identically zero)."""
+    return not expand_derivatives(ufl.derivative(form, w, trial)).empty()
+
+
+class CableForms:
+    """The residual of a model as named terms, and every form derived from them.
+
+    Sign convention: the residual is ``internal − external + inertia + damping + Σ user
+    terms`` and the solvers find where it vanishes; a user term is added as it enters the
+    residual (a load ``f`` as ``−f·δu``, a dashpot ``c v`` as ``+c v·δu``).
+
+    The model supplies its own terms (:meth:`set_model_terms`); a user adds terms with
+    :meth:`add`; :meth:`compile` derives and compiles everything the solvers read:
+
+    * ``F_static = internal − external + Σ static terms`` and ``J_static = ∂F_static/∂u``;
+    * their bilateral twins (the internal work with compression allowed), which statics
+      uses to leave a guess on which every element is slack;
+    * ``F_dynamic = inertia + internal − external + damping + Σ static + Σ dynamic terms``
+      and the Jacobian of the time integrator, ``∂F/∂u + shift_a ∂F/∂a + shift_v ∂F/∂v``
+      with a ``v`` (``a``) part whenever ``F_dynamic`` depends on ``v`` (``a``);
+    * the mass form ``M = ∂F_dynamic/∂a`` (the inertia and any dynamic term in ``a``);
+    * the output expressions (tension, strain) and the energy forms of the model.
+
+    The UFL forms stay readable (``forms.F_dynamic``, ``forms.J_dynamic``, ...); they are
+    derived from the terms at every access, never stored: editing them changes nothing.
+    """
+
+    def __init__(self, u, v, a, test, trial, shift_v, shift_a, points):
+        self.u, self.v, self.a = u, v, a
+        self.test, self.trial = test, trial
+        self.shift_v, self.shift_a = shift_v, shift_a
+        self.points = points  #: where output expressions are evaluated (the DG0 points)
+        #: the model's cell measure; one with a quadrature degree (the rod's one point) fixes
+        #: the rule of every cell integral (see :meth:`add`)
+        self.dx = ufl.dx
+        self.internal = self.internal_bilateral = self.external = None
+        self.inertia = self.damping = None
+        self.user: dict[str, tuple[ufl.Form, str]] = {}  #: name -> (form, kind)
+        #: output expressions by name, compiled to ``<name>_expr`` (tension, strain)
+        self.outputs: dict[str, ufl.core.expr.Expr] = {}
+        #: kinetic, strain and gravity potential energy (UFL functionals of the model)
+        self.energies: tuple = ()
+        self._changes = 0  # bumped by every change of a term
+        self._compiled_at = -1
+        self._compiled: dict[str, object] = {}
+
+    # ------------------------------------------------------------------ terms
+    def set_model_terms(self, internal, external, inertia, damping=None,
+                        internal_bilateral=None) -> None:
+        """The model's own terms (for model builders): internal work, external work of the
+        loads (positive: it is subtracted), inertia, damping (or None) and the internal
+        work with compression allowed (None: the same as ``internal``)."""
+        self.internal, self.external, self.inertia = internal, external, inertia
+        self.damping, self.internal_bilateral = damping, internal_bilateral
+        self._changes += 1
+
+    def add(self, name: str, form, kind: str = "static") -> None:
+        """Add the term ``form`` (a UFL form linear in the model's test function, with the
+        sign it has in the residual) under ``name``.
+
+        ``kind="static"``: a force of the configuration (a load, a spring): it acts in
+        statics and in dynamics, and may depend on ``u`` only (not ``v`` or ``a``).
+        ``kind="dynamic"``: it acts in dynamics only (a dashpot ``c v``, an added mass
+        ``m_a a``, a load that starts with the motion); linear in ``a`` if it depends on it.
+
+        Every Jacobian is derived again at the next :meth:`compile` (or on the next access
+        of a compiled form)."""
+        if kind not in KINDS:
+            raise ValueError(f"kind must be one of {KINDS}, got {kind!r}")
+        if not isinstance(name, str) or not name or name in MODEL_TERMS or name in self.user:
+            raise ValueError(f"term name {name!r} is empty, reserved {MODEL_TERMS} or taken "
+                             f"(terms: {sorted(self.user)}): remove it first")
+        if not isinstance(form, ufl.Form) or form.empty():
+            raise ValueError(f"term {name!r}: expected a UFL form (an integral ... * dx), "
+                             f"got {type(form).__name__}")
+        if form.arguments() != (self.test,):
+            raise ValueError(f"term {name!r}: the form must be linear in the model's test "
+                             f"function (model.du) and have no other argument; its arguments "
+                             f"are {form.arguments()}")
+        self._check_rule(name, form)
+        # derivatives applied now: a term given as a Gateaux derivative in the direction v
+        # (beta dF/du [v]) must show v explicitly for the Jacobian's derivative in v
+        form = expand_derivatives(form)
+        if kind == "static":
+            rates = [w.name for w in (self.v, self.a) if w in form.coefficients()]
+            if rates:
+                raise ValueError(f"term {name!r} depends on {', '.join(rates)}: statics has "
+                                 "no velocity or acceleration; add it with kind='dynamic'")
+        self.user[name] = (form, kind)
+        self._changes += 1
+
+    def _check_rule(self, name: str, form) -> None:
+        """A model that integrates its cells with one point (the rod: ``dx`` with quadrature
+        degree 0) takes user cell integrals of one point only: FFCx 0.5 fails to compile a
+        Jacobian whose cell integrals mix that rule with one of more points (it declares
+        the cell Jacobian twice)."""
+        fixed = self.dx.metadata().get("quadrature_degree")
+        if fixed is None:
+            return
+        for itg in form.integrals_by_type("cell"):
+            degree = itg.metadata().get("quadrature_degree")
+            if degree is None:
+                degree = estimate_total_polynomial_degree(expand_derivatives(itg.integrand()))
+            if degree > 1:  # one Gauss point integrates degree 1 exactly
+                raise ValueError(
+                    f"term {name!r}: this model integrates every cell term with one point; "
+                    f"integrate with model.forms.dx (a product of two P1 fields exactly: "
+                    f"cablefem.rod.p1_product), not a rule of degree {degree}")
+
+    def remove(self, name: str) -> None:
+        """Remove the user term ``name``."""
+        if name not in self.user:
+            raise KeyError(f"no user term {name!r} (terms: {sorted(self.user)})")
+        del self.user[name]
+        self._changes += 1
+
+    @property
+    def terms(self) -> dict[str, tuple[ufl.Form, str]]:
+        """Every term of the residuals, name -> (form, kind), the model's first (external
+        with the sign it has in the residual)."""
+        out = {"internal": (self.internal, "internal"),
+               "external": (-self.external, "external"), "inertia": (self.inertia, "inertia")}
+        if self.damping is not None:
+            out["damping"] = (self.damping, "damping")
+        out.update(self.user)
+        return out
+
+    def _sum(self, start, kinds):
+        for form, kind in self.user.values():
+            if kind in kinds:
+                start = start + form
+        return start
+
+    # ------------------------------------------------------------------ derived UFL
+    @property
+    def F_static(self):
+        return self._sum(self.internal - self.external, ("static",))
+
+    @property
+    def F_static_bilateral(self):
+        if self.internal_bilateral is None:
+            return self.F_static
+        return self._sum(self.internal_bilateral - self.external, ("static",))
+
+    @property
+    def J_static(self):
+        return ufl.derivative(self.F_static, self.u, self.trial)
+
+    @property
+    def J_static_bilateral(self):
+        return ufl.derivative(self.F_static_bilateral, self.u, self.trial)
+
+    @property
+    def F_dynamic(self):
+        F = self.inertia + self.internal - self.external
+        if self.damping is not None:
+            F = F + self.damping
+        return self._sum(F, KINDS)
+
+    @property
+    def J_dynamic(self):
+        """``∂F/∂u + shift_a ∂F/∂a + shift_v ∂F/∂v``, each rate's part only where
+        ``F_dynamic`` depends on it."""
+        F, dw = self.F_dynamic, self.trial
+        J = ufl.derivative(F, self.u, dw)
+        if _depends_on(F, self.a, dw):
+            J = J + self.shift_a * ufl.derivative(F, self.a, dw)
+        if _depends_on(F, self.v, dw):
+            J = J + self.shift_v * ufl.derivative(F, self.v, dw)
+        return J
+
+    @property
+    def M_form(self):
+        """The mass form ``∂F_dynamic/∂a``: the inertia and the dynamic terms in ``a``."""
+        M = self.inertia
+        for form, kind in self.user.values():
+            if kind == "dynamic" and _depends_on(form, self.a, self.trial):
+                M = M + form
+        return ufl.derivative(M, self.a, self.trial)
+
+    # ------------------------------------------------------------------ compiled
+    @property
+    def stale(self) -> bool:
+        """True when a term changed since the last :meth:`compile`."""
+        return self._compiled_at != self._changes
+
+    def compile(self) -> None:
+        """Derive every form from the terms and JIT-compile it (FFCx caches the code: a
+        form compiled before takes milliseconds). Collective on the mesh's communicator."""
+        from dolfinx import fem
+
+        from cablefem.jit import quiet_compiler
+
+        with quiet_compiler():
+            out = {"f_static": fem.form(self.F_static), "j_static": fem.form(self.J_static)}
+            if self.internal_bilateral is None:  # the same forms: compiled once
+                out["f_static_bilateral"], out["j_static_bilateral"] = \
+                    out["f_static"], out["j_static"]
+            else:
+                out["f_static_bilateral"] = fem.form(self.F_static_bilateral)
+                out["j_static_bilateral"] = fem.form(self.J_static_bilateral)
+            out["f_dynamic"] = fem.form(self.F_dynamic)
+            out["j_dynamic"] = fem.form(self.J_dynamic)
+            out["m_form"] = fem.form(self.M_form)
+            for name, expr in self.outputs.items():
+                out[f"{name}_expr"] = fem.Expression(expr, self.points)
+            out["energy_forms"] = tuple(fem.form(e) for e in self.energies)
+        self._compiled = out
+        self._compiled_at = self._changes
+
+    def __getattr__(self, name: str):
+        # the compiled objects (f_static, j_dynamic, tension_expr, ...): compiled again
+        # first when a term changed since
+        if name.startswith("_") or not (name in COMPILED or name.endswith("_expr")):
+            raise AttributeError(name)
+        if self.stale:
+            self.compile()
+        try:
+            return self._compiled[name]
+        except KeyError:
+            raise AttributeError(f"no compiled {name!r}") from None

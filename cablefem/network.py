@@ -20,7 +20,7 @@ from dolfinx import mesh as dmesh
 from petsc4py import PETSc
 
 from cablefem.cable import MAX_PLAUSIBLE_STRAIN, AnchorBC, CableModel
-from cablefem.case import CaseError
+from cablefem.errors import CaseError
 from cablefem.geometry import MeshError, NetworkMesh, connected_components, read_network_mesh
 
 __all__ = ["NetworkModel", "NetworkGeometry"]

@@ -63,12 +63,13 @@ from dolfinx import fem
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from cablefem.cable import CableModel
-from cablefem.case import Case, CaseError
+from cablefem.cable import CableModel, comm_first
+from cablefem.description import CableDescription
+from cablefem.errors import CaseError
 from cablefem.geometry import straight_cable
 
 __all__ = ["BeamModel", "beam_stations", "cayley_from_rotation", "cayley_rotation",
-           "rotation_matrix", "virtual_rotation_map", "rod_strains"]
+           "p1_product", "rotation_matrix", "virtual_rotation_map", "rod_strains"]
 
 log = logging.getLogger(__name__)
 
@@ -193,6 +194,10 @@ def _p1_product(a, b, t0, mesh):
     return ufl.inner(a, b) + h * h / 12.0 * ufl.inner(ufl.grad(a) * t0, ufl.grad(b) * t0)
 
 
+#: public name of the one-point exact product of two P1 fields (user terms on the rod)
+p1_product = _p1_product
+
+
 def energy_density(G, K, EA, GA, EI, GJ):
     """``Ψ`` per stress-free length."""
     return 0.5 * (EA * G[2] ** 2 + GA * (G[0] ** 2 + G[1] ** 2)
@@ -220,8 +225,9 @@ class BeamModel(CableModel):
     #: then takes tiny steps and stagnates ("cp" too); full Newton steps converge
     static_options = {"snes_linesearch_type": "basic", "snes_divergence_tolerance": -1}
 
-    def __init__(self, case: Case, comm: MPI.Comm = MPI.COMM_WORLD, prefix: str = "cable_",
+    def __init__(self, comm: MPI.Comm, description: CableDescription, prefix: str = "cable_",
                  refine: float = 1.0):
+        comm, case = comm_first(comm, description)
         problems = []
         if case.network is not None:
             problems.append(("network", "the beam model takes single cables, not networks"))
@@ -234,7 +240,7 @@ class BeamModel(CableModel):
             raise CaseError(problems, case.source)
         self.refine = float(refine)
         self.spec = case.beam
-        super().__init__(case, comm, prefix)
+        super().__init__(comm, case, prefix)
         self.tension_only = False  # a rod carries compression (bending stiffness)
 
     # ------------------------------------------------------------------ geometry
@@ -367,9 +373,14 @@ class BeamModel(CableModel):
                         F_weight=cc * self.m * ufl.inner(self.gravity, duu) * dxr,
                         F_inertia=F_inertia, du_t=duu, a_t=au, dx=dxr)
         # output fields (DG0 at the element midpoint, where the strains are sampled)
-        self._axial_strain = G[2]
-        self._tension = self.EA * G[2]
+        self.forms.dx = dxr  # user terms too: FFCx 0.5 cannot mix cell rules (forms.add)
+        self.forms.outputs = {"tension": self.EA * G[2], "strain": G[2]}
         self._moment = self.EI * (K[0] * d[0] + K[1] * d[1]) + self.GJ * K[2] * d[2]
+        vu, vq = split(self.v)
+        kin = 0.5 * cc * (self.m * ufl.inner(vu, vu) + self.rhoI * (
+            ufl.inner(vq, vq) + ufl.dot(vq, E3) ** 2))
+        self.forms.energies = (kin * ufl.dx, self.Pi,
+                               -ufl.inner(cc * self.m * self.gravity, split(u)[0]) * ufl.dx)
 
     def _axial_damping_work(self):
         """The rod's axial strain-rate damping: ``β EA (dΓ3/dt) δΓ3``."""
@@ -393,15 +404,7 @@ class BeamModel(CableModel):
         return form
 
     def _compile(self) -> None:
-        self.f_static = fem.form(self.F_static)
-        self.j_static = fem.form(self.J_static)
-        self.f_static_bilateral, self.j_static_bilateral = self.f_static, self.j_static
-        self.f_dynamic = fem.form(self.F_dynamic)
-        self.j_dynamic = fem.form(self.J_dynamic)
-        self.m_form = fem.form(self.M_form)
-        pts = self.W.element.interpolation_points()
-        self.tension_expr = fem.Expression(self._tension, pts)
-        self.strain_expr = fem.Expression(self._axial_strain, pts)
+        """The output spaces of three components and the moment expression."""
         self.W3 = fem.VectorFunctionSpace(self.mesh, ("DG", 0), dim=3)
         self.V3 = fem.VectorFunctionSpace(self.mesh, ("Lagrange", 1), dim=3)
         # the output copies components node by node: both spaces must number nodes alike
@@ -411,12 +414,6 @@ class BeamModel(CableModel):
                                        self.V.tabulate_dof_coordinates()):
             raise RuntimeError("beam: P1 spaces of 3 and 6 components number nodes apart")
         self.moment_expr = fem.Expression(self._moment, self.W3.element.interpolation_points())
-        vu, vq = split(self.v)
-        kin = 0.5 * self.c * (self.m * ufl.inner(vu, vu) + self.rhoI * (
-            ufl.inner(vq, vq) + ufl.dot(vq, self.frame[2]) ** 2))
-        uu, _ = split(self.u)
-        self.energy_forms = (fem.form(kin * ufl.dx), fem.form(self.Pi),
-                             fem.form(-ufl.inner(self.c * self.m * self.gravity, uu) * ufl.dx))
 
     def _part(self, f: fem.Function, comps: slice, out: fem.Function) -> fem.Function:
         out.x.array[:] = f.x.array.reshape(-1, 6)[:, comps].reshape(-1)

@@ -10,20 +10,18 @@ from __future__ import annotations
 
 import numpy as np
 
-from cablefem.case import Case
 from cablefem.catenary import catenary_between
+from cablefem.description import CableDescription, stress_free_length
 from cablefem.moments import anchor_moments
 
 __all__ = ["closed_form_anchor_moments"]
 
 
-def closed_form_anchor_moments(case: Case, form: str = "exact") -> dict[str, dict]:
+def closed_form_anchor_moments(case: CableDescription, form: str = "exact") -> dict[str, dict]:
     """Static anchor-moment columns (as in anchors.csv) of every clamped anchor, from the
     exact elastic catenary of the bare cable (no point masses or extra loads)."""
-    from cablefem.app.post import case_length
-
     sec = case.section
-    length = case_length(case)
+    length = stress_free_length(case)
     gdir = np.asarray(case.gravity.direction, float)
     w = sec.mass * case.gravity.g
     a0, a1 = case.anchors

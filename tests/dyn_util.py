@@ -36,7 +36,7 @@ def free_vibration(n=20, amplitude=1e-3, t_end=3.0, dt=0.01, rho_inf=1.0, dampin
     d = level_case(EA=EA, EI=1e-6, mass=M, g=0.0, length=L0, chord=L, elements=n,
                    damping=damping,
                    dynamics={"t_end": t_end, "dt": dt, "rho_inf": rho_inf})
-    model = CableModel(parse_case(d), MPI.COMM_WORLD)
+    model = CableModel(MPI.COMM_WORLD, parse_case(d))
     solve_static(model)
     s = model.geometry.stations
     shape = np.zeros((s.size, 3))

@@ -112,7 +112,7 @@ def test_reactions_balance_momentum(make_case):
     from cablefem.dynamics import integrate
     from cablefem.statics import solve_static
 
-    model = CableModel(case, MPI.COMM_WORLD)
+    model = CableModel(MPI.COMM_WORLD, case)
     solve_static(model)
     alpha = case.damping.alpha
     forms = [fem.form(model.m * (model.a[k] + alpha * model.v[k]) * ufl.dx) for k in range(3)]
@@ -195,7 +195,7 @@ def test_rayleigh_current_tangent_is_frame_independent():
         from cablefem.dynamics import integrate
         from cablefem.statics import solve_static
 
-        model = CableModel(parse_case(d), MPI.COMM_WORLD)
+        model = CableModel(MPI.COMM_WORLD, parse_case(d))
         solve_static(model)
         return np.array([f.copy() for _, f in integrate(model, 0.3, 0.005, 0.9, 1)])
 

@@ -17,7 +17,7 @@ from cablefem.statics import solve_static
 
 def taut_model(n: int, EA=100.0, l=1.0, L=1.01, m=1.0):
     d = level_case(EA=EA, EI=1e-6, mass=m, g=0.0, length=l, chord=L, elements=n)
-    model = CableModel(parse_case(d), MPI.COMM_WORLD)
+    model = CableModel(MPI.COMM_WORLD, parse_case(d))
     solve_static(model)
     return model
 
@@ -75,7 +75,7 @@ def test_irvine_caughey(lambda2):
     EA = lambda2 * H0 * (1 + 8 * sag**2) * H0**2  # lambda^2 = (wL/H)^2 L EA / (H L_e)
     d = level_case(EA=EA, EI=1e-6, g=1.0, chord=1.0, elements=n,
                    geometry={"horizontal_tension": H0})
-    model = CableModel(parse_case(d), MPI.COMM_WORLD)
+    model = CableModel(MPI.COMM_WORLD, parse_case(d))
     st = solve_static(model)
     H = st.anchor_forces[0][0]
     u = model.gather_nodal(model.u)
@@ -111,7 +111,7 @@ def test_inclined_cable_modes_labelled():
     for a in d["anchors"]:
         a.pop("direction")
         a["type"] = "pinned"
-    model = CableModel(parse_case(d), MPI.COMM_WORLD)
+    model = CableModel(MPI.COMM_WORLD, parse_case(d))
     solve_static(model)
     res = solve_modes(model, 6)
     oop = [lab for lab in res.labels if lab.get("plane") == "out-of-plane"]

@@ -21,7 +21,7 @@ W = np.array([0.0, 0.0, -1.0])  # weight per length, case A units
 
 
 def _static_moments(n: int) -> tuple[dict, dict]:
-    model = CableModel(parse_case(level_case(elements=n)), MPI.COMM_WORLD)
+    model = CableModel(MPI.COMM_WORLD, parse_case(level_case(elements=n)))
     st = solve_static(model)
     args = (EI, EA, 1.0, np.zeros((1, 3)), W, 1.0)
     return (anchor_moments(st.anchor_forces[:1], [1, 0, 0], *args),
@@ -86,7 +86,7 @@ def test_rotation_invariance():
     out = []
     for d in (base, rot):
         case = parse_case(d)
-        model = CableModel(case, MPI.COMM_WORLD)
+        model = CableModel(MPI.COMM_WORLD, case)
         st = solve_static(model)
         g = case.gravity.g * case.gravity.direction
         out.append([anchor_moments(st.anchor_forces[i:i + 1], a.direction, EI, EA, 1.0,
@@ -101,7 +101,7 @@ def test_rotation_invariance():
 
 def _series(d):
     case = parse_case(d)
-    model = CableModel(case, MPI.COMM_WORLD)
+    model = CableModel(MPI.COMM_WORLD, case)
     solve_static(model)
     names = [a.name for a in model.anchors]
     hist = {n: [] for n in names}

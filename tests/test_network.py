@@ -66,7 +66,7 @@ def test_cables_in_series_closed_form(mpi_tmp_path):
                          {"group": "b", "section": "s2", "pretension": 3e4}], ["ends"],
                   sections=[{"name": "s1", "EA": 1e6, "EI": 1.0, "mass": 2.0},
                             {"name": "s2", "EA": 4e6, "EI": 1.0, "mass": 2.0}])
-    model = NetworkModel(parse_case(d), comm)
+    model = NetworkModel(comm, parse_case(d))
     st = solve_static(model)
     l1, l2 = 6.0 / (1 + 1e4 / 1e6), 4.0 / (1 + 3e4 / 4e6)
     T = (10.0 - l1 - l2) / (l1 / 1e6 + l2 / 4e6)
@@ -102,7 +102,7 @@ def test_weightless_fan_frequencies(mpi_tmp_path):
     modes pi sqrt(T/m_c)/L (m_c = m/lambda per current length), each twice (two planes),
     up to the consistent-mass error (pi/k)^2/24 = 4.1e-3 for k = 10 elements."""
     mesh = fan_mesh(str(mpi_tmp_path / "fan.msh"))
-    model = NetworkModel(parse_case(fan_case(mesh)), comm)
+    model = NetworkModel(comm, parse_case(fan_case(mesh)))
     solve_static(model)
     om = solve_modes(model, 6).omegas
     lam = 1 + 2e6 / 9e8
@@ -126,7 +126,7 @@ def test_network_parallel_equals_serial_and_xdmf(mpi_tmp_path):
     case = parse_case(d)
     hist = []
     for c in (comm, MPI.COMM_SELF):
-        model = NetworkModel(case, c)
+        model = NetworkModel(c, case)
         st = solve_static(model)
         hist.append([st.anchor_forces] + [f.copy() for _, f in integrate(model, 0.2, 0.005,
                                                                             0.9, 10)])
@@ -187,7 +187,7 @@ def test_bad_meshes_rejected(mpi_tmp_path, defect, key):
     mesh = write_mesh(str(mpi_tmp_path / f"{defect}.msh"), pts, cells, groups, vg)
     d = case_dict(mesh, [{"group": "a", "section": "s", "pretension": 1e3}], ["ends"])
     with pytest.raises(CaseError) as err:
-        NetworkModel(parse_case(d), comm)
+        NetworkModel(comm, parse_case(d))
     assert key in str(err.value)
 
 
@@ -205,7 +205,7 @@ def test_point_load_on_vertex_group(mpi_tmp_path):
                       {"ends": [0, 10], "mid": [5]})
     d = case_dict(mesh, [{"group": "a", "section": "s", "pretension": 1e4}], ["ends"],
                   point_loads=[{"group": "mid", "value": [0, 0, -2e3]}])
-    model = NetworkModel(parse_case(d), comm)
+    model = NetworkModel(comm, parse_case(d))
     st = solve_static(model)
     c, P, EA = 1 / (1 + 1e4 / 1e6), 2e3, 1e6
 

@@ -14,7 +14,7 @@ from cablefem.statics import solve_static
 
 
 def _history(case, comm):
-    model = CableModel(case, comm)
+    model = CableModel(comm, case)
     st = solve_static(model)
     om = solve_modes(model, 4).omegas
     model.u.x.array[:] = model.u_static.x.array

@@ -42,7 +42,7 @@ def test_implausible_catenary_warns(geometry, key, what):
     outside PLAUSIBLE_LENGTH_RATIO of the chord: a warning naming the geometry key; a
     normal stay (H = 1e6 N: strain ~1e-3, l within 1 % of the chord: the stretch H l/EA
     and the sag's extra length 8 d^2/(3 l) are both ~1e-3 l) has none."""
-    model = CableModel(parse_case(stay(geometry)), MPI.COMM_WORLD)
+    model = CableModel(MPI.COMM_WORLD, parse_case(stay(geometry)))
     strain = model.force_scale / EA  # the largest catenary tension (or the weight) / EA
     ratio = model.length / CHORD
     expect = set()
@@ -55,7 +55,7 @@ def test_implausible_catenary_warns(geometry, key, what):
     assert {k for k, _ in got} == {key}
     assert ("strain" in what) == any("strain" in m for _, m in got)
     assert ("length" in what) == any("stress-free length" in m for _, m in got)
-    normal = CableModel(parse_case(stay({"horizontal_tension": 1e6})), MPI.COMM_WORLD)
+    normal = CableModel(MPI.COMM_WORLD, parse_case(stay({"horizontal_tension": 1e6})))
     assert normal.warnings == []
     assert 0.99 < normal.length / CHORD < 1.01 and normal.force_scale / EA < 2e-3
 

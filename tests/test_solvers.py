@@ -32,7 +32,7 @@ def test_automatic_choice(n_dofs, size):
 def _history(make_case, options):
     case = make_case(motion={"type": "harmonic", "amplitude": [2e-4, 0, 0], "omega": 32.814},
                      solver={"petsc_options": options})
-    model = CableModel(case, MPI.COMM_WORLD)
+    model = CableModel(MPI.COMM_WORLD, case)
     solve_static(model)
     model.u.x.array[:] = model.u_static.x.array
     ts, (_, J) = _make_ts(model, 0.005, 0.9, SNESHistory())

@@ -61,7 +61,7 @@ def test_rod_first_rows_are_static_plus_the_quasi_static_damping_force():
     (Newton's tolerances)."""
     EA, EI, m, L0, e, beta, A, omega = 1e4, 1e-2, 1.0, 1.0, 0.01, 1e-3, 1e-3, 10.0
     T = EA * e
-    model = BeamModel(_taut_rod(EA, EI, m, L0, e, beta, A, omega), MPI.COMM_WORLD)
+    model = BeamModel(MPI.COMM_WORLD, _taut_rod(EA, EI, m, L0, e, beta, A, omega))
     static = solve_static(model).anchor_forces
     # the static state: straight, tension T, no moment
     np.testing.assert_allclose(static[0], [T, 0, 0, 0, 0, 0], atol=1e-9 * T)
@@ -124,8 +124,8 @@ def test_first_row_on_case_a_is_static_plus_damping_of_the_quasi_static_motion(k
     of the tension on the string (h1 = l/30), 230 % on the rod (h1 = l_a/8), and 77 % of
     the rod's moment at q."""
     case = load_case(DEMOS / "paper_inplane.toml")
-    model = (BeamModel(case, MPI.COMM_WORLD, refine=0.5) if kind == "beam"
-             else CableModel(case, MPI.COMM_WORLD))
+    model = (BeamModel(MPI.COMM_WORLD, case, refine=0.5) if kind == "beam"
+             else CableModel(MPI.COMM_WORLD, case))
     q = model.anchors[1]
     pos0 = q.position.copy()
     chord = pos0 - model.anchors[0].position

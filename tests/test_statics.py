@@ -26,7 +26,7 @@ def inclined_case(elements: int, **extra) -> dict:
 
 
 def _errors(n: int) -> tuple[float, float]:
-    model = CableModel(parse_case(inclined_case(n)), MPI.COMM_WORLD)
+    model = CableModel(MPI.COMM_WORLD, parse_case(inclined_case(n)))
     solve_static(model)
     u = model.gather_nodal(model.u)
     cat = catenary_between([0, 0, 0], [80, 60, 30], 112.0, 50.0 * 9.81, 2.0e8)
@@ -68,7 +68,7 @@ def test_global_equilibrium_and_reactions():
     catenary's end forces at second order (checked at 1e-3 relative on 40 elements: the
     reaction's O(h^2) error is (h/l)^2 ~ 6e-4 times the tension)."""
     case = parse_case(inclined_case(40))
-    model = CableModel(case, MPI.COMM_WORLD)
+    model = CableModel(MPI.COMM_WORLD, case)
     st = solve_static(model)
     W = np.array([0, 0, -50.0 * 9.81 * 112.0])
     total = st.anchor_forces.sum(axis=0)
@@ -90,7 +90,7 @@ def test_point_mass_kink_and_continuation():
     d = inclined_case(40)
     d["point_masses"] = [{"s": 56.0, "mass": 30 * 50.0 * 112.0}]
     case = parse_case(d)
-    model = CableModel(case, MPI.COMM_WORLD)
+    model = CableModel(MPI.COMM_WORLD, case)
     st = solve_static(model)
     W = 9.81 * (50.0 * 112.0 + 30 * 50.0 * 112.0)
     np.testing.assert_allclose(st.anchor_forces.sum(axis=0), [0, 0, -W], atol=1e-8 * W)
@@ -115,7 +115,7 @@ def test_taut_weightless_cable_uniform_tension():
     uniform tension EA (L/l - 1), exactly (the P1 solution is exact for a uniform strain)."""
     d = inclined_case(10, gravity={"g": 0.0})
     d["geometry"] = {"length": 99.0}
-    model = CableModel(parse_case(d), MPI.COMM_WORLD)
+    model = CableModel(MPI.COMM_WORLD, parse_case(d))
     st = solve_static(model)
     L = np.linalg.norm([80.0, 60.0, 30.0])
     T = 2.0e8 * (L / 99.0 - 1.0)

@@ -15,10 +15,11 @@ from pathlib import Path
 import numpy as np
 from mpi4py import MPI
 
-from cablefem import __version__, catenary
+from cablefem import __version__
 from cablefem.app.plots import anchor_figures
 from cablefem.app.run import _max_excitation, steady_state_stats
 from cablefem.case import Case
+from cablefem.description import stress_free_length
 from cablefem.io.anchorcsv import ANCHOR_COLUMNS, MOMENT_COLUMNS, AnchorCSV, read_forces
 from cablefem.io.series import write_json
 from cablefem.moments import MAX_ANCHOR_ANGLE, anchor_moments
@@ -28,20 +29,8 @@ __all__ = ["run_post", "case_length"]
 log = logging.getLogger(__name__)
 
 
-def case_length(case: Case) -> float:
-    """Stress-free length of the case's cable (the catenary for tension/sag geometry)."""
-    geo = case.geometry
-    if geo.kind in ("length", "polyline"):
-        return float(geo.length)
-    p, q = (np.asarray(a.position, float) for a in case.anchors)
-    up = -np.asarray(case.gravity.direction, float)
-    d = q - p
-    rise = float(d @ up)
-    span = float(np.linalg.norm(d - rise * up))
-    w = case.section.mass * case.gravity.g
-    if geo.kind == "horizontal_tension":
-        return catenary.length_for_horizontal_tension(span, rise, geo.value, w, case.section.EA)
-    return catenary.length_for_sag_ratio(span, rise, geo.value, w, case.section.EA)
+#: the stress-free length of a case's cable (the catenary's for tension/sag geometry)
+case_length = stress_free_length
 
 
 #: an anchor is refused when more than this share of its (non-slack) rows has the force

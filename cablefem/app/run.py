@@ -46,8 +46,8 @@ from cablefem.network import NetworkModel
 from cablefem.statics import solve_static
 from cablefem.units import unit
 
-__all__ = ["RunResult", "RunError", "RunInterrupted", "run_case", "steady_state_stats", "warn",
-           "static_sag_ratio", "rod_moment_columns"]
+__all__ = ["RunResult", "RunError", "RunInterrupted", "run_case", "model_from_case",
+           "steady_state_stats", "warn", "static_sag_ratio", "rod_moment_columns"]
 
 log = logging.getLogger(__name__)
 
@@ -144,6 +144,9 @@ class _Emitter:
         self.forces: dict[str, list[np.ndarray]] = {a.name: [] for a in model.anchors}
         self.columns: dict[str, dict[str, list]] = {
             a.name: {k: [] for k in MOMENT_COLUMNS} for a in self.clamped}
+        #: per clamped anchor with a virtual hinge: the rows whose layer was in its
+        #: low-tension fallback (cablefem.hinge; this process's rows, not a resumed run's)
+        self.fallback: dict[str, list[bool]] = {}
         self._names = [a.name for a in model.anchors]
         self._index = {name: j for j, name in enumerate(self._names)}
         if resume_after is not None:  # the rows up to the checkpoint, without a kill's rest
@@ -271,6 +274,9 @@ class _Emitter:
     def add(self, t: float, forces: np.ndarray) -> None:
         """Record the anchor forces at ``t`` (written in batches)."""
         self.times.append(t)
+        if getattr(self.model, "hinges", None):  # the law the row's step was solved with
+            for name, flag in self.model.hinges.fallback().items():
+                self.fallback.setdefault(name, []).append(flag)
         F = np.array(forces, float)  # a copy: the rows below are views of it
         for name, N in zip(self._names, F):
             self.forces[name].append(N[:3])
@@ -368,6 +374,21 @@ class _Emitter:
                 self.moments.close()
 
 
+def model_from_case(comm: MPI.Comm, case: Case, *, model: str = "string",
+                    refine: float = 1.0) -> CableModel:
+    """The model of a case: its description (a case is one) built as the string
+    (:class:`CableModel`, a :class:`NetworkModel` for a network) or, with
+    ``model="beam"``, the reference rod (:class:`cablefem.rod.BeamModel`, mesh density
+    scaled by ``refine``). Collective on ``comm``."""
+    if model not in ("string", "beam"):
+        raise ValueError(f"model must be 'string' or 'beam', got {model!r}")
+    if model == "beam":
+        from cablefem.rod import BeamModel
+
+        return BeamModel(comm, case, refine=refine)
+    return (NetworkModel if case.network is not None else CableModel)(comm, case)
+
+
 def run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, **kwargs
              ) -> RunResult:
     """Run a case (see :func:`_run_case` for the keywords and what is written), the C
@@ -457,16 +478,7 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
         outdir.mkdir(parents=True, exist_ok=True)
     comm.Barrier()
     kind = model
-    if kind not in ("string", "beam"):
-        raise ValueError(f"model must be 'string' or 'beam', got {kind!r}")
-    if kind == "beam":
-        from cablefem.rod import BeamModel
-
-        model = BeamModel(case, comm, refine=refine)
-    elif case.network is not None:
-        model = NetworkModel(case, comm)
-    else:
-        model = CableModel(case, comm)
+    model = model_from_case(comm, case, model=kind, refine=refine)
     t_build = time.perf_counter() - wall0
     if restart:  # what a kill left half-written (the series' own parts: see io.Series)
         remove_temporaries(outdir, comm)
@@ -697,6 +709,13 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
                 warn(summary, f"anchors.{a.name}", f"{backwards} of {len(times)} rows have "
                      "the anchor force more than 90 degrees from the clamp direction: "
                      "outside the method, valid = 0 (check anchors.direction)")
+            fb = emitter.fallback.get(a.name)
+            if fb and any(fb):
+                entry["outer_fallback_fraction"] = float(np.mean(fb))
+                warn(summary, f"anchors.{a.name}", f"{sum(fb)} of {len(fb)} rows with the "
+                     "virtual hinge's layer in its low-tension fallback (it stops following "
+                     "the tension below a quarter of the static one): the first-order "
+                     "correction is only partial there")
             if len(times) > 1:
                 entry["steady_state_moment"] = steady_state_stats(times, mo["moment"])
         summary["anchors"][a.name] = entry

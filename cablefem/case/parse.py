@@ -35,6 +35,8 @@ from cablefem.case.schema import (
     SolverSpec,
     rayleigh_coefficients,
 )
+from cablefem.describe import anchor_problems, zero_segments
+from cablefem.description import BEAM_BOUNDS, GEOMETRY_BOUNDS, GEOMETRY_KINDS, NAME
 from cablefem.errors import CaseError
 from cablefem.motion import (
     EllipseMotion,
@@ -51,8 +53,6 @@ from cablefem.properties import Section
 # ---------------------------------------------------------------------------------------------
 # Parsing, table by table.
 
-_GEOMETRY_KINDS = ("length", "horizontal_tension", "sag_ratio", "polyline")
-_NAME = re.compile(r"[A-Za-z0-9_-]+")
 _TOL = 1e-9  # relative tolerance for coincident points and parallel directions
 
 
@@ -71,14 +71,12 @@ def _parse_section(r: _Reader) -> Section | None:
 
 
 def _parse_geometry(r: _Reader) -> Geometry | None:
-    given = [k for k in _GEOMETRY_KINDS if r.has(k)]
+    given = [k for k in GEOMETRY_KINDS if r.has(k)]
     if len(given) != 1:
         got = " and ".join(given) if given else "none"
-        r.problems.append((r.path, f"give exactly one of {', '.join(_GEOMETRY_KINDS)}; "
+        r.problems.append((r.path, f"give exactly one of {', '.join(GEOMETRY_KINDS)}; "
                                    f"got {got}"))
-    bounds = {"length": {"gt": 0}, "horizontal_tension": {"gt": 0},
-              "sag_ratio": {"gt": 0, "le": 10}}
-    values = {k: r.number(k, **bounds[k]) for k in given if k != "polyline"}
+    values = {k: r.number(k, **GEOMETRY_BOUNDS[k]) for k in given if k != "polyline"}
     points = _parse_polyline(r) if "polyline" in given else None
     if len(given) != 1:
         return None
@@ -101,8 +99,7 @@ def _parse_polyline(r: _Reader) -> np.ndarray | None:
     if any(p is None for p in points):
         return None
     points = np.array(points)
-    scale = np.maximum(1.0, np.linalg.norm(points[1:], axis=1))
-    zero = np.flatnonzero(np.linalg.norm(np.diff(points, axis=0), axis=1) <= _TOL * scale) + 1
+    zero = zero_segments(points)
     for i in zero:
         r.problems.append((f"{key}[{i}]", f"zero-length segment: point {i} coincides with "
                                           f"point {i - 1}"))
@@ -246,41 +243,15 @@ def _parse_petsc_options(r: _Reader) -> dict:
 
 def _check_anchors(anchors: list[Anchor], readers: list[_Reader], geometry: Geometry | None,
                    polyline_given: bool, gravity: Gravity | None, problems: list) -> None:
-    """Cross-checks that need both anchors (and the geometry and gravity)."""
+    """Cross-checks that need both anchors (and the geometry and gravity): the core's
+    (:func:`cablefem.description.anchor_problems`) on what the tables gave."""
     if len(readers) != 2:
         return
-    (a, b), (ra, rb) = anchors, readers
-    if a.name is not None and a.name == b.name:
-        rb.add("name", f"duplicate anchor name {a.name!r} (anchors[0] has it too)")
-    polyline = geometry.polyline if geometry is not None else None
-    for anchor, r, end in ((a, ra, 0), (b, rb, -1)):
-        if anchor.position is None and not r.has("position"):
-            if polyline is not None:
-                anchor.position = polyline[end].copy()
-            elif not polyline_given:
-                r.add("position", "missing required key (optional only with geometry.polyline)")
-        if anchor.kind == "pinned" and r.has("direction"):
+    for a, r in zip(anchors, readers):  # given but unreadable: reported already, or here
+        if a.kind == "pinned" and a.direction is None and r.has("direction"):
             r.add("direction", "direction only applies to clamped anchors")
-    if a.position is None or b.position is None:
-        return
-    chord = b.position - a.position
-    distance = float(np.linalg.norm(chord))
-    scale = max(1.0, float(np.linalg.norm(a.position)), float(np.linalg.norm(b.position)))
-    if distance <= _TOL * scale:
-        rb.add("position", f"anchors {a.name!r} and {b.name!r} coincide (distance "
-                           f"{distance:g} m)")
-        return
-    for anchor, sign in ((a, 1.0), (b, -1.0)):
-        if anchor.kind == "clamped" and anchor.direction is None:
-            anchor.direction = sign * chord / distance + 0.0  # + 0.0: no -0.0 in outputs
-    if geometry is not None and geometry.kind in ("horizontal_tension", "sag_ratio") \
-            and gravity is not None:
-        key = f"geometry.{geometry.kind}"
-        if gravity.g == 0:
-            problems.append((key, "needs gravity.g > 0 (got 0)"))
-        elif np.linalg.norm(np.cross(chord / distance, gravity.direction)) <= _TOL:
-            problems.append((key, f"needs a chord not parallel to gravity (the chord from "
-                                  f"{a.name!r} to {b.name!r} is along gravity)"))
+    problems += anchor_problems(anchors, geometry, gravity, polyline_given,
+                                positions_given=tuple(r.has("position") for r in readers))
 
 
 def _check_positions_on_cable(items: list, readers: list[_Reader], length: float | None) -> None:
@@ -346,7 +317,7 @@ def parse_case(data: dict, base_dir: str | os.PathLike = Path("."),
     anchors = []
     for r in anchor_rs:
         name = r.string("name")
-        if name is not None and not _NAME.fullmatch(name):
+        if name is not None and not NAME.fullmatch(name):
             r.add("name", f"must use only the characters A-Z a-z 0-9 _ -, got {name!r}")
         anchors.append(Anchor(name, r.vector("position"), r.string("type", ("clamped", "pinned")),
                               r.vector("direction", unit_vector=True),
@@ -369,10 +340,8 @@ def parse_case(data: dict, base_dir: str | os.PathLike = Path("."),
     modal = ModalSpec(table("modal").integer("modes"))
     fatigue = _parse_fatigue(top.table("fatigue"), section)
     beam_r = table("beam")
-    beam = BeamSpec(beam_r.number("layer_elements", ge=0.5, le=1000),
-                    beam_r.number("growth", gt=1, le=2), beam_r.integer("span_elements",
-                                                                       le=1_000_000),
-                    beam_r.number("shear_stiffness", gt=0))
+    beam = BeamSpec(*(beam_r.integer(k, **BEAM_BOUNDS[k][0]) if k == "span_elements"
+                      else beam_r.number(k, **BEAM_BOUNDS[k][0]) for k in BEAM_BOUNDS))
     solver_r = table("solver")
     solver = SolverSpec(solver_r.boolean("tension_only"), _parse_petsc_options(solver_r),
                         solver_r.string("outer_correction", ("none", "hinge")))
@@ -387,8 +356,10 @@ def parse_case(data: dict, base_dir: str | os.PathLike = Path("."),
         raise RuntimeError("cablefem internal error: a case value failed without a message")
     if _missing(beam.layer_elements, beam.growth, beam.span_elements):
         raise RuntimeError("cablefem internal error: a case value failed without a message")
-    return _finish(Case(title, section, gravity, geometry, mesh, anchors, loads, masses,
-                        point_loads, damping, dynamics, modal, solver, source, fatigue,
+    return _finish(Case(title=title, section=section, gravity=gravity, geometry=geometry,
+                        mesh=mesh, anchors=anchors, loads=loads, point_masses=masses,
+                        point_loads=point_loads, damping=damping, dynamics=dynamics,
+                        modal=modal, solver=solver, source=source, fatigue=fatigue,
                         beam=beam, units=units or "SI"))
 
 
@@ -461,9 +432,11 @@ def _parse_network_case(data: dict, base_dir: Path, source: str) -> Case:
         raise CaseError(problems, source)
     if _missing(title, gravity, mesh_path, first, damping, modal.modes, solver.tension_only):
         raise RuntimeError("cablefem internal error: a case value failed without a message")
-    return _finish(Case(title, first, gravity, None, MeshSpec(1, 1.0), anchors, loads,
-                        masses, point_loads, damping, dynamics, modal, solver, source,
-                        fatigue, NetworkSpec(mesh_path, sections, cables),
+    return _finish(Case(title=title, section=first, gravity=gravity, geometry=None,
+                        mesh=MeshSpec(1, 1.0), anchors=anchors, loads=loads,
+                        point_masses=masses, point_loads=point_loads, damping=damping,
+                        dynamics=dynamics, modal=modal, solver=solver, source=source,
+                        fatigue=fatigue, network=NetworkSpec(mesh_path, sections, cables),
                         units=units or "SI"))
 
 

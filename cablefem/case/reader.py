@@ -3,9 +3,7 @@
 from __future__ import annotations
 
 import difflib
-import math
 import numbers
-import operator
 import os
 from pathlib import Path
 from typing import Any
@@ -14,46 +12,13 @@ import numpy as np
 
 from cablefem.case.keys import REQUIRED
 from cablefem.errors import CaseError
+from cablefem.validation import bounds_text, is_number, is_sequence, number_problem, show
 
 # ---------------------------------------------------------------------------------------------
 # Reading: typed getters that collect problems under key paths.
 
-def _show(value: Any) -> str:
-    """Describe a raw value for a type error, e.g. "string 'abc'"."""
-    if value is None:
-        return "None"
-    if isinstance(value, (bool, np.bool_)):
-        return f"boolean {str(bool(value)).lower()}"
-    if isinstance(value, str):
-        return f"string {value!r}"
-    if isinstance(value, numbers.Integral):
-        return f"integer {value}"
-    if isinstance(value, numbers.Real):
-        return f"number {value!r}"
-    if isinstance(value, dict):
-        return "a table"
-    if isinstance(value, (list, tuple, np.ndarray)):
-        return f"an array of {len(value)}"
-    return type(value).__name__
-
-
-def _is_number(value: Any) -> bool:
-    return isinstance(value, numbers.Real) and not isinstance(value, (bool, np.bool_))
-
-
-def _is_sequence(value: Any) -> bool:
-    return isinstance(value, (list, tuple)) or (isinstance(value, np.ndarray) and value.ndim == 1)
-
-
-_COMPARE = {"gt": operator.gt, "ge": operator.ge, "lt": operator.lt, "le": operator.le}
-_SYMBOL = {"gt": ">", "ge": ">=", "lt": "<", "le": "<="}
+_show, _is_number, _is_sequence, _bounds_text = show, is_number, is_sequence, bounds_text
 _UNSET = object()
-
-
-def _bounds_text(**bounds: float | None) -> str:
-    """E.g. '> 0 and <= 10' (floats in %g, integers as they are)."""
-    return " and ".join(f"{_SYMBOL[k]} {v:g}" if isinstance(v, float) else f"{_SYMBOL[k]} {v}"
-                        for k, v in bounds.items() if v is not None)
 
 
 class _Reader:
@@ -91,19 +56,11 @@ class _Reader:
         return default, False
 
     def _number(self, value: Any, key: str, unit: str, **bounds) -> float | None:
-        if not _is_number(value):
-            self.problems.append((key, f"expected a number, got {_show(value)}"))
+        problem = number_problem(value, unit, **bounds)
+        if problem is not None:
+            self.problems.append((key, problem))
             return None
-        value = float(value)
-        if not math.isfinite(value):
-            self.problems.append((key, f"must be finite, got {value!r}"))
-            return None
-        if not all(_COMPARE[k](value, b) for k, b in bounds.items() if b is not None):
-            unit_text = f" ({unit})" if unit and unit != "-" else ""
-            self.problems.append((key, f"must be {_bounds_text(**bounds)}{unit_text}, "
-                                       f"got {value!r}"))
-            return None
-        return value
+        return float(value)
 
     def number(self, name: str, **bounds) -> float | None:
         value, given = self.raw(name)

@@ -1,0 +1,223 @@
+"""What a model is built from, independent of the case files: the cable's gravity, stress-free
+geometry, mesh, loads, point masses, damping and solver switches, gathered in
+:class:`CableDescription` (a single cable or, with ``network``, a cable network).
+
+The case schema (:mod:`cablefem.case`) reuses these classes: a :class:`cablefem.case.Case` is
+a :class:`CableDescription` plus the run settings (dynamics, modal, fatigue, title).
+:func:`cablefem.describe.describe_cable` and :func:`~cablefem.describe.describe_network`
+check a description built from Python objects; :func:`cablefem.create_cable` and
+:func:`cablefem.create_network` build the model from it.
+Pure Python/NumPy: no dolfinx import.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from cablefem import catenary
+from cablefem.anchor import Anchor
+from cablefem.motion import TimeFunction
+from cablefem.properties import Section
+
+__all__ = ["Gravity", "Geometry", "MeshSpec", "DistributedLoad", "PointMass", "PointLoad",
+           "Damping", "SolverSpec", "BeamSpec", "CableSpec", "NetworkSpec", "CableDescription",
+           "rayleigh_coefficients", "stress_free_length", "GEOMETRY_KINDS", "GEOMETRY_BOUNDS",
+           "BEAM_BOUNDS", "DAMPING_MODELS", "OUTER_CORRECTIONS", "MAX_ELEMENTS"]
+
+#: the ways to give the stress-free length, and the bounds of their values
+GEOMETRY_KINDS = ("length", "horizontal_tension", "sag_ratio", "polyline")
+GEOMETRY_BOUNDS = {"length": {"gt": 0}, "horizontal_tension": {"gt": 0},
+                   "sag_ratio": {"gt": 0, "le": 10}}
+GEOMETRY_UNITS = {"length": "m", "horizontal_tension": "N", "sag_ratio": "-"}
+#: bounds of the reference rod's mesh options (:class:`BeamSpec`), and their units
+BEAM_BOUNDS = {"layer_elements": ({"ge": 0.5, "le": 1000}, ""), "growth": ({"gt": 1, "le": 2}, ""),
+               "span_elements": ({"ge": 1, "le": 1_000_000}, ""),
+               "shear_stiffness": ({"gt": 0}, "N")}
+DAMPING_MODELS = ("rayleigh", "rayleigh_k0", "axial", "none")
+OUTER_CORRECTIONS = ("none", "hinge")
+MAX_ELEMENTS = 10_000_000
+NAME = re.compile(r"[A-Za-z0-9_-]+")  #: anchor names
+
+
+@dataclass
+class Gravity:
+    """Gravitational acceleration ``g`` (m/s^2) along the unit vector ``direction``."""
+
+    g: float = 9.81
+    direction: np.ndarray = field(default_factory=lambda: np.array([0.0, 0.0, -1.0]))
+
+    @property
+    def vector(self) -> np.ndarray:
+        """``g * direction`` (m/s^2)."""
+        return self.g * self.direction
+
+
+@dataclass
+class Geometry:
+    """How the stress-free length is given: ``kind`` is 'length' | 'horizontal_tension' |
+    'sag_ratio' | 'polyline'; ``value`` is l (m), H (N) or the sag ratio (-), and for a
+    polyline its length l (m); ``polyline`` (n, 3) the stress-free points (m)."""
+
+    kind: str
+    value: float | None
+    polyline: np.ndarray | None = None
+
+    @property
+    def length(self) -> float | None:
+        """The stress-free length l (m) if the case gives it, else None (catenary needed)."""
+        return self.value if self.kind in ("length", "polyline") else None
+
+
+@dataclass
+class MeshSpec:
+    """Number of string elements and the mid-span / end element length ratio."""
+
+    elements: int = 30
+    grading: float = 1.0
+
+
+@dataclass
+class DistributedLoad:
+    """Load per unit stress-free length ``value`` (N/m) times ``time.value(t)``."""
+
+    value: np.ndarray
+    time: TimeFunction = field(default_factory=TimeFunction.constant)
+
+
+@dataclass
+class PointMass:
+    """Lumped ``mass`` (kg) at stress-free arc length ``s`` (m) from the first anchor (a
+    network: ``s`` is the name of a 0D group of the mesh)."""
+
+    s: float
+    mass: float
+
+
+@dataclass
+class PointLoad:
+    """Force ``value`` (N) times ``time.value(t)`` at stress-free arc length ``s`` (m) (a
+    network: ``s`` is the name of a 0D group of the mesh)."""
+
+    s: float
+    value: np.ndarray
+    time: TimeFunction = field(default_factory=TimeFunction.constant)
+
+
+@dataclass
+class Damping:
+    """Damping model 'none' | 'rayleigh' (current tangent) | 'rayleigh_k0' (static tangent)
+    | 'axial', with resolved ``alpha`` (1/s), ``beta`` (s); ``ratios`` and ``frequencies``
+    (rad/s) when given that way (:meth:`from_ratios`)."""
+
+    model: str = "none"
+    alpha: float = 0.0
+    beta: float = 0.0
+    ratios: tuple | None = None
+    frequencies: tuple | None = None
+
+    def ratio_at(self, omega: float) -> float:
+        """Rayleigh modal damping ratio ``alpha/(2 omega) + beta omega/2`` at omega (rad/s)."""
+        return self.alpha / (2.0 * omega) + self.beta * omega / 2.0
+
+    @classmethod
+    def from_ratios(cls, ratios: tuple[float, float], frequencies: tuple[float, float],
+                    model: str = "rayleigh") -> Damping:
+        """Rayleigh damping with ratios ``z1, z2`` (-) at frequencies ``w1, w2`` (rad/s)."""
+        zs, ws = tuple(float(z) for z in ratios), tuple(float(w) for w in frequencies)
+        return cls(model, *rayleigh_coefficients(zs, ws), zs, ws)
+
+
+@dataclass
+class SolverSpec:
+    """The model's switches: the tension-only law, the first-order outer correction
+    ('none' | 'hinge') and PETSc options of its solvers (without the options prefix)."""
+
+    tension_only: bool = True
+    petsc_options: dict = field(default_factory=dict)
+    outer_correction: str = "none"
+
+
+@dataclass
+class BeamSpec:
+    """Mesh grading and shear stiffness of the reference rod (:mod:`cablefem.rod`)."""
+
+    layer_elements: float = 8.0
+    growth: float = 1.1
+    span_elements: int = 100
+    shear_stiffness: float | None = None
+
+
+@dataclass
+class CableSpec:
+    """A family of cables: a 1D group of the mesh, its section and pretension."""
+
+    group: str
+    section: str
+    pretension: float
+
+
+@dataclass
+class NetworkSpec:
+    """A cable network: the mesh file, the named sections and the cable families."""
+
+    mesh: Path
+    sections: dict[str, Section]
+    cables: list[CableSpec]
+
+
+@dataclass(kw_only=True)
+class CableDescription:
+    """Everything a model is built from (:class:`cablefem.cable.CableModel`,
+    :class:`cablefem.network.NetworkModel`, :class:`cablefem.rod.BeamModel`).
+
+    A single cable has two ``anchors``, a ``section`` and a ``geometry``; a network has
+    ``network`` (mesh, sections, cable families), anchors naming 0D groups of its mesh and
+    ``section`` its first cable family's. ``source`` names it in error messages; ``units``
+    ('SI' or 'dimensionless') only labels the outputs (:mod:`cablefem.units`).
+    """
+
+    section: Section | None
+    anchors: list[Anchor]
+    geometry: Geometry | None = None
+    gravity: Gravity = field(default_factory=Gravity)
+    mesh: MeshSpec = field(default_factory=MeshSpec)
+    loads: list[DistributedLoad] = field(default_factory=list)
+    point_masses: list[PointMass] = field(default_factory=list)
+    point_loads: list[PointLoad] = field(default_factory=list)
+    damping: Damping = field(default_factory=Damping)
+    solver: SolverSpec = field(default_factory=SolverSpec)
+    beam: BeamSpec = field(default_factory=BeamSpec)
+    network: NetworkSpec | None = None
+    source: str = "<python>"
+    units: str = "SI"
+
+
+def rayleigh_coefficients(ratios: tuple[float, float],
+                          frequencies: tuple[float, float]) -> tuple[float, float]:
+    """Rayleigh ``alpha`` (1/s), ``beta`` (s) giving damping ratios ``z1, z2`` at circular
+    frequencies ``w1 != w2`` (rad/s), from ``z(w) = alpha/(2 w) + beta w/2``:
+    ``alpha = 2 w1 w2 (z1 w2 - z2 w1)/(w2^2 - w1^2)``, ``beta = 2 (z2 w2 - z1 w1)/(w2^2 - w1^2)``.
+    """
+    (z1, z2), (w1, w2) = ratios, frequencies
+    d = w2**2 - w1**2
+    return 2.0 * w1 * w2 * (z1 * w2 - z2 * w1) / d, 2.0 * (z2 * w2 - z1 * w1) / d
+
+
+def stress_free_length(desc: CableDescription) -> float:
+    """Stress-free length l (m) of a single cable (the catenary's for tension/sag geometry)."""
+    geo = desc.geometry
+    if geo.kind in ("length", "polyline"):
+        return float(geo.length)
+    p, q = (np.asarray(a.position, float) for a in desc.anchors)
+    up = -np.asarray(desc.gravity.direction, float)
+    d = q - p
+    rise = float(d @ up)
+    span = float(np.linalg.norm(d - rise * up))
+    w = desc.section.mass * desc.gravity.g
+    if geo.kind == "horizontal_tension":
+        return catenary.length_for_horizontal_tension(span, rise, geo.value, w, desc.section.EA)
+    return catenary.length_for_sag_ratio(span, rise, geo.value, w, desc.section.EA)
