@@ -122,12 +122,12 @@ simple.SaveScreenshot(sys.argv[2], view, ImageResolution=[640, 360])
 @pytest.mark.skipif(shutil.which("pvbatch") is None or shutil.which("xvfb-run") is None,
                     reason="pvbatch or xvfb-run is not installed")
 def test_paraview_renders_tension(tmp_path):
-    """ParaView renders string.xdmf headless (pvbatch on a virtual X server), the fan warped
-    by its displacement and coloured by tension, as a user would look at it. The image is
-    not blank: on the white background the six stays cover a few thousand pixels, and
-    since their tensions differ (pretensions 2.5 and 3.1 MN, the colour range is the
-    data's), both ends of the cool-to-warm map appear: blue pixels (lowest tension) and
-    red ones (highest)."""
+    """ParaView renders string.xdmf headless (pvbatch on a virtual X server), the test
+    fan (3 stays) warped by its displacement and coloured by tension, as a user would look
+    at it. The image is not blank: on the white background the stays cover a few thousand
+    pixels, and since the tension varies (it grows up each stay with the weight carried;
+    the colour range is the data's), both ends of the cool-to-warm map appear: blue pixels
+    (lowest tension, at the deck) and red ones (highest, at the pylon)."""
     import matplotlib.image as mpimg
     import numpy as np
 
@@ -150,8 +150,8 @@ def test_paraview_renders_tension(tmp_path):
     img = mpimg.imread(png)[..., :3]  # floats in [0, 1]
     assert img.shape[:2] == (360, 640)
     drawn = np.any(img < 0.9, axis=2)  # not the white background
-    # a stay ~60 m long across a ~90 m wide view of 640 px, 3 px wide: > 6 * 300 pixels
-    # would be drawn; a blank or uniform image has none
+    # three stays, each some 300 px long and 3 px wide: a few thousand pixels; a blank
+    # or uniform image has none, a broken camera fills the view
     assert 1000 < drawn.sum() < 0.5 * drawn.size, drawn.sum()
     r, g, b = img[..., 0], img[..., 1], img[..., 2]
     blue = (b > r + 0.3) & drawn   # the map's low end (0.23, 0.30, 0.75)
