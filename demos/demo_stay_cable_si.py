@@ -39,8 +39,7 @@ from mpi4py import MPI
 from cablefem.app.log import setup_logging
 from cablefem.app.run import run_case
 from cablefem.case import load_case
-from cablefem.catenary import (catenary_between, irvine_lambda2,
-                               irvine_symmetric_frequency)
+from cablefem.catenary import catenary_between, irvine_lambda2, irvine_symmetric_frequency
 from cablefem.verify import closed_form_anchor_moments
 
 here = Path(__file__).resolve().parent
