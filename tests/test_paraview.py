@@ -143,10 +143,15 @@ def test_paraview_renders_tension(tmp_path):
     run_case(parse_case(d), out, figures=False, progress=False)
     script, png = tmp_path / "render.py", out / "string.png"
     script.write_text(RENDER)
-    res = subprocess.run(["xvfb-run", "-a", "-s", "-screen 0 1024x768x24", "pvbatch",
-                          str(script), str(out / "string.xdmf"), str(png)],
-                         capture_output=True, text=True, timeout=300)
-    assert res.returncode == 0 and png.is_file(), res.stdout[-2000:] + res.stderr[-2000:]
+    # one retry: once in a full suite on the shared machine pvbatch aborted at start-up
+    # (exit 134) and passed on every rerun, likely xvfb-run -a racing another X server
+    for _ in range(2):
+        res = subprocess.run(["xvfb-run", "-a", "-s", "-screen 0 1024x768x24", "pvbatch",
+                              str(script), str(out / "string.xdmf"), str(png)],
+                             capture_output=True, text=True, timeout=300)
+        if res.returncode == 0:
+            break
+    assert res.returncode == 0 and png.is_file(), res.stdout[-2000:] + res.stderr[:3000]
     img = mpimg.imread(png)[..., :3]  # floats in [0, 1]
     assert img.shape[:2] == (360, 640)
     drawn = np.any(img < 0.9, axis=2)  # not the white background
