@@ -8,9 +8,10 @@ have in common, so that both use the same window), and the relative differences
 ``(b - a) / a``; the history error ``RMS(|M|_b - |M|_a) / RMS(|M|_a)``, the pointwise
 difference of the two histories over the same window (:func:`history_error`); also the first
 natural frequency and the wall times (ratio ``b / a``). Warns (log and ``warnings`` in
-``compare.json``) when a run's first output row is not its static state (:func:`start_warnings`):
-such a run did not start clean. Writes ``compare.json``, ``compare.md`` and
-``compare_<anchor>.png`` (default: into ``DIR_B``). No dolfinx objects: rank 0 reads, computes and writes; every rank gets the
+``compare.json``) when a run's first output row is not its static state
+(:func:`start_warnings`): such a run did not start clean. Writes ``compare.json``,
+``compare.md`` and ``compare_<anchor>.png`` (default: into ``DIR_B``). No dolfinx objects:
+rank 0 reads, computes and writes; every rank gets the
 result (and the same ValueError on bad input).
 """
 
