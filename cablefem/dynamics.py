@@ -49,8 +49,8 @@ from cablefem.petsc_utils import (
 )
 from cablefem.reactions import AnchorReactions
 
-__all__ = ["Checkpoint", "DynamicProblem", "DynamicsError", "DynamicsStats", "Interrupted", "integrate",
-           "initial_velocity", "grid_time"]
+__all__ = ["Checkpoint", "DynamicProblem", "DynamicsError", "DynamicsStats", "Interrupted",
+           "integrate", "initial_velocity", "grid_time"]
 
 log = logging.getLogger(__name__)
 
