@@ -209,6 +209,10 @@ def initial_velocity(model, V: PETSc.Vec, t: float = 0.0, quasi_static: bool = T
     return ok
 
 
+#: the TS's end time when none is given: PETSc's TSStep refuses to run without one
+_NO_END = 1e300
+
+
 class _StopPoll:
     """``should_stop()`` polled after every step so that all ranks stop after the same one,
     without a blocking collective per step: on one rank the flag itself; on several, the
@@ -289,6 +293,7 @@ class DynamicProblem:
         self.history = SNESHistory()
         self.ts, self._work = _make_ts(model, dt, rho_inf, self.history, self.prefix,
                                        petsc_options)  # _work: F and J live as long as ts
+        self.ts.setMaxTime(_NO_END)  # PETSc steps only with an end; step(t_end) sets it
         self.reactions = AnchorReactions(model)
         self.hinges = getattr(model, "hinges", None)
         self.time, self.step_number, self.level, self.calm = 0.0, 0, 0, 0
@@ -325,6 +330,7 @@ class DynamicProblem:
         self.time, self.step_number = float(ck.time), int(ck.step)
         self.level, self.calm = int(ck.level), int(ck.calm)
         self._follow_pending = False
+        self._initial_output = False  # the checkpoint's time was an output already
         m.set_time(self.time)
         U = m.u.vector.copy()
         V = m.v.vector.copy()
@@ -387,6 +393,8 @@ class DynamicProblem:
         ts, dt, history, stats = self.ts, self.dt, self.history, self.stats
         t = self.time
         eps_t = 1e-9 * dt
+        if t_end is not None:
+            ts.setMaxTime(t_end)
         # one step of the nominal grid, its end step x dt (no round-off accumulated)
         t_start = t
         t_next = grid_time(self.step_number + 1, dt)
@@ -405,7 +413,8 @@ class DynamicProblem:
             try:
                 ts.step()
             except PETSc.Error:  # raised when the step is rejected (ts_max_reject = 0)
-                pass
+                if ts.getConvergedReason() >= 0:  # any other error: not a failed step
+                    raise
             reason = ts.getConvergedReason()
             if reason >= 0:
                 t = ts.getTime()
