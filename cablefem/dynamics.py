@@ -94,8 +94,9 @@ _TS_REASONS = {-1: "Newton failed (TS_DIVERGED_NONLINEAR_SOLVE)",
                    "times (TS_DIVERGED_STEP_REJECTED)"}
 
 
-def _make_ts(model, dt: float, rho_inf: float, history: SNESHistory, prefix: str,
-             petsc_options: dict | None = None):
+def _make_ts(model, dt: float, rho_inf: float, history: SNESHistory,
+             prefix: str | None = None, petsc_options: dict | None = None):
+    prefix = model.prefix if prefix is None else prefix
     scale = model.force_scale
     defaults = {"ts_type": "alpha2", "ts_alpha_radius": rho_inf, "ts_max_reject": 0,
                 "ts_max_snes_failures": -1, "snes_type": "newtonls",

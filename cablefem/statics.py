@@ -51,6 +51,41 @@ class StaticResult:
     wall_time: float
 
 
+def _make_snes(model, history: SNESHistory, bilateral: bool = False, prefix: str | None = None,
+               petsc_options: dict | None = None) -> tuple[PETSc.SNES, tuple]:
+    """The static SNES of ``model`` and its (residual vector, Jacobian matrix), under
+    ``prefix`` (default ``<model prefix>static_``); the caller destroys all three."""
+    prefix = model.prefix + "static_" if prefix is None else prefix
+    # absolute tolerance: round-off of the residual grows with the tension (EA v3), so
+    # scale it with the larger of the cable's weight and its catenary tension
+    defaults = {"snes_type": "newtonls", "snes_linesearch_type": "bt", "snes_max_it": 50,
+                "snes_rtol": 1e-10, "snes_atol": 1e-10 * model.force_scale,
+                "snes_stol": 1e-14,
+                **lu_options(model.comm.size), **getattr(model, "static_options", {})}
+    f_form = model.f_static_bilateral if bilateral else model.f_static
+    j_form = model.j_static_bilateral if bilateral else model.j_static
+    b = fpetsc.create_vector(f_form)
+    A = fpetsc.create_matrix(j_form)
+    snes = PETSc.SNES().create(model.comm)
+    snes.setOptionsPrefix(prefix)
+
+    def F(snes, x, f):
+        copy_in(x, model.u)
+        assemble_residual(f, f_form, j_form, model.bcs, x)
+
+    def J(snes, x, jac, pre):
+        copy_in(x, model.u)
+        assemble_jacobian(jac, j_form, model.bcs)
+
+    snes.setFunction(F, b)
+    snes.setJacobian(J, A)
+    snes.setMonitor(history)
+    user = {**case_options(model, "static"), **(petsc_options or {})}
+    with default_options(prefix, defaults, user):
+        snes.setFromOptions()
+    return snes, (b, A)
+
+
 def _try(snes, x, history) -> tuple[bool, int]:
     history.clear()
     snes.solve(None, x)
@@ -123,35 +158,8 @@ class StaticProblem:
         self.reactions: AnchorReactions | None = None
 
     def _make_snes(self, bilateral: bool) -> tuple[PETSc.SNES, tuple]:
-        model, prefix = self.model, self.prefix
-        # absolute tolerance: round-off of the residual grows with the tension (EA v3), so
-        # scale it with the larger of the cable's weight and its catenary tension
-        defaults = {"snes_type": "newtonls", "snes_linesearch_type": "bt", "snes_max_it": 50,
-                    "snes_rtol": 1e-10, "snes_atol": 1e-10 * model.force_scale,
-                    "snes_stol": 1e-14,
-                    **lu_options(model.comm.size), **getattr(model, "static_options", {})}
-        f_form = model.f_static_bilateral if bilateral else model.f_static
-        j_form = model.j_static_bilateral if bilateral else model.j_static
-        b = fpetsc.create_vector(f_form)
-        A = fpetsc.create_matrix(j_form)
-        snes = PETSc.SNES().create(model.comm)
-        snes.setOptionsPrefix(prefix)
-
-        def F(snes, x, f):
-            copy_in(x, model.u)
-            assemble_residual(f, f_form, j_form, model.bcs, x)
-
-        def J(snes, x, jac, pre):
-            copy_in(x, model.u)
-            assemble_jacobian(jac, j_form, model.bcs)
-
-        snes.setFunction(F, b)
-        snes.setJacobian(J, A)
-        snes.setMonitor(self.history)
-        user = {**case_options(model, "static"), **self.petsc_options}
-        with default_options(prefix, defaults, user):
-            snes.setFromOptions()
-        return snes, (b, A)
+        return _make_snes(self.model, self.history, bilateral, self.prefix,
+                          self.petsc_options)
 
     def solve(self) -> StaticResult:
         """Solve the static equilibrium of the model from its initial guess; leaves it in
