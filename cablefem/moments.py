@@ -111,3 +111,98 @@ def composite_field(node_s: np.ndarray, r: np.ndarray, a: np.ndarray, EA: float,
     orient = np.array([1.0 if s0 < 0.5 * L else -1.0 for s0 in anchor_s])
     kap = asymptotics.composite_curvature(ks, sig, deltas, ells, normals, orientation=orient)
     return pos, kap
+
+
+@dataclass
+class ClampedAnchor:
+    """What the anchor moments need of one clamped anchor: plain numbers and its motion."""
+
+    name: str
+    index: int  #: the anchor's place in the model's anchor list (the rows of its forces)
+    direction: np.ndarray  #: unit clamp direction into the cable
+    EI: float
+    EA: float
+    mass: float  #: kg/m, of the cable's section at the anchor
+    motion: object = None  #: a :class:`cablefem.motion.Motion` (``acceleration(t)``) or None
+
+    def acceleration(self, times: np.ndarray) -> np.ndarray:
+        """(n, 3) acceleration of the anchor at ``times``, m/s²."""
+        if self.motion is None:
+            return np.zeros((np.size(times), 3))
+        return np.array([np.asarray(self.motion.acceleration(t), float) for t in times]
+                        ).reshape(-1, 3)
+
+
+class AnchorMoments:
+    """The bending moment columns of ``anchors.csv`` (:data:`MOMENT_COLUMNS`) at every
+    clamped anchor of a model, from anchor-force histories: :func:`anchor_moments` with
+    the anchor's section, clamp direction and acceleration, the distributed load at the
+    anchor at each time (the weight plus the case's distributed loads, time-dependent ones
+    included), the cable's length, the highest excitation frequency ``omega`` and the
+    inner solution's ``form``. Pure NumPy: :meth:`from_model` reads what it needs from a
+    model once; the object holds no dolfinx or PETSc object.
+
+    Use::
+
+        moments = AnchorMoments.from_model(model, omega=32.8)
+        cols = moments.compute(times, forces)   # forces (n, n_anchors, 3)
+        cols["p"]["moment"]                     # (n,) N m at clamped anchor "p"
+    """
+
+    def __init__(self, anchors: list[ClampedAnchor], gravity: np.ndarray, length: float,
+                 loads: list[tuple[np.ndarray, object]] = (), omega: float | None = None,
+                 form: str = "exact") -> None:
+        """``gravity``: (3,) acceleration of gravity, m/s²; ``loads``: (value (3,) N/m,
+        time function with ``value(t)``) of each distributed load."""
+        self.anchors = list(anchors)
+        self.gravity = np.asarray(gravity, float)
+        self.length = float(length)
+        self.loads = [(np.asarray(v, float), tf) for v, tf in loads]
+        self.omega, self.form = omega, form
+        self._by_name = {a.name: a for a in self.anchors}
+
+    @classmethod
+    def from_model(cls, model, omega: float | None = None, form: str = "exact"
+                   ) -> AnchorMoments:
+        """The clamped anchors of a model (a string, a network or a rod)."""
+        clamped = [ClampedAnchor(a.name, i, np.asarray(a.direction, float), a.section.EI,
+                                 a.section.EA, a.section.mass, a.motion)
+                   for i, a in enumerate(model.anchors) if a.kind == "clamped"]
+        loads = [(np.asarray(ld.value, float), ld.time) for _, ld in model.loads]
+        return cls(clamped, model.g_vec, model.length, loads, omega, form)
+
+    @property
+    def names(self) -> list[str]:
+        return [a.name for a in self.anchors]
+
+    def load_at(self, t: float, mass: float) -> np.ndarray:
+        """(3,) distributed load per stress-free length at ``t`` on a cable of ``mass``
+        (kg/m), weight included, N/m."""
+        f = mass * self.gravity
+        for value, tf in self.loads:
+            f = f + value * tf.value(t)
+        return f
+
+    def anchor(self, name: str, times: np.ndarray, forces: np.ndarray) -> dict:
+        """The columns of clamped anchor ``name`` (:func:`anchor_moments`'s dict) for its
+        forces (n, 3) at ``times`` (n,)."""
+        a = self._by_name[name]
+        times = np.atleast_1d(np.asarray(times, float))
+        load = np.array([self.load_at(t, a.mass) for t in times]).reshape(-1, 3)
+        return anchor_moments(np.asarray(forces, float)[:, :3], a.direction, a.EI, a.EA,
+                              a.mass, a.acceleration(times), load, self.length, self.omega,
+                              self.form)
+
+    def compute(self, times: np.ndarray, forces) -> dict[str, dict[str, np.ndarray]]:
+        """Columns of every clamped anchor: ``{name: {column: (n,) array}}``. ``forces``:
+        (n, n_anchors, 3) in the model's anchor order (as :func:`cablefem.dynamics.
+        integrate` yields them, stacked), or a dict ``{name: (n, 3)}``."""
+        out = {}
+        for a in self.anchors:
+            N = (forces[a.name] if isinstance(forces, dict)
+                 else np.asarray(forces, float)[:, a.index])
+            out[a.name] = self.anchor(a.name, times, N)
+        return out
+
+
+__all__ += ["AnchorMoments", "ClampedAnchor"]

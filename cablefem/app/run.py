@@ -39,6 +39,7 @@ from cablefem.modal import free_dofs, solve_modes
 from cablefem.moments import (
     MAX_ANCHOR_ANGLE,
     MOMENT_COLUMNS,
+    AnchorMoments,
     anchor_moments,
     composite_field,
 )
@@ -135,6 +136,8 @@ class _Emitter:
         self.omega = omega
         self.resume_after = resume_after
         self.clamped = [a for a in model.anchors if a.kind == "clamped"]
+        #: the moment columns from the anchor forces (the numbers; this class writes them)
+        self.moment_columns = AnchorMoments.from_model(model, omega, form)
         self.network = getattr(model, "is_network", False)
         self.beam = model.is_beam  # a rod: moments from the model, no composite field
         self.rod: dict[str, list[np.ndarray]] = {a.name: [] for a in self.clamped}
@@ -221,18 +224,14 @@ class _Emitter:
                 self.columns[name] = {k: d[k].tolist() for k in MOMENT_COLUMNS}
 
     def load_at(self, t: float, mass: float | None = None) -> np.ndarray:
-        """Distributed load per stress-free length at ``t``, weight included."""
-        f = (self.m if mass is None else mass) * self.model.g_vec
-        for _, ld in self.model.loads:
-            f = f + np.asarray(ld.value) * ld.time.value(t)
-        return f
+        """Distributed load per stress-free length at ``t``, weight included
+        (:meth:`cablefem.moments.AnchorMoments.load_at`; the single cable's mass by
+        default)."""
+        return self.moment_columns.load_at(t, self.m if mass is None else mass)
 
     def _moments(self, anc, times: np.ndarray, N: np.ndarray) -> dict:
-        sec = anc.section
-        acc = np.array([anc.acceleration(t) for t in times])
-        load = np.array([self.load_at(t, sec.mass) for t in times])
-        return anchor_moments(N, anc.direction, sec.EI, sec.EA, sec.mass, acc, load,
-                              self.model.length, self.omega, self.form)
+        """The moment columns of clamped anchor ``anc`` (:class:`AnchorMoments`)."""
+        return self.moment_columns.anchor(anc.name, times, N)
 
     # a network: one short line per clamped anchor in moments.xdmf -----------------------
     def _segments_setup(self, static_forces: np.ndarray) -> None:
