@@ -22,6 +22,8 @@ tension times the unit tangent from the anchor into the span (``docs/post.md``).
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from cablefem import asymptotics
