@@ -5,4 +5,5 @@ demo demo-spatial test test-slow bench:
 setup:
 	bash .ci/setup
 lint:
-	ruff check cablefem tests demos benchmarks
+	bash .ci/setup
+	.venv/bin/ruff check cablefem tests demos benchmarks

@@ -64,11 +64,23 @@ class AnchorBC:
     offset: np.ndarray = field(default_factory=lambda: np.zeros(3))  #: string: where the
     #: node is prescribed relative to the anchor (a virtual hinge, cablefem.hinge), m
 
+    def _layout(self) -> tuple[np.ndarray, np.ndarray]:
+        """The unrolled rows and the component of each, computed once per layout (a rod
+        changes ``bs`` and ``comps`` after construction: the cache is keyed on them)."""
+        key = (self.bs, tuple(self.comps), id(self.dofs), self.dofs.size)
+        if getattr(self, "_layout_key", None) != key:
+            comps = np.asarray(self.comps, dtype=np.int64)
+            rows = (self.bs * np.asarray(self.dofs, np.int64)[:, None]
+                    + comps[None, :]).reshape(-1)
+            self._layout_cache = (rows, np.tile(comps, self.dofs.size))
+            self._layout_key = key
+        return self._layout_cache
+
     @property
     def flat_dofs(self) -> np.ndarray:
-        """Unrolled indices (in a local array) of the components the anchor prescribes."""
-        comps = np.asarray(self.comps)
-        return (self.bs * self.dofs[:, None] + comps[None, :]).reshape(-1)
+        """Unrolled indices (in a local array) of the components the anchor prescribes
+        (computed once; do not modify the array)."""
+        return self._layout()[0]
 
     def prescribed(self, kind: str, t: float) -> np.ndarray:
         """Values of ``kind`` ("displacement", "velocity", "acceleration") at ``t`` for
@@ -80,7 +92,7 @@ class AnchorBC:
             rot = self.rotation if kind == "displacement" and self.rotation is not None \
                 else np.zeros(3)
             val = np.concatenate([val, rot])
-        return np.tile(np.asarray(val)[list(self.comps)], self.dofs.size)
+        return np.asarray(val)[self._layout()[1]]
 
     def displacement(self, t: float) -> np.ndarray:
         """Prescribed displacement of the anchor node from its reference position, m."""

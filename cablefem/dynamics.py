@@ -37,6 +37,7 @@ from petsc4py import PETSc
 
 from cablefem.errors import DynamicsError, Interrupted
 from cablefem.hinge import HingeError
+from cablefem.initial import initial_velocity
 from cablefem.petsc_utils import (
     SNESHistory,
     assemble_jacobian_rows,
@@ -45,12 +46,11 @@ from cablefem.petsc_utils import (
     copy_in,
     default_options,
     linear_solver_options,
-    lu_options,
 )
-from cablefem.reactions import AnchorForces
+from cablefem.reactions import AnchorReactions
 
-__all__ = ["Checkpoint", "DynamicsError", "DynamicsStats", "Interrupted", "integrate",
-           "initial_velocity", "grid_time"]
+__all__ = ["Checkpoint", "DynamicProblem", "DynamicsError", "DynamicsStats", "Interrupted",
+           "integrate", "initial_velocity", "grid_time"]
 
 log = logging.getLogger(__name__)
 
@@ -65,6 +65,11 @@ class Checkpoint:
     calm: int = 0
     #: virtual hinges: (n_hinges, 2) tension and angle of each layer's law (cablefem.hinge)
     layers: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
+    #: this rank's ``model.u.x.array`` and ``model.v.x.array`` at the checkpoint, when
+    #: :meth:`DynamicProblem.checkpoint` took it (a checkpoint read from a file has None:
+    #: the state is then put into ``model.u``, ``model.v`` before restoring)
+    u: np.ndarray | None = field(default=None, repr=False)
+    v: np.ndarray | None = field(default=None, repr=False)
 
 
 @dataclass
@@ -89,8 +94,9 @@ _TS_REASONS = {-1: "Newton failed (TS_DIVERGED_NONLINEAR_SOLVE)",
                    "times (TS_DIVERGED_STEP_REJECTED)"}
 
 
-def _make_ts(model, dt: float, rho_inf: float, history: SNESHistory):
-    prefix = model.prefix
+def _make_ts(model, dt: float, rho_inf: float, history: SNESHistory,
+             prefix: str | None = None, petsc_options: dict | None = None):
+    prefix = model.prefix if prefix is None else prefix
     scale = model.force_scale
     defaults = {"ts_type": "alpha2", "ts_alpha_radius": rho_inf, "ts_max_reject": 0,
                 "ts_max_snes_failures": -1, "snes_type": "newtonls",
@@ -127,7 +133,8 @@ def _make_ts(model, dt: float, rho_inf: float, history: SNESHistory):
     ts.setI2Function(I2Function, F_vec)
     ts.setTimeStep(dt)
     ts.setExactFinalTime(PETSc.TS.ExactFinalTime.MATCHSTEP)
-    with default_options(prefix, defaults, case_options(model, "")):
+    user = {**case_options(model, ""), **(petsc_options or {})}
+    with default_options(prefix, defaults, user):
         # -cable_mat_type (default baij: bs x bs blocks, assembly and triangular solves
         # faster than aij) is read here: the matrix must exist before the TS is configured
         J_mat = fpetsc.create_matrix(model.j_dynamic,
@@ -141,66 +148,305 @@ def _make_ts(model, dt: float, rho_inf: float, history: SNESHistory):
     return ts, (F_vec, J_mat)
 
 
-def initial_velocity(model, V: PETSc.Vec, t: float = 0.0, quasi_static: bool = True) -> bool:
-    """Fill ``V`` with the velocity the dynamics starts from at time ``t``.
+#: the TS's end time when none is given: PETSc's TSStep refuses to run without one
+_NO_END = 1e300
 
-    The anchors' rows get their prescribed velocity ``ġ(t)`` (a clamp's rotation rows 0: a
-    clamp translates). With ``quasi_static`` the free rows get the velocity with which the
-    cable follows that motion quasi-statically, the solution of the tangent problem at the
-    current state ``model.u`` (normally the static equilibrium)::
 
-        K_ff v_f = −K_fb ġ(t),        K = ∂f_int/∂u (the static Jacobian)
+class _StopPoll:
+    """``should_stop()`` polled after every step so that all ranks stop after the same one,
+    without a blocking collective per step: on one rank the flag itself; on several, the
+    logical or of the flags of step ``k`` is reduced by a non-blocking ``Iallreduce``
+    started after step ``k`` and completed after step ``k + 1`` (by then long done), so a
+    request to stop takes effect one step later, on every rank at the same step."""
 
-    so that no element is strained at a rate: the anchor does not tear away from a cable at
-    rest (a velocity jump across the first element, whose strain rate ``|ġ|/h`` grows without
-    bound as the element shrinks and which a stiffness-proportional damping turns into a
-    reaction ``β EA |ġ|/h``; the rod, graded to ``ℓ/8`` at a clamp, has elements 10-100 times
-    shorter than the string's). Without ``quasi_static``, or when every anchor is at rest,
-    the free rows are 0 (the cable at rest). Returns whether a quasi-static field was
-    solved for (False when nothing moves). Collective."""
-    V.set(0.0)
-    n_owned = model.V.dofmap.index_map.size_local
-    rows, vals = [], []
-    for anc in model.anchors:
-        r = anc.flat_dofs
-        keep = r < model.bs * n_owned
-        rows.append(r[keep])
-        vals.append(np.asarray(anc.prescribed("velocity", t), float)[keep])
-    rows = np.concatenate(rows).astype(np.int32) if rows else np.zeros(0, np.int32)
-    vals = np.concatenate(vals) if vals else np.zeros(0)
-    V.array[rows] = vals
-    moving = model.comm.allreduce(bool(np.any(vals != 0.0)), op=MPI.LOR)
-    if not (quasi_static and moving):
-        return False
-    # K at model.u, unconstrained: b = -K v_b; the anchor rows of b hold v_b
-    K = fpetsc.assemble_matrix(model.j_static)
-    K.assemble()
-    b = V.duplicate()
-    K.mult(V, b)
-    b.scale(-1.0)
-    b.array[rows] = vals
-    # the tangent with identity rows and zero columns at the anchors: K_ff v_f = -K_fb v_b
-    K.zeroRowsColumnsLocal(rows, diag=1.0)
-    ksp = PETSc.KSP().create(model.comm)
-    prefix = model.prefix + "static_"
-    ksp.setOptionsPrefix(prefix)
-    ksp.setOperators(K)
-    with default_options(prefix, lu_options(model.comm.size), case_options(model, "static")):
-        ksp.setFromOptions()
-    x = V.duplicate()
-    ksp.solve(b, x)
-    ok = ksp.getConvergedReason() > 0 and np.all(np.isfinite(x.array_r))
-    ok = model.comm.allreduce(bool(ok), op=MPI.LAND)
-    if ok:
-        x.copy(V)
-        V.array[rows] = vals  # exactly the prescribed values
-    elif model.comm.rank == 0:
-        log.warning("the quasi-static initial velocity could not be solved for (KSP reason "
-                    "%d): the cable starts at rest, its anchors moving",
-                    ksp.getConvergedReason())
-    for obj in (ksp, K, b, x):
-        obj.destroy()
-    return ok
+    def __init__(self, comm: MPI.Comm, should_stop) -> None:
+        self.comm, self.should_stop = comm, should_stop
+        self._send = np.zeros(1, np.int32)
+        self._recv = np.zeros(1, np.int32)
+        self._request: MPI.Request | None = None
+
+    def __call__(self) -> bool:
+        if self.should_stop is None:
+            return False
+        if self.comm.size == 1:
+            return bool(self.should_stop())
+        stop = self.complete()
+        self._send[0] = int(bool(self.should_stop()))
+        self._request = self.comm.Iallreduce(self._send, self._recv, op=MPI.LOR)
+        return stop
+
+    def complete(self) -> bool:
+        """Wait for the reduction in flight (collective: every rank has started it)."""
+        if self._request is None:
+            return False
+        self._request.Wait()
+        self._request = None
+        return bool(self._recv[0])
+
+
+class DynamicProblem:
+    """Time integration of a model as an object that owns its PETSc ``TS``.
+
+    Creates the generalised-α integrator (``.ts``, type ``alpha2``, with its SNES, KSP and
+    Jacobian matrix) under the options prefix ``petsc_options_prefix`` (default the model's,
+    ``cable_``: ``-cable_ts_alpha_radius``, ``-cable_snes_rtol``, ``-cable_ksp_type``,
+    ``-cable_mat_type``, ...), options from lowest to highest priority: the defaults, the
+    case file's ``solver.petsc_options``, ``petsc_options`` (keys without the prefix), the
+    options database. The anchor forces come from an :class:`~cablefem.reactions.
+    AnchorReactions` (``.reactions``, prefix ``<model prefix>mass_``).
+
+    Without ``start`` the problem begins at ``t = 0`` from ``model.u`` (normally the static
+    equilibrium) with the initial velocity ``initial`` (:func:`initial_velocity`):
+    "quasi-static" or "rest". With ``start`` (a :class:`Checkpoint`) it resumes from it
+    (:meth:`restore`).
+
+    * :meth:`step` advances one step of the nominal grid ``k dt`` (with the step cutting of
+      the module docs) and returns the new time; :meth:`anchor_forces` gives the anchor
+      forces at the current time (and puts the state into ``model.u``, ``model.v``,
+      ``model.a``).
+    * :meth:`run` is the generator of :func:`integrate`: ``(t, anchor_forces)`` at the
+      start, every ``output_every`` steps and at ``t_end``; it can be called again to go
+      on to a later ``t_end``.
+    * :meth:`checkpoint` / :meth:`restore`: a restored problem repeats the run from the
+      checkpoint bit for bit.
+    * :meth:`destroy` (or the end of a ``with`` block) frees every PETSc object.
+
+    Use::
+
+        with DynamicProblem(model, dt=0.005) as problem:
+            for t, forces in problem.run(1.0):
+                ...
+    """
+
+    def __init__(self, model, dt: float, *, rho_inf: float = 0.9,
+                 petsc_options_prefix: str | None = None, petsc_options: dict | None = None,
+                 initial: str = "quasi-static", start: Checkpoint | None = None,
+                 max_cuts: int = 6, cooldown: int = 8, stats: DynamicsStats | None = None):
+        if initial not in ("quasi-static", "rest"):
+            raise ValueError(f"initial must be 'quasi-static' or 'rest', got {initial!r}")
+        self._wall0 = time.perf_counter()
+        self.model, self.dt = model, float(dt)
+        self.max_cuts, self.cooldown = max_cuts, cooldown
+        self.stats = stats if stats is not None else DynamicsStats()
+        self.prefix = model.prefix if petsc_options_prefix is None else petsc_options_prefix
+        self.history = SNESHistory()
+        self.ts, self._work = _make_ts(model, dt, rho_inf, self.history, self.prefix,
+                                       petsc_options)  # _work: F and J live as long as ts
+        self.ts.setMaxTime(_NO_END)  # PETSc steps only with an end; step(t_end) sets it
+        self.reactions = AnchorReactions(model)
+        self.hinges = getattr(model, "hinges", None)
+        self.time, self.step_number, self.level, self.calm = 0.0, 0, 0, 0
+        self._follow_pending = False
+        #: the state at the start is an output of the first run() (not after a restore)
+        self._initial_output = start is None
+        if self.hinges:  # the layers follow the tension and angle from the static state on
+            self.hinges.start_dynamics(model.u_static.x.array)
+        if start is not None:
+            self.restore(start)
+            return
+        model.set_time(0.0)
+        U = model.u.vector.copy()
+        V = model.v.vector.copy()
+        initial_velocity(model, V, 0.0, quasi_static=initial == "quasi-static")
+        copy_in(V, model.v)
+        self.ts.setTime(0.0)
+        self.ts.setStepNumber(0)
+        self.ts.setSolution2(U, V)
+        self.ts.setUp()
+        U.destroy()  # the TS keeps its own references
+        V.destroy()
+
+    # ------------------------------------------------------------------ state
+    def restore(self, ck: Checkpoint) -> None:
+        """Continue from ``ck``: its time, step, step-cutting state and hinge laws, and the
+        state ``ck.u``, ``ck.v`` (or, when None, the one in ``model.u``, ``model.v``). The
+        integrator re-estimates the acceleration from ``(u, v)``, as the run that took the
+        checkpoint did at that step."""
+        m = self.model
+        if ck.u is not None:
+            m.u.x.array[:] = ck.u
+            m.v.x.array[:] = ck.v
+        self.time, self.step_number = float(ck.time), int(ck.step)
+        self.level, self.calm = int(ck.level), int(ck.calm)
+        self._follow_pending = False
+        self._initial_output = False  # the checkpoint's time was an output already
+        m.set_time(self.time)
+        U = m.u.vector.copy()
+        V = m.v.vector.copy()
+        self.ts.setTime(self.time)
+        self.ts.setStepNumber(self.step_number)
+        self.ts.setSolution2(U, V)
+        self.ts.setUp()
+        self.ts.restartStep()
+        U.destroy()
+        V.destroy()
+        if self.hinges:  # the laws the checkpointed state was being solved with
+            self.hinges.set_state(ck.layers, self.time)
+
+    def checkpoint(self) -> Checkpoint:
+        """What :meth:`restore` needs to repeat the run from here, bit for bit (a
+        :class:`Checkpoint` holding this rank's state). The integrator re-estimates its
+        acceleration from ``(u, v)`` at the next step, as a restored one does."""
+        self._follow()
+        self.ts.restartStep()  # the next step re-estimates A from (u, v), as a resumed run
+        self._state_to_model()
+        m = self.model
+        return Checkpoint(self.time, self.step_number, self.level, self.calm,
+                          self.hinges.state() if self.hinges else np.zeros((0, 2)),
+                          m.u.x.array.copy(), m.v.x.array.copy())
+
+    def _state_to_model(self) -> tuple[PETSc.Vec, PETSc.Vec]:
+        U2, V2 = self.ts.getSolution2()
+        copy_in(U2, self.model.u)
+        copy_in(V2, self.model.v)
+        return U2, V2
+
+    def anchor_forces(self) -> np.ndarray:
+        """The anchor forces (n_anchors, 3) at the current time, the same on every rank
+        (collective); leaves the state in ``model.u``, ``model.v`` and ``model.a``."""
+        self._state_to_model()
+        self.model.set_time(self.time)
+        return self.reactions.compute(self.time)
+
+    def _follow(self) -> None:
+        """The hinges follow the step just taken (after its output: the forces of a step
+        are those of its own layers)."""
+        if not self._follow_pending:
+            return
+        self._follow_pending = False
+        U2, V2 = self.ts.getSolution2()
+        copy_in(U2, self.model.u)
+        try:
+            self.hinges.follow(self.model.u.x.array, self.time)
+        except HingeError as err:
+            copy_in(V2, self.model.v)
+            raise DynamicsError(str(err), self.time) from err
+
+    # ------------------------------------------------------------------ stepping
+    def step(self, t_end: float | None = None) -> float:
+        """Advance one step of the nominal grid (to ``(k + 1) dt``, or to ``t_end`` when
+        that comes first) and return the new time. A step whose Newton solve fails is cut
+        as the module docs say; :class:`DynamicsError` when it cannot continue (the last
+        converged state then in ``model.u``, ``model.v``)."""
+        self._follow()
+        ts, dt, history, stats = self.ts, self.dt, self.history, self.stats
+        t = self.time
+        eps_t = 1e-9 * dt
+        if t_end is not None:
+            ts.setMaxTime(t_end)
+        # one step of the nominal grid, its end step x dt (no round-off accumulated)
+        t_start = t
+        t_next = grid_time(self.step_number + 1, dt)
+        if t_end is not None:
+            t_next = min(t_next, t_end)
+            if t_end - t_next < 1e-6 * dt:  # the sum of many dt falls short of t_end by
+                t_next = t_end  # round-off: no extra step of ~1e-11 s (its velocity jump
+                # at a moving anchor gave forces of 1e6 N in the last row)
+        history.clear()
+        if self.level and self.calm >= self.cooldown:  # a larger step again, seldom: each
+            self.level, self.calm = self.level - 1, 0  # change costs generalised-alpha
+        failed = False
+        while t < t_next - eps_t:
+            sub = (t_next - t_start) / 4**self.level
+            ts.setTimeStep((t_next - t) / max(1, round((t_next - t) / sub)))
+            try:
+                ts.step()
+            except PETSc.Error:  # raised when the step is rejected (ts_max_reject = 0)
+                if ts.getConvergedReason() >= 0:  # any other error: not a failed step
+                    raise
+            reason = ts.getConvergedReason()
+            if reason >= 0:
+                t = ts.getTime()
+                continue
+            stats.rejected_steps += 1
+            failed = True
+            ts.setConvergedReason(PETSc.TS.ConvergedReason.CONVERGED_ITERATING)
+            # a retried step would start from the failed attempt's acceleration (alpha2
+            # copies A1 into A0): restart, i.e. re-estimate A0 from the restored state
+            ts.restartStep()
+            if self.level == self.max_cuts:
+                self.time = t
+                self._state_to_model()  # the last converged state (step rolled back)
+                raise DynamicsError(
+                    f"time integration stopped at t = {t:.6g} s (step "
+                    f"{self.step_number + 1}): Newton failed with dt = {dt:.3g} s and with "
+                    f"{self.max_cuts} cuts down to {dt / 4**self.max_cuts:.3g} s "
+                    f"({_TS_REASONS.get(reason, reason)}); last Newton history: "
+                    f"{history.text()}", t)
+            self.level += 1
+            log.info("t = %.6g: Newton failed with dt = %.3g, sub-stepping with dt = %.3g",
+                     t, 4 * sub, sub)
+        self.calm = 0 if failed else self.calm + 1
+        self.time = t = t_next
+        ts.setTime(t)  # the TS clock on the grid exactly, as a resumed run sets it
+        self.step_number += 1
+        stats.steps = self.step_number
+        stats.newton_iterations = ts.getSNESIterations()
+        stats.linear_iterations = ts.getKSPIterations()
+        U2, V2 = ts.getSolution2()
+        if not (np.all(np.isfinite(U2.array_r)) and np.all(np.isfinite(V2.array_r))):
+            raise DynamicsError(f"non-finite state at t = {t:.6g} s; the last finite output "
+                                "is kept", t)
+        self._follow_pending = bool(self.hinges)
+        return t
+
+    def run(self, t_end: float, output_every: int = 1, checkpoint_every: int = 0,
+            on_checkpoint=None, should_stop=None) -> Iterator[tuple[float, np.ndarray]]:
+        """Integrate to ``t_end``; yields ``(t, anchor_forces)`` at the start (the first
+        run of a problem not made from a checkpoint), every ``output_every`` steps and at
+        ``t_end``, with ``model.u``, ``model.v`` and ``model.a`` at that time.
+
+        Every ``checkpoint_every`` steps ``on_checkpoint(Checkpoint)`` is called (the
+        integrator restarts there, :meth:`checkpoint`). ``should_stop()`` is polled after
+        every step; when it returns True on any rank, :class:`Interrupted` is raised on all
+        ranks after the same step (on several ranks one step after the poll that saw it,
+        :class:`_StopPoll`), after its output. Leaving the generator early (``break``,
+        an exception) leaves the problem usable; the problem's PETSc objects go with
+        :meth:`destroy`."""
+        m, stats, dt = self.model, self.stats, self.dt
+        self.ts.setMaxTime(t_end)
+        poll = _StopPoll(m.comm, should_stop)
+        try:
+            if self._initial_output:
+                self._initial_output = False
+                stats.output_times.append(self.time)
+                yield self.time, self.anchor_forces()
+            eps_t = 1e-9 * dt
+            while self.time < t_end - eps_t:
+                t = self.step(t_end)
+                last = t >= t_end - eps_t
+                if self.step_number % output_every == 0 or last:
+                    forces = self.anchor_forces()
+                    stats.output_times.append(t)
+                    stats.wall_time = time.perf_counter() - self._wall0
+                    yield t, forces
+                self._follow()
+                if checkpoint_every and self.step_number % checkpoint_every == 0 and not last:
+                    ck = self.checkpoint()
+                    if on_checkpoint is not None:
+                        on_checkpoint(ck)
+                if poll() and not last:
+                    self._state_to_model()
+                    raise Interrupted(f"stopped on request at t = {t:.6g} s (step "
+                                      f"{self.step_number})", t)
+            stats.wall_time = time.perf_counter() - self._wall0
+        finally:
+            poll.complete()
+
+    # ------------------------------------------------------------------ clean-up
+    def destroy(self) -> None:
+        """Free the TS (with its SNES and KSP), its matrix and vectors, and the reactions'
+        solver."""
+        self.ts.destroy()
+        for obj in self._work:
+            obj.destroy()
+        self.reactions.destroy()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.destroy()
 
 
 def integrate(model, t_end: float, dt: float, rho_inf: float = 0.9, output_every: int = 1,
@@ -210,7 +456,9 @@ def integrate(model, t_end: float, dt: float, rho_inf: float = 0.9, output_every
               ) -> Iterator[tuple[float, np.ndarray]]:
     """Integrate from the current state to ``t_end``; yields ``(t, anchor_forces)`` at the
     start (not when resuming from ``start``), every ``output_every`` steps and at ``t_end``,
-    with ``model.u``, ``model.v`` and ``model.a`` at that time.
+    with ``model.u``, ``model.v`` and ``model.a`` at that time: a :class:`DynamicProblem`
+    made, run (:meth:`DynamicProblem.run`) and destroyed when the generator ends, is
+    closed (``break`` out of its loop) or raises.
 
     ``anchor_forces`` is ``(n_anchors, 3)``, the force of the span at each anchor (N).
 
@@ -223,117 +471,12 @@ def integrate(model, t_end: float, dt: float, rho_inf: float = 0.9, output_every
     ``checkpoint_every`` steps ``on_checkpoint(Checkpoint)`` is called; at that step the
     integrator re-estimates its acceleration from ``(u, v)`` as a resumed run does, so that a
     resumed run repeats the uninterrupted one to round-off. ``should_stop()`` is polled after
-    every step (collectively); when it returns True on any rank, :class:`Interrupted` is
-    raised on all ranks, after the last output.
+    every step; when it returns True on any rank, :class:`Interrupted` is raised on all
+    ranks after the same step, after its output.
     """
     if initial not in ("quasi-static", "rest"):
         raise ValueError(f"initial must be 'quasi-static' or 'rest', got {initial!r}")
-    stats = stats if stats is not None else DynamicsStats()
-    wall0 = time.perf_counter()
-    history = SNESHistory()
-    ts, _work = _make_ts(model, dt, rho_inf, history)  # _work: F and J live as long as ts
-    forces = AnchorForces(model)
-    t = 0.0 if start is None else start.time
-    step = 0 if start is None else start.step
-    model.set_time(t)
-    U = model.u.vector.copy()
-    V = model.v.vector.copy()
-    if start is None:
-        initial_velocity(model, V, t, quasi_static=initial == "quasi-static")
-        copy_in(V, model.v)
-    ts.setTime(t)
-    ts.setMaxTime(t_end)
-    ts.setStepNumber(step)
-    ts.setSolution2(U, V)
-    ts.setUp()
-    hinges = getattr(model, "hinges", None)
-    if hinges:  # the layers follow the tension and angle from the static state on
-        hinges.start_dynamics(model.u_static.x.array)
-        if start is not None:  # the laws the checkpointed state was being solved with
-            hinges.set_state(start.layers, t)
-    if start is None:
-        stats.output_times.append(t)
-        yield t, forces.compute(t)
-
-    eps_t = 1e-9 * dt
-    level = 0 if start is None else start.level  # nominal steps split in 4**level
-    calm = 0 if start is None else start.calm  # nominal steps without failure at level
-    while t < t_end - eps_t:
-        # one step of the nominal grid, its end step x dt (no round-off accumulated)
-        t_start, t_next = t, min(grid_time(step + 1, dt), t_end)
-        if t_end - t_next < 1e-6 * dt:  # the sum of many dt falls short of t_end by
-            t_next = t_end  # round-off: no extra step of ~1e-11 s (its velocity jump at a
-            # moving anchor gave forces of 1e6 N in the last row)
-        history.clear()
-        if level and calm >= cooldown:  # try a larger step again, seldom: each change of
-            level, calm = level - 1, 0  # step size costs generalised-alpha some accuracy
-        failed = False
-        while t < t_next - eps_t:
-            sub = (t_next - t_start) / 4**level
-            ts.setTimeStep((t_next - t) / max(1, round((t_next - t) / sub)))
-            try:
-                ts.step()
-            except PETSc.Error:  # raised when the step is rejected (ts_max_reject = 0)
-                pass
-            reason = ts.getConvergedReason()
-            if reason >= 0:
-                t = ts.getTime()
-                continue
-            stats.rejected_steps += 1
-            failed = True
-            ts.setConvergedReason(PETSc.TS.ConvergedReason.CONVERGED_ITERATING)
-            # a retried step would start from the failed attempt's acceleration (alpha2
-            # copies A1 into A0): restart, i.e. re-estimate A0 from the restored state
-            ts.restartStep()
-            if level == max_cuts:
-                U2, V2 = ts.getSolution2()  # the last converged state (step rolled back)
-                copy_in(U2, model.u)
-                copy_in(V2, model.v)
-                raise DynamicsError(
-                    f"time integration stopped at t = {t:.6g} s (step {step + 1}): Newton "
-                    f"failed with dt = {dt:.3g} s and with {max_cuts} cuts down to "
-                    f"{dt / 4**max_cuts:.3g} s ({_TS_REASONS.get(reason, reason)}); last "
-                    f"Newton history: {history.text()}", t)
-            level += 1
-            log.info("t = %.6g: Newton failed with dt = %.3g, sub-stepping with dt = %.3g",
-                     t, 4 * sub, sub)
-        calm = 0 if failed else calm + 1
-        t = t_next
-        ts.setTime(t)  # the TS clock on the grid exactly, as a resumed run sets it
-        step += 1
-        stats.steps = step
-        stats.newton_iterations = ts.getSNESIterations()
-        stats.linear_iterations = ts.getKSPIterations()
-        U2, V2 = ts.getSolution2()
-        if not (np.all(np.isfinite(U2.array_r)) and np.all(np.isfinite(V2.array_r))):
-            raise DynamicsError(f"non-finite state at t = {t:.6g} s; the last finite output "
-                                "is kept", t)
-        last = t >= t_end - eps_t
-        if step % output_every == 0 or last:
-            copy_in(U2, model.u)
-            copy_in(V2, model.v)
-            model.set_time(t)
-            stats.output_times.append(t)
-            stats.wall_time = time.perf_counter() - wall0
-            yield t, forces.compute(t)
-        if hinges:  # after the output: the forces above are those of the step's own layers
-            copy_in(U2, model.u)
-            try:
-                hinges.follow(model.u.x.array, t)
-            except HingeError as err:
-                copy_in(V2, model.v)
-                raise DynamicsError(str(err), t) from err
-        if checkpoint_every and step % checkpoint_every == 0 and not last:
-            ts.restartStep()  # the next step re-estimates A from (u, v), as a resumed run
-            copy_in(U2, model.u)
-            copy_in(V2, model.v)
-            if on_checkpoint is not None:
-                on_checkpoint(Checkpoint(t, step, level, calm,
-                                         hinges.state() if hinges else np.zeros((0, 2))))
-        stop = bool(should_stop()) if should_stop is not None else False
-        if model.comm.allreduce(stop, op=MPI.LOR) and not last:
-            copy_in(U2, model.u)
-            copy_in(V2, model.v)
-            raise Interrupted(f"stopped on request at t = {t:.6g} s (step {step})", t)
-    stats.wall_time = time.perf_counter() - wall0
-    ts.destroy()
+    with DynamicProblem(model, dt, rho_inf=rho_inf, initial=initial, start=start,
+                        max_cuts=max_cuts, cooldown=cooldown, stats=stats) as problem:
+        yield from problem.run(t_end, output_every, checkpoint_every, on_checkpoint,
+                               should_stop)

@@ -16,7 +16,6 @@ unless dropped (``invalid="drop"``: the remaining samples are joined across the 
 
 from __future__ import annotations
 
-import csv
 import json
 import math
 import os
@@ -30,7 +29,7 @@ from numpy.typing import ArrayLike
 
 __all__ = ["StressSection", "SNCurve", "axial_stress", "bending_stress", "fibre_directions",
            "anchor_stress", "rainflow_cycles", "miner_damage", "equivalent_stress_range",
-           "time_to_failure", "fatigue_report", "write_report", "read_anchor_csv"]
+           "time_to_failure", "fatigue_report", "write_report"]
 
 
 def _number(name: str, value: object, low: float = 0.0, inclusive: bool = False) -> float:
@@ -423,54 +422,3 @@ def _histogram_png(path: Path, reports: dict[str, dict], curve: SNCurve, units: 
     axes[-1].set_xlabel(f"stress range [{units}]")
     fig.tight_layout()
     _atomic(path, lambda fh: fig.savefig(fh, format="png", dpi=110))
-
-
-def read_anchor_csv(path: str | Path) -> dict[str, dict[str, np.ndarray]]:
-    """Read cablefem's ``anchors.csv``: anchor -> ``time, tension, moment, valid`` arrays
-    (empty fields -> NaN; an empty or missing ``valid`` -> 0 / finite moment) and, when the
-    columns exist, ``moment_vector`` (n, 3) from ``Mx, My, Mz``. ValueError names the file,
-    line and column of malformed input."""
-    path = Path(path)
-    data: dict[str, list[list[float]]] = {}
-    with path.open(newline="") as fh:
-        reader = csv.reader(fh)
-        head = [h.strip() for h in next(reader, [])]
-        missing = [c for c in ("time", "anchor", "tension", "moment") if c not in head]
-        if missing:
-            raise ValueError(f"{path}:1: header lacks column(s) {', '.join(missing)}")
-        cols = ["time", "tension", "moment"] + [c for c in ("valid", "Mx", "My", "Mz")
-                                                  if c in head]
-        for row in reader:
-            line, vals = reader.line_num, []
-            if not any(f.strip() for f in row):
-                continue
-            if len(row) != len(head):
-                raise ValueError(f"{path}:{line}: {len(row)} fields, the header has {len(head)}")
-            for c in cols:
-                s = row[head.index(c)].strip()
-                try:
-                    vals.append(float(s) if s else math.nan)
-                except ValueError:
-                    raise ValueError(f"{path}:{line}: column '{c}': not a number: {s!r}") from None
-            if not math.isfinite(vals[0]):
-                raise ValueError(f"{path}:{line}: column 'time': empty or not finite")
-            if "valid" in cols and not (math.isnan(vals[3]) or vals[3] in (0.0, 1.0)):
-                raise ValueError(f"{path}:{line}: column 'valid': must be 0, 1 or empty")
-            name = row[head.index("anchor")].strip()
-            if not name:
-                raise ValueError(f"{path}:{line}: column 'anchor': empty")
-            data.setdefault(name, []).append(vals)
-    if not data:
-        raise ValueError(f"{path}: no data rows")
-    result = {}
-    for name, rows in data.items():
-        a = np.array(rows)
-        if np.any(np.diff(a[:, 0]) <= 0):
-            raise ValueError(f"{path}: times of anchor '{name}' are not strictly increasing")
-        d = {"time": a[:, 0], "tension": a[:, 1], "moment": a[:, 2]}
-        d["valid"] = (np.nan_to_num(a[:, 3]) if "valid" in cols
-                      else np.isfinite(a[:, 2]).astype(float))
-        if {"Mx", "My", "Mz"} <= set(cols):
-            d["moment_vector"] = a[:, [cols.index(c) for c in ("Mx", "My", "Mz")]]
-        result[name] = d
-    return result

@@ -12,68 +12,102 @@ the frequencies (the span turns about H, not about A).
 
 * the anchor node is prescribed at H (the anchor's ``offset`` h c, added to its
   prescribed displacement, so an anchor motion moves the hinge with it);
-* the stress-free length of the element next to the anchor is shortened by ``sigma_h``
-  (its coefficient ``c``, stress-free length per mesh length): the layer's
-  material is not in the string;
+* the stress-free length ``sigma_h`` is taken out of the *region* next to the anchor: the
+  fewest whole elements whose stress-free length K is at least ``sigma_h / REGION_FRACTION``
+  (one element on a coarse mesh, as many as needed on a fine one), each shortened by the same
+  fraction ``sigma_h / K`` (its coefficient ``c``, stress-free length per mesh length). The
+  region's nodes are free: under tension they lie on the far-field line between H and the
+  region's end, which is all the outer problem needs (the layer's shape is the boundary
+  layer's business). The region is kept across the statics iterations (it grows only past
+  GROW x REGION_FRACTION). The anchor force and moment do not depend on how many elements
+  share the cut beyond the elements' O(L^2) (a test checks it from 10 elements to many times
+  finer than the layer);
 * the layer's own weight and inertia, ``m sigma_h (g - a_A)``, are added to the hinge
   force, so that the anchor force is the force at the real anchor
   (:meth:`cablefem.reactions.AnchorForces.compute`); the boundary layer (the anchor moment)
   and the hinge itself are computed from it;
-* statics iterates hinge -> equilibrium -> anchor force -> hinge to a fixed point (the
-  relative change falls by 1e-2 to 1e-3 per iteration on the paper's cases).
+* statics iterates hinge -> equilibrium -> anchor force -> hinge to a fixed point,
+  accelerated (:func:`cablefem.statics._hinge_iterations`).
 
-In dynamics the node stays where statics put it (it moves with the anchor): H moves only at
-second order in a change of Delta, and a prescribed node that jumps with the tension feeds
-velocity jumps into generalised-alpha (tried: the run blew up). The layer itself follows the
-tension T and angle Delta of the first element (:meth:`VirtualHinges.follow`, after every
-step): sigma is set so that the string from the fixed node lies, along the string, on the
-rod's far-field line at the current T and Delta, ``h cos(Delta) - lambda_inf sigma = D_t(T,
-Delta)`` (plus the static state's small mismatch between element tension and anchor force,
-kept constant). The Delta part is first order in the motion: as the span swings, the layer
-gives length, ``d sigma ~ -ell Delta dDelta / 2``, which softens the geometric stiffening of
-a vibrating cable (case A: the steady-state RMS moment moves by 0.8 % towards the rod's).
-The T part, ``sigma_T = d sigma/dT`` (the layer's axial compliance, from D_t ~ T^-1/2), is
-tiny but cannot be lagged: the first element is stiff (EA/L), and EA/L times that compliance
-is ~2.4 in case B, so a sigma updated from the last step's tension blew up within 15 steps.
-It goes into the first element's law instead, linearised about the current tension, as a
-compliance in series (EA' and a stress-free length R, exact at that tension, the layer's mass
-``s1 - R``), so that each step solves the layer's response to its own tension implicitly.
+In dynamics the node stays where statics put it (it moves with the anchor), and so does the
+region: H moves only at second order in a change of Delta, and a prescribed node that jumps
+with the tension feeds velocity jumps into generalised-alpha (tried: the run blew up). The
+layer itself follows the tension T and angle Delta of the first element
+(:meth:`VirtualHinges.follow`, after every step): sigma is set so that the string from the
+fixed node lies, along the string, on the rod's far-field line at the current T and Delta,
+``h cos(Delta) - lambda_inf sigma = D_t(T, Delta)`` (plus the static state's small mismatch
+between element tension and anchor force, kept constant). The Delta part is first order in
+the motion: as the span swings, the layer gives length, ``d sigma ~ -ell Delta dDelta / 2``,
+which softens the geometric stiffening of a vibrating cable. The T part, ``sigma_T = d
+sigma/dT`` (the layer's axial compliance, from D_t ~ T^-1/2), is tiny but cannot be lagged:
+the first element is stiff (EA/L), and EA/L times that compliance is ~2.4 in case B, so a
+sigma updated from the last step's tension blew up within 15 steps. It goes into the
+region's law instead, linearised about the current tension, as a compliance in series
+(each element of stress-free length s gets EA' and a stress-free length R, exact at that
+tension, each element its share p = s/K of the layer; the layer's mass is K - sum R), so
+that each step solves the layer's response to
+its own tension implicitly.
+
+Low tension (the fallback). The layer length grows as T^-1/2 and the series compliance as
+T^-3/2: near a slack phase neither can be followed. Below ``FLOOR`` times the static
+tension of the first element the layer stops following the tension: its law is the one at
+the floor tension (at the current angle), without the compliance. At the floor the two laws
+agree, so nothing jumps. Where the far field does not exist or sigma leaves (0,
+MAX_FRACTION K] (anchor angles near 120 deg and beyond, or a region too short for the
+layer) the layer keeps its last law without the compliance (frozen). Those steps are the
+anchor's *fallback* steps: :meth:`VirtualHinges.fallback` flags them, and the run goes on.
 
 Only the string model has hinges (``solver.outer_correction = "hinge"``); the rod resolves
-its layers itself. A first element shorter than ``sigma_h / MAX_FRACTION`` is refused.
+its layers itself. A hinge that cannot be placed in statics (slack anchor, anchor angle
+above ~120 deg, a layer longer than REGION_FRACTION of half the cable) raises
+:class:`HingeError` (statics makes it an input error naming ``solver.outer_correction``).
 """
 
 from __future__ import annotations
 
 import numpy as np
 from mpi4py import MPI
+from scipy.spatial import cKDTree
 
 from cablefem.asymptotics import far_field_offsets, layer, virtual_hinge
 from cablefem.errors import HingeError
 
-__all__ = ["VirtualHinges", "HingeError", "MAX_FRACTION"]
+__all__ = ["VirtualHinges", "HingeError", "MAX_FRACTION", "REGION_FRACTION", "FLOOR"]
 
-#: Largest fraction of the first element's stress-free length that the hinge may remove.
+#: Largest fraction of the region's stress-free length the layer may take (dynamics).
 MAX_FRACTION = 0.5
+#: In statics the region is chosen so that sigma_h is at most this fraction of it: room for
+#: the layer to grow to twice its length (sigma ~ T^-1/2: a quarter of the tension, FLOOR)
+#: in dynamics before MAX_FRACTION is reached.
+REGION_FRACTION = 0.25
+#: Statics keeps its region while sigma_h stays below GROW x REGION_FRACTION of it (a
+#: region that changed with every iteration would make the fixed point hop).
+GROW = 1.5
+#: Below this fraction of its static tension, a layer no longer follows the tension.
+FLOOR = 0.25
 
 
 class _Hinge:
-    """One clamped anchor's hinge: its cells, their base coefficient, h and sigma_h."""
+    """One clamped anchor's hinge: its region's cells, their base coefficients, h and
+    sigma_h."""
 
-    def __init__(self, index, anc, cells, lengths, c0, first, nodes):
+    def __init__(self, index, anc, s, cells, nodes):
         self.index = index  # position in model.anchors
         self.anchor = anc
-        self.cells = cells  # local cell indices next to the anchor node (owned and ghost)
-        self.lengths = lengths  # their mesh lengths, m
-        self.c0 = c0  # their base stress-free length per mesh length
-        self.first = first  # the first element's stress-free length (all ranks), m
+        self.s = s  # stress-free lengths of the elements from the anchor on (all ranks), m
+        self.cells = cells  # local cell of each of those elements (-1: not on this rank)
         self.nodes = nodes  # first element: (anchor node, other node, X_other - X_anchor)
+        self.n = 0  # elements the layer's length is taken from
+        self.p = np.zeros(0)  # their shares of it
+        self.touched = 0  # elements whose coefficients the hinge has changed
         self.h = 0.0  # the node is at A + h c
-        self.sigma = 0.0  # the layer's stress-free length (the first element's, removed)
+        self.sigma = 0.0  # the layer's stress-free length (taken from the region)
         self.shift = 0.0  # dynamics: sigma - sigma_far at the static state, m
-        self.removed = 0.0  # stress-free length taken from the first element, m
-        self.EA0 = None  # the first element's own EA (set by VirtualHinges)
-        self.last = (np.nan, np.nan)  # dynamics: (T, Delta) the law was last set from
+        self.removed = 0.0  # stress-free length taken from the region, m
+        self.EA0 = 0.0  # the elements' own EA
+        self.T_static = 0.0  # dynamics: the first element's static tension, N
+        self.last = (np.nan, np.nan)  # dynamics: the law's (T, Delta), T < 0: no compliance
+        self.fallback = False  # dynamics: the current law is a fallback (module docs)
 
 
 class VirtualHinges:
@@ -82,35 +116,39 @@ class VirtualHinges:
     def __init__(self, model) -> None:
         self.model = model
         mesh = model.mesh
-        mesh.topology.create_connectivity(0, 1)
-        v2c = mesh.topology.connectivity(0, 1)
+        geo = model.geometry
         x = mesh.geometry.x
         gdofs = mesh.geometry.dofmap
         X = model.V.tabulate_dof_coordinates()
+        n_cells = mesh.topology.index_map(1).size_local + mesh.topology.index_map(1).num_ghosts
+        pts = np.asarray(geo.points, float)
+        n_el = len(pts) - 1
+        # the element of every local cell, by its midpoint (the mesh is the reference)
+        mid = np.array([x[gdofs.links(c)].mean(axis=0) for c in range(n_cells)]).reshape(-1, 3)
+        elem_of = (cKDTree(0.5 * (pts[1:] + pts[:-1])).query(mid)[1] if n_cells
+                   else np.zeros(0, int))
+        cell_of = np.full(n_el, -1, np.int64)
+        cell_of[elem_of] = np.arange(n_cells)
+        s_all = np.abs(np.diff(np.asarray(geo.stations, float)))
         self.items: list[_Hinge] = []
         for i, anc in enumerate(model.anchors):
             if anc.kind != "clamped":
                 continue
-            verts = model._locate_node(anc.node)
-            cells = np.unique(np.concatenate([v2c.links(v) for v in verts])) if verts.size \
-                else np.zeros(0, np.int32)
-            ncell = model.comm.allreduce(int(cells.size), op=MPI.MAX)
-            if ncell > 1:
+            k0 = geo.anchor_nodes.get(anc.name)
+            if k0 not in (0, n_el):
                 raise HingeError(f"anchor {anc.name}: the virtual hinge needs the anchor at "
-                                 f"the end of one cable (it is on {ncell} elements)")
-            lengths = np.array([np.linalg.norm(x[gdofs.links(c)[1]] - x[gdofs.links(c)[0]])
-                                for c in cells])
-            c0 = model.c.x.array[cells].copy()
-            first = model.comm.allreduce(float(np.min(c0 * lengths, initial=np.inf)),
-                                         op=MPI.MIN)
+                                 "the end of one cable")
+            order = np.arange(n_el) if k0 == 0 else np.arange(n_el)[::-1]
+            order = order[:max(1, n_el // 2)]  # a region never reaches past mid-cable
+            cells = cell_of[order]
             nodes = None
-            if cells.size:  # the first element's two nodes, the anchor's first
-                dofs = model.V.dofmap.cell_dofs(cells[0])
+            if cells[0] >= 0:  # the first element's two nodes, the anchor's first
+                dofs = model.V.dofmap.cell_dofs(int(cells[0]))
                 at_anchor = np.linalg.norm(X[dofs] - anc.reference, axis=1)
                 a, b = dofs[np.argmin(at_anchor)], dofs[np.argmax(at_anchor)]
                 nodes = (a, b, X[b] - X[a])  # and the element in the reference geometry
-            hg = _Hinge(i, anc, cells.astype(np.int32), lengths, c0, first, nodes)
-            hg.EA0 = model.EA.x.array[cells].copy()
+            hg = _Hinge(i, anc, s_all[order], cells, nodes)
+            hg.EA0 = float(anc.section.EA)
             self.items.append(hg)
         self.g_vec = np.asarray(model.g_vec, float)
 
@@ -126,42 +164,69 @@ class VirtualHinges:
                 return mass * (self.g_vec - np.asarray(acceleration, float))
         return np.zeros(3)
 
-    def _place(self, hg: _Hinge, forces: np.ndarray) -> tuple[float, float]:
-        sec = hg.anchor.section
-        lay = layer(np.asarray(forces[hg.index][:3], float), hg.anchor.direction, sec.EI,
-                    sec.EA)
-        h, sig = (float(v) for v in virtual_hinge(lay.delta, lay.tension, sec.EI, sec.EA))
-        why = None
-        if not (np.isfinite(h) and np.isfinite(sig)):
-            why = "no layer (slack anchor or anchor angle near 180 deg)"
-        elif sig <= 0.0:
-            why = f"sigma_h = {sig:.3g} m <= 0 (anchor angle above ~120 deg)"
-        elif sig > MAX_FRACTION * hg.first:
-            why = (f"sigma_h = {sig:.3g} m is more than {MAX_FRACTION:g} of the first "
-                   f"element's stress-free length {hg.first:.3g} m")
-        if why is not None:
-            raise HingeError(f"anchor {hg.anchor.name}: cannot place the virtual hinge: "
-                             f"{why}. Use solver.outer_correction = \"none\" (or "
-                             "--outer-correction none), or a coarser mesh near the anchor.")
-        return h, sig
+    # ------------------------------------------------------------------ statics
+    def place(self, forces: np.ndarray) -> np.ndarray:
+        """(n_hinges, 2): h and sigma_h of every hinge from the anchor forces (n_anchors,
+        >= 3) at the real anchors. Raises :class:`HingeError` where a hinge cannot be
+        placed."""
+        out = np.zeros((len(self.items), 2))
+        for k, hg in enumerate(self.items):
+            sec = hg.anchor.section
+            lay = layer(np.asarray(forces[hg.index][:3], float), hg.anchor.direction, sec.EI,
+                        sec.EA)
+            h, sig = (float(v) for v in virtual_hinge(lay.delta, lay.tension, sec.EI,
+                                                      sec.EA))
+            why = None
+            if not (np.isfinite(h) and np.isfinite(sig)):
+                why = "no layer (slack anchor or anchor angle near 180 deg)"
+            elif sig <= 0.0:
+                why = f"sigma_h = {sig:.3g} m <= 0 (anchor angle above ~120 deg)"
+            elif sig > REGION_FRACTION * float(np.sum(hg.s)):
+                why = (f"sigma_h = {sig:.3g} m: the layer is too long for the cable (more "
+                       f"than {REGION_FRACTION:g} of half its length)")
+            if why is not None:
+                raise HingeError(f"anchor {hg.anchor.name}: cannot place the virtual hinge: "
+                                 f"{why}. Use solver.outer_correction = \"none\" (or "
+                                 "--outer-correction none) for the leading order.")
+            out[k] = h, sig
+        return out
 
-    def update(self, forces: np.ndarray) -> float:
-        """Place every hinge from the anchor forces (n_anchors, >= 3) at the real anchors
-        (statics); returns the largest change of h or sigma_h relative to sigma_h (inf the
-        first time). Raises :class:`HingeError` where a hinge cannot be placed."""
-        change = 0.0
-        for hg in self.items:
-            h, sig = self._place(hg, forces)
-            change = max(change, np.inf if hg.sigma == 0.0 else
-                         max(abs(h - hg.h), abs(sig - hg.sigma)) / sig)
-            hg.h, hg.sigma, hg.removed = h, sig, sig
+    def apply(self, z: np.ndarray) -> None:
+        """Put hinges at ``z`` (n_hinges, 2: h, sigma_h) into the model (statics): the node
+        offsets, and sigma_h taken from the elements next to the anchor, each filled to
+        REGION_FRACTION of its stress-free length in turn (a change of sigma_h changes only
+        the last element it reaches: the fixed point's equilibria stay close)."""
+        for hg, (h, sig) in zip(self.items, np.asarray(z, float).reshape(-1, 2)):
+            if not (np.isfinite(h) and np.isfinite(sig) and 0.0 < sig):
+                raise HingeError(f"anchor {hg.anchor.name}: cannot place the virtual hinge "
+                                 f"(h = {h:.3g} m, sigma_h = {sig:.3g} m)")
+            if hg.n == 0 or sig > GROW * REGION_FRACTION * float(np.sum(hg.s[:hg.n])):
+                need = int(np.searchsorted(np.cumsum(hg.s), sig / REGION_FRACTION)) + 1
+                if need > hg.s.size:
+                    raise HingeError(f"anchor {hg.anchor.name}: sigma_h = {sig:.3g} m is more "
+                                     f"than {REGION_FRACTION:g} of half the cable")
+                hg.n = max(hg.n, need)
+            hg.p = hg.s[:hg.n] / float(np.sum(hg.s[:hg.n]))  # the same fraction of each
+            r = np.zeros(hg.s.size)
+            r[:hg.n] = sig * hg.p
+            hg.h, hg.sigma, hg.removed = float(h), float(sig), float(sig)
             hg.anchor.offset = h * hg.anchor.direction
-            if hg.cells.size:
-                self.model.c.x.array[hg.cells] = hg.c0 - sig / hg.lengths
-                self.model.EA.x.array[hg.cells] = hg.EA0
+            touched = max(hg.n, hg.touched)  # cells changed before and now
+            c = hg.cells[:touched]
+            self.model.c.x.array[c[c >= 0]] = (1.0 - r[:touched] / hg.s[:touched])[c >= 0]
+            self.model.EA.x.array[c[c >= 0]] = hg.EA0
+            hg.touched = touched
         self.model.invalidate_time()
-        return change
 
+    def current(self) -> np.ndarray:
+        """(n_hinges, 2): the h and sigma_h in the model."""
+        return np.array([(hg.h, hg.sigma) for hg in self.items], float).reshape(-1, 2)
+
+    def regions(self) -> dict[str, int]:
+        """Per anchor: the number of elements the layer's length is taken from."""
+        return {hg.anchor.name: hg.n for hg in self.items}
+
+    # ------------------------------------------------------------------ dynamics
     def _measure(self, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Tension and anchor angle Delta (between the clamp direction and the first
         element) of every hinge's first element in the displacement ``u`` (a Function's
@@ -174,17 +239,18 @@ class VirtualHinges:
             a, b, E = hg.nodes
             e = E + x[b] - x[a]
             le = float(np.linalg.norm(e))
-            stretch = le / (self.model.c.x.array[hg.cells[0]] * hg.lengths[0])
+            c0 = int(hg.cells[0])
+            stretch = le / (self.model.c.x.array[c0] * float(np.linalg.norm(E)))
             cosd = float(np.dot(hg.anchor.direction, e)) / le
-            local[k] = (self.model.EA.x.array[hg.cells[0]] * (stretch - 1.0),
+            local[k] = (self.model.EA.x.array[c0] * (stretch - 1.0),
                         np.arccos(np.clip(cosd, -1.0, 1.0)), 1.0)
         tot = self.model.comm.allreduce(local, op=MPI.SUM)  # every holder has the same values
         return tot[:, 0] / tot[:, 2], tot[:, 1] / tot[:, 2]
 
     def _sigma_far(self, hg: _Hinge, T: float, delta: float) -> float:
-        """The stress-free length to remove from the first element for the string from the
-        (fixed) node at A + h c to lie on the rod's far-field line at tension T and angle
-        Delta: along the string, ``h cos(Delta) - lambda_inf sigma = D_t(T, Delta)``."""
+        """The stress-free length to remove for the string from the (fixed) node at A + h c
+        to lie on the rod's far-field line at tension T and angle Delta: along the string,
+        ``h cos(Delta) - lambda_inf sigma = D_t(T, Delta)``."""
         sec = hg.anchor.section
         D_t, _ = far_field_offsets(delta, T, sec.EI, sec.EA)
         return float((hg.h * np.cos(delta) - D_t) / (1.0 + T / sec.EA))
@@ -195,48 +261,75 @@ class VirtualHinges:
         T, delta = self._measure(u_static)
         for hg, t_k, d_k in zip(self.items, T, delta):
             hg.shift = hg.sigma - self._sigma_far(hg, t_k, d_k)
+            hg.T_static = float(t_k)
+            hg.last = (float(t_k), float(d_k))
+            hg.fallback = False
 
     def follow(self, u: np.ndarray, t: float) -> None:
         """Dynamics, after a step: let each layer follow the tension T and angle Delta of
         its first element in ``u`` (module docs); the node stays at A + h c.
 
         sigma(T, Delta) = sigma_far(T, Delta) + shift is linearised in T about the current
-        T and put into the first element's law as a compliance in series, so that the
-        next step solves the layer's response to its own tension implicitly: the element
-        of full stress-free length s1 has length (s1 - sigma(T)) (1 + T/EA) = R (1 + T/EA')
-        to first order, with R = s1 - sigma + sigma_T T and EA' = R / ((s1 - sigma)/EA -
-        sigma_T); the layer's mass is s1 - R. Raises :class:`HingeError` when sigma leaves
-        (0, MAX_FRACTION x first element] or the element is slack."""
-        self.set_state(np.column_stack(self._measure(u)), t)
+        T and put into the region's law as a compliance in series, so that the next step
+        solves the layer's response to its own tension implicitly: an element of full
+        stress-free length s and share p, of which p sigma is removed, has length (s - p
+        sigma(T)) (1 + T/EA) = R (1 + T/EA') to first order, with R = s - p (sigma -
+        sigma_T T) and EA' = R / ((s - p sigma)/EA - p sigma_T); the layer's mass is sigma
+        - sigma_T T. Below the floor tension, or where sigma cannot be followed, the
+        fallback of the module docs (never an error)."""
+        T, delta = self._measure(u)
+        for hg, t_k, d_k in zip(self.items, T, delta):
+            floor = FLOOR * hg.T_static
+            state = (float(t_k), float(d_k)) if t_k >= floor else (-floor, float(d_k))
+            if not self._law(hg, state, check=True):
+                state = (-abs(hg.last[0]), hg.last[1])  # frozen: the last law, stiff
+                self._law(hg, state, check=False)
+            hg.fallback = state[0] < 0.0
+
+    def _law(self, hg: _Hinge, state: tuple[float, float], check: bool) -> bool:
+        """Set the region's law from ``state`` = (T, Delta) (T < 0: the law at -T without
+        the compliance); with ``check``, refuse (False, nothing set) a sigma outside (0,
+        MAX_FRACTION K] (K = s/p, the region's length)."""
+        t_k, d_k = state
+        T = abs(t_k)
+        sig = self._sigma_far(hg, T, d_k) + hg.shift
+        sig_T = 0.0
+        if t_k > 0.0:
+            dT = 1e-4 * T
+            sig_T = (self._sigma_far(hg, T + dT, d_k)
+                     - self._sigma_far(hg, T - dT, d_k)) / (2 * dT)
+        p, sl = hg.p, hg.s[:hg.n]
+        if check and not (T > 0.0 and np.isfinite(sig + sig_T)
+                          and 0.0 < sig <= MAX_FRACTION * float(np.min(sl / p))):
+            return False
+        hg.sigma, hg.removed, hg.last = sig, sig - sig_T * T, (float(t_k), float(d_k))
+        c = hg.cells[:hg.n]
+        R = 1.0 - p * (sig - sig_T * T) / sl  # stress-free length per mesh length
+        EA = R / ((1.0 - p * sig / sl) / hg.EA0 - p * sig_T / sl)
+        self.model.c.x.array[c[c >= 0]] = R[c >= 0]
+        self.model.EA.x.array[c[c >= 0]] = EA[c >= 0]
+        return True
 
     def state(self) -> np.ndarray:
-        """(n_hinges, 2): the tension and angle each layer's law was last set from (what a
-        checkpoint must keep: the state alone does not give them back, the tension measured
-        in it depends on the law it was solved with)."""
+        """(n_hinges, 2): the tension and angle each layer's law was last set from (T < 0:
+        a fallback law without compliance), what a checkpoint must keep: the state alone
+        does not give them back, the tension measured in it depends on the law it was
+        solved with."""
         return np.array([hg.last for hg in self.items], float).reshape(-1, 2)
 
     def set_state(self, state: np.ndarray, t: float) -> None:
-        """Set each layer's sigma and its first element's law from a tension and angle
-        (n_hinges, 2); see :meth:`follow`."""
+        """Set each layer's sigma and its region's law from :meth:`state`'s rows."""
         for hg, (t_k, d_k) in zip(self.items, np.asarray(state, float).reshape(-1, 2)):
-            sig = self._sigma_far(hg, t_k, d_k) + hg.shift
-            dT = 1e-4 * t_k
-            sig_T = (self._sigma_far(hg, t_k + dT, d_k)
-                     - self._sigma_far(hg, t_k - dT, d_k)) / (2 * dT)
-            if not (t_k > 0.0 and np.isfinite(sig + sig_T)
-                    and 0.0 < sig <= MAX_FRACTION * hg.first):
-                raise HingeError(f"anchor {hg.anchor.name}: at t = {t:.6g} s the virtual "
-                                 f"hinge's layer length sigma = {sig:.3g} m left (0, "
-                                 f"{MAX_FRACTION * hg.first:.3g}] m (tension {t_k:.3g} N, "
-                                 f"angle {np.degrees(d_k):.3g} deg)")
-            s1 = hg.first  # the full stress-free length of the first element
-            R = s1 - sig + sig_T * t_k
-            hg.sigma, hg.removed, hg.last = sig, s1 - R, (t_k, d_k)
-            if hg.cells.size:
-                self.model.c.x.array[hg.cells] = R / hg.lengths
-                self.model.EA.x.array[hg.cells] = R / ((s1 - sig) / hg.EA0 - sig_T)
+            self._law(hg, (float(t_k), float(d_k)), check=False)
+            hg.fallback = t_k < 0.0
+
+    def fallback(self) -> dict[str, bool]:
+        """Per anchor: True while its layer is in the fallback (module docs), i.e. for the
+        step just solved when read before :meth:`follow`."""
+        return {hg.anchor.name: bool(hg.fallback) for hg in self.items}
 
     def report(self) -> dict[str, dict]:
-        """Per anchor: the hinge distance h along the clamp direction and the stress-free
-        length sigma_h removed (m)."""
-        return {hg.anchor.name: {"h": hg.h, "sigma_h": hg.sigma} for hg in self.items}
+        """Per anchor: the hinge distance h along the clamp direction, the stress-free
+        length sigma_h removed (m) and the number of elements it is taken from."""
+        return {hg.anchor.name: {"h": hg.h, "sigma_h": hg.sigma, "elements": hg.n}
+                for hg in self.items}

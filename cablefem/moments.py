@@ -22,26 +22,21 @@ tension times the unit tangent from the anchor into the span (``docs/post.md``).
 
 from __future__ import annotations
 
-import csv
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 
 from cablefem import asymptotics
+from cablefem.io.anchorcsv import ANCHOR_COLUMNS, MOMENT_COLUMNS
 
-__all__ = ["ANCHOR_COLUMNS", "MOMENT_COLUMNS", "MAX_ANCHOR_ANGLE", "anchor_moments",
-           "read_anchor_forces", "AnchorHistory"]
+__all__ = ["ANCHOR_COLUMNS", "MOMENT_COLUMNS", "MAX_ANCHOR_ANGLE", "anchor_moments"]
 
-ANCHOR_COLUMNS = ["time", "anchor", "Nx", "Ny", "Nz", "tension"]
 #: Largest angle Delta between the clamp direction and the anchor force that the layer
 #: describes. The clamp turns the cable by Delta within the layer; beyond 90 degrees the
 #: cable would leave the clamp backwards, which no taut cable does: such a force has the
 #: wrong sign (the anchor's reaction instead of the span's force) or comes from a
 #: mis-oriented clamp.
 MAX_ANCHOR_ANGLE = np.pi / 2
-MOMENT_COLUMNS = ["delta", "moment", "Mx", "My", "Mz", "psi0", "layer_length",
-                  "moment_layer", "valid"]
 
 
 def anchor_moments(forces: np.ndarray, direction: np.ndarray, EI: float, EA: float,
@@ -84,55 +79,6 @@ def anchor_moments(forces: np.ndarray, direction: np.ndarray, EI: float, EA: flo
             "slack": lay.slack}
 
 
-@dataclass
-class AnchorHistory:
-    """Anchor-force histories read from a CSV: ``forces[name]`` is (n, 3), ``times`` (n,)."""
-
-    times: np.ndarray
-    forces: dict[str, np.ndarray]
-
-
-def read_anchor_forces(path: str | Path) -> AnchorHistory:
-    """Read a long-format CSV with columns ``time, anchor, Nx, Ny, Nz`` (others ignored),
-    one row per time and anchor, as cablefem writes and as other tools can export.
-
-    Raises ``ValueError`` naming the file, line and column on malformed input.
-    """
-    path = Path(path)
-    if not path.is_file():
-        raise ValueError(f"{path}: no such file")
-    rows: dict[str, list[tuple[float, float, float, float]]] = {}
-    with path.open(newline="") as fh:
-        reader = csv.DictReader(fh)
-        need = {"time", "anchor", "Nx", "Ny", "Nz"}
-        if reader.fieldnames is None or not need <= {f.strip() for f in reader.fieldnames}:
-            raise ValueError(f"{path}: header must contain time, anchor, Nx, Ny, Nz "
-                             f"(got {reader.fieldnames})")
-        for lineno, row in enumerate(reader, start=2):
-            row = {k.strip(): (v or "").strip() for k, v in row.items() if k}
-            try:
-                vals = tuple(float(row[k]) for k in ("time", "Nx", "Ny", "Nz"))
-            except ValueError:
-                raise ValueError(f"{path}:{lineno}: time, Nx, Ny, Nz must be numbers") from None
-            if not np.all(np.isfinite(vals)):
-                raise ValueError(f"{path}:{lineno}: non-finite value")
-            rows.setdefault(row["anchor"], []).append(vals)
-    if not rows:
-        raise ValueError(f"{path}: no data rows")
-    times = None
-    forces = {}
-    for name, r in rows.items():
-        a = np.array(r)
-        if np.any(np.diff(a[:, 0]) <= 0):
-            raise ValueError(f"{path}: times of anchor '{name}' are not strictly increasing")
-        if times is None:
-            times = a[:, 0]
-        elif a.shape[0] != times.size or not np.allclose(a[:, 0], times):
-            raise ValueError(f"{path}: anchor '{name}' has other times than the first anchor")
-        forces[name] = a[:, 1:]
-    return AnchorHistory(times, forces)
-
-
 def composite_field(node_s: np.ndarray, r: np.ndarray, a: np.ndarray, EA: float, EI: float,
                     mass: float, load: np.ndarray, stations: np.ndarray,
                     anchor_s: list[float], deltas: np.ndarray, ells: np.ndarray,
@@ -167,3 +113,98 @@ def composite_field(node_s: np.ndarray, r: np.ndarray, a: np.ndarray, EA: float,
     orient = np.array([1.0 if s0 < 0.5 * L else -1.0 for s0 in anchor_s])
     kap = asymptotics.composite_curvature(ks, sig, deltas, ells, normals, orientation=orient)
     return pos, kap
+
+
+@dataclass
+class ClampedAnchor:
+    """What the anchor moments need of one clamped anchor: plain numbers and its motion."""
+
+    name: str
+    index: int  #: the anchor's place in the model's anchor list (the rows of its forces)
+    direction: np.ndarray  #: unit clamp direction into the cable
+    EI: float
+    EA: float
+    mass: float  #: kg/m, of the cable's section at the anchor
+    motion: object = None  #: a :class:`cablefem.motion.Motion` (``acceleration(t)``) or None
+
+    def acceleration(self, times: np.ndarray) -> np.ndarray:
+        """(n, 3) acceleration of the anchor at ``times``, m/s²."""
+        if self.motion is None:
+            return np.zeros((np.size(times), 3))
+        return np.array([np.asarray(self.motion.acceleration(t), float) for t in times]
+                        ).reshape(-1, 3)
+
+
+class AnchorMoments:
+    """The bending moment columns of ``anchors.csv`` (:data:`MOMENT_COLUMNS`) at every
+    clamped anchor of a model, from anchor-force histories: :func:`anchor_moments` with
+    the anchor's section, clamp direction and acceleration, the distributed load at the
+    anchor at each time (the weight plus the case's distributed loads, time-dependent ones
+    included), the cable's length, the highest excitation frequency ``omega`` and the
+    inner solution's ``form``. Pure NumPy: :meth:`from_model` reads what it needs from a
+    model once; the object holds no dolfinx or PETSc object.
+
+    Use::
+
+        moments = AnchorMoments.from_model(model, omega=32.8)
+        cols = moments.compute(times, forces)   # forces (n, n_anchors, 3)
+        cols["p"]["moment"]                     # (n,) N m at clamped anchor "p"
+    """
+
+    def __init__(self, anchors: list[ClampedAnchor], gravity: np.ndarray, length: float,
+                 loads: list[tuple[np.ndarray, object]] = (), omega: float | None = None,
+                 form: str = "exact") -> None:
+        """``gravity``: (3,) acceleration of gravity, m/s²; ``loads``: (value (3,) N/m,
+        time function with ``value(t)``) of each distributed load."""
+        self.anchors = list(anchors)
+        self.gravity = np.asarray(gravity, float)
+        self.length = float(length)
+        self.loads = [(np.asarray(v, float), tf) for v, tf in loads]
+        self.omega, self.form = omega, form
+        self._by_name = {a.name: a for a in self.anchors}
+
+    @classmethod
+    def from_model(cls, model, omega: float | None = None, form: str = "exact"
+                   ) -> AnchorMoments:
+        """The clamped anchors of a model (a string, a network or a rod)."""
+        clamped = [ClampedAnchor(a.name, i, np.asarray(a.direction, float), a.section.EI,
+                                 a.section.EA, a.section.mass, a.motion)
+                   for i, a in enumerate(model.anchors) if a.kind == "clamped"]
+        loads = [(np.asarray(ld.value, float), ld.time) for _, ld in model.loads]
+        return cls(clamped, model.g_vec, model.length, loads, omega, form)
+
+    @property
+    def names(self) -> list[str]:
+        return [a.name for a in self.anchors]
+
+    def load_at(self, t: float, mass: float) -> np.ndarray:
+        """(3,) distributed load per stress-free length at ``t`` on a cable of ``mass``
+        (kg/m), weight included, N/m."""
+        f = mass * self.gravity
+        for value, tf in self.loads:
+            f = f + value * tf.value(t)
+        return f
+
+    def anchor(self, name: str, times: np.ndarray, forces: np.ndarray) -> dict:
+        """The columns of clamped anchor ``name`` (:func:`anchor_moments`'s dict) for its
+        forces (n, 3) at ``times`` (n,)."""
+        a = self._by_name[name]
+        times = np.atleast_1d(np.asarray(times, float))
+        load = np.array([self.load_at(t, a.mass) for t in times]).reshape(-1, 3)
+        return anchor_moments(np.asarray(forces, float)[:, :3], a.direction, a.EI, a.EA,
+                              a.mass, a.acceleration(times), load, self.length, self.omega,
+                              self.form)
+
+    def compute(self, times: np.ndarray, forces) -> dict[str, dict[str, np.ndarray]]:
+        """Columns of every clamped anchor: ``{name: {column: (n,) array}}``. ``forces``:
+        (n, n_anchors, 3) in the model's anchor order (as :func:`cablefem.dynamics.
+        integrate` yields them, stacked), or a dict ``{name: (n, 3)}``."""
+        out = {}
+        for a in self.anchors:
+            N = (forces[a.name] if isinstance(forces, dict)
+                 else np.asarray(forces, float)[:, a.index])
+            out[a.name] = self.anchor(a.name, times, N)
+        return out
+
+
+__all__ += ["AnchorMoments", "ClampedAnchor"]

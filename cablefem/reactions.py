@@ -30,14 +30,36 @@ from cablefem.petsc_utils import (
     lu_options,
 )
 
-__all__ = ["AnchorForces"]
+__all__ = ["AnchorReactions", "AnchorForces"]
 
 
-class AnchorForces:
-    """Computes ``N_a`` for every anchor of a :class:`~cablefem.cable.CableModel`."""
+class AnchorReactions:
+    """The force ``N_a`` the span transmits at every anchor of a model (a
+    :class:`~cablefem.cable.CableModel`, a network or a rod), from the model's current state.
+
+    Holds its PETSc objects (the residual vector, the mass matrices and the KSP of the mass
+    solve, options prefix ``<model prefix>mass_``, e.g. ``-cable_mass_ksp_type``) and
+    preallocated buffers: an evaluation (:meth:`compute`) assembles once, solves once with
+    the mass matrix (dynamics) and sums the anchors' rows over the ranks with one
+    ``Allreduce`` of a NumPy buffer. :meth:`destroy` (or a ``with`` block) frees the PETSc
+    objects.
+
+    Use::
+
+        with AnchorReactions(model) as reactions:
+            N = reactions.compute(t)            # (n_anchors, 3), same on every rank
+            N0 = reactions.compute(0.0, dynamic=False)  # statics: v = a = 0
+    """
 
     def __init__(self, model) -> None:
         self.model = model
+        n_owned = model.V.dofmap.index_map.size_local
+        #: (anchor index, first unrolled row) of the anchors whose node this rank owns
+        self._own = [(i, model.bs * int(anc.dofs[anc.dofs < n_owned][0]))
+                     for i, anc in enumerate(model.anchors)
+                     if np.any(anc.dofs < n_owned)]
+        self._local = np.zeros((len(model.anchors), model.bs))
+        self._global = np.zeros_like(self._local)
         self.R = fpetsc.create_vector(model.f_dynamic)
         self.M = fpetsc.assemble_matrix(model.m_form, model.bcs, diagonal=1.0)
         self.M.assemble()
@@ -98,16 +120,33 @@ class AnchorForces:
             m.a.x.array[:] = 0.0
             self._assemble()
             arr = self.R.array_r
-        n_owned = m.V.dofmap.index_map.size_local
         bs = m.bs
-        local = np.zeros((len(m.anchors), bs))
-        for i, anc in enumerate(m.anchors):
-            own = anc.dofs[anc.dofs < n_owned]
-            if own.size:
-                local[i] = -arr[bs * own[0]: bs * own[0] + bs]
-                if m.hinges:  # the layer's weight and inertia: the force at the real anchor
-                    acc = anc.acceleration(t) if dynamic else np.zeros(3)
-                    local[i, :3] += m.hinges.layer_force(i, acc)
-                if bs == 6:  # a rod: the rotation rows' reaction -> the moment (beam.py)
-                    local[i, 3:] = anc.moment_map @ local[i, 3:]
-        return m.comm.allreduce(local, op=MPI.SUM)
+        local = self._local
+        local[:] = 0.0
+        for i, row in self._own:
+            anc = m.anchors[i]
+            np.negative(arr[row: row + bs], out=local[i])
+            if m.hinges:  # the layer's weight and inertia: the force at the real anchor
+                acc = anc.acceleration(t) if dynamic else np.zeros(3)
+                local[i, :3] += m.hinges.layer_force(i, acc)
+            if bs == 6:  # a rod: the rotation rows' reaction -> the moment (beam.py)
+                local[i, 3:] = anc.moment_map @ local[i, 3:]
+        if m.comm.size == 1:
+            return local.copy()
+        m.comm.Allreduce(local, self._global, op=MPI.SUM)
+        return self._global.copy()  # the caller may keep it: not the buffer itself
+
+    def destroy(self) -> None:
+        """Free the PETSc objects (the object cannot compute afterwards)."""
+        for obj in (self.ksp, self.M, self.M_full, self.R, self.rhs, self.Mda, self.da):
+            obj.destroy()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.destroy()
+
+
+#: the earlier name
+AnchorForces = AnchorReactions

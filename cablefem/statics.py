@@ -8,6 +8,7 @@ is an equilibrium) to their full value, with an adaptive load increment. A netwo
 is its pretensioned mesh, an equilibrium without gravity: there the weight is ramped too.
 
 PETSc options prefix: ``<model prefix>static_`` (default ``cable_static_``).
+:class:`StaticProblem` owns the solver; :func:`solve_static` makes, solves and destroys one.
 """
 
 from __future__ import annotations
@@ -31,10 +32,10 @@ from cablefem.petsc_utils import (
     default_options,
     lu_options,
 )
-from cablefem.reactions import AnchorForces
+from cablefem.reactions import AnchorReactions
 from cablefem.units import unit
 
-__all__ = ["StaticResult", "StaticError", "solve_static"]
+__all__ = ["StaticProblem", "StaticResult", "StaticError", "solve_static"]
 
 log = logging.getLogger(__name__)
 
@@ -50,11 +51,13 @@ class StaticResult:
     wall_time: float
 
 
-def _make_snes(model, history: SNESHistory, bilateral: bool = False
-               ) -> tuple[PETSc.SNES, PETSc.Vec]:
-    prefix = model.prefix + "static_"
-    # absolute tolerance: round-off of the residual grows with the tension (EA v3), so scale
-    # it with the larger of the cable's weight and its catenary tension
+def _make_snes(model, history: SNESHistory, bilateral: bool = False, prefix: str | None = None,
+               petsc_options: dict | None = None) -> tuple[PETSc.SNES, tuple]:
+    """The static SNES of ``model`` and its (residual vector, Jacobian matrix), under
+    ``prefix`` (default ``<model prefix>static_``); the caller destroys all three."""
+    prefix = model.prefix + "static_" if prefix is None else prefix
+    # absolute tolerance: round-off of the residual grows with the tension (EA v3), so
+    # scale it with the larger of the cable's weight and its catenary tension
     defaults = {"snes_type": "newtonls", "snes_linesearch_type": "bt", "snes_max_it": 50,
                 "snes_rtol": 1e-10, "snes_atol": 1e-10 * model.force_scale,
                 "snes_stol": 1e-14,
@@ -77,9 +80,10 @@ def _make_snes(model, history: SNESHistory, bilateral: bool = False
     snes.setFunction(F, b)
     snes.setJacobian(J, A)
     snes.setMonitor(history)
-    with default_options(prefix, defaults, case_options(model, "static")):
+    user = {**case_options(model, "static"), **(petsc_options or {})}
+    with default_options(prefix, defaults, user):
         snes.setFromOptions()
-    return snes, b
+    return snes, (b, A)
 
 
 def _try(snes, x, history) -> tuple[bool, int]:
@@ -88,135 +92,288 @@ def _try(snes, x, history) -> tuple[bool, int]:
     return snes.getConvergedReason() > 0, snes.getIterationNumber()
 
 
-def _hinge_iterations(model, snes, x, history, reaction, forces, tol: float = 1e-9,
-                      max_iterations: int = 30) -> int:
-    """Fixed point hinge -> equilibrium -> anchor forces -> hinge (:mod:`cablefem.hinge`).
+def _hinge_iterations(model, snes, x, history, reaction, forces, tol: float | None = None,
+                      max_iterations: int = 30, depth: int = 3) -> int:
+    """Fixed point hinge -> equilibrium -> anchor forces -> hinge (:mod:`cablefem.hinge`),
+    accelerated (Anderson mixing of depth ``depth`` on the hinges' (h, sigma_h)).
 
-    The hinge depends on the anchor force only through ell ~ T^-1/2 and Delta, and its
-    offset h and removed length sigma_h nearly cancel in the span's tension: the relative
-    change falls by orders of magnitude per iteration. ``forces`` is updated in place to
-    the last equilibrium's; returns the Newton iterations."""
+    The hinge depends on the anchor force only through ell ~ T^-1/2 and Delta; the plain
+    iteration contracts by 1e-2 to 1e-3 per step on a taut cable but only by about a half on
+    a sagging one with horizontal clamps (the hinge moves the sag, the sag the angle).
+    Converged when the anchor forces change by less than ``tol`` (default: Newton's own
+    force tolerance, ``max(atol, rtol |F|)`` of the SNES, times 10: the fixed point is then
+    as exact as the equilibrium inside it) between two equilibria, or (h, sigma_h) by less
+    than 1e-10 of sigma_h (the anchor force is exact to ~1e-10 and sigma_h ~ T^-1/2: the
+    iteration's noise floor; near it the force changes by more than Newton's tolerance,
+    the first element being stiff). ``forces`` is updated in place to the last
+    equilibrium's; returns the Newton iterations. A hinge that cannot be placed is an input
+    problem (:class:`cablefem.errors.CaseError` naming ``solver.outer_correction``)."""
+    from cablefem.errors import CaseError
     from cablefem.hinge import HingeError
 
-    its_total = 0
-    for it in range(1, max_iterations + 1):
+    rtol, atol, _, _ = snes.getTolerances()
+    hinges = model.hinges
+
+    def place(f):
         try:
-            change = model.hinges.update(forces)
+            return hinges.place(f)
         except HingeError as err:
-            raise StaticError(str(err)) from None
+            raise CaseError([("solver.outer_correction", str(err))],
+                            model.case.source) from None
+
+    def apply(z):
+        try:
+            hinges.apply(z)
+        except HingeError as err:
+            raise CaseError([("solver.outer_correction", str(err))],
+                            model.case.source) from None
         model.set_time(0.0)
+
+    bilateral = []  # a SNES with compression allowed, made on first need
+
+    def solve(it):
         ok, its = _try(snes, x, history)
+        if not ok and model.tension_only:
+            # as for the leading order: an element the hinge step leaves slack (H is ~h into
+            # the first element; a cable's strain T/EA can be far smaller) can make the
+            # tension-only Jacobian singular; compression allowed first, then tension-only
+            last.copy(x)
+            if not bilateral:
+                bilateral.append(_make_snes(model, history, bilateral=True)[0])
+            ok2, its2 = _try(bilateral[0], x, history)
+            its += its2
+            if ok2:
+                ok, its3 = _try(snes, x, history)
+                its += its3
+        if not ok and history.norms and history.norms[-1][1] <= 100.0 * atol:
+            ok = True  # stagnated at round-off near Newton's tolerance (a fine mesh)
+            log.info("statics: virtual hinges, iteration %d: Newton stagnated at |F| = "
+                     "%.2e (atol %.2e), accepted", it, history.norms[-1][1], atol)
+        return ok, its
+
+    its_total = 0
+    Z, G = [], []  # iterates and their images
+    z = place(forces)
+    scale = float(z[:, 1].max())  # lengths in units of the first sigma_h (fixed)
+    change_F = change_z = np.inf
+    z_done, last = hinges.current(), x.copy()  # the last hinges with an equilibrium
+    for it in range(1, max_iterations + 1):
+        apply(z)  # sets the region for z (kept by the partial steps below)
+        ok, its = solve(it)
         its_total += its
-        if not ok:
-            raise StaticError(f"static equilibrium with the virtual hinges (iteration {it}) "
-                              f"not found: Newton history {history.text()}")
+        theta, step, z0 = 0.0, 0.5, z_done
+        while not ok:  # continuation from the last equilibrium's hinges towards z
+            if step < 1.0 / 64:
+                raise StaticError(f"static equilibrium with the virtual hinges (iteration "
+                                  f"{it}) not found, also in steps towards them: Newton "
+                                  f"history {history.text()}")
+            last.copy(x)
+            apply(z0 + min(1.0, theta + step) * (z - z0))
+            ok, its = solve(it)
+            its_total += its
+            if ok:
+                x.copy(last)
+                theta = min(1.0, theta + step)
+                step *= 1.5
+                ok = theta >= 1.0
+                if not ok:
+                    continue
+            else:
+                step *= 0.5
+        z_done = hinges.current()
+        x.copy(last)
         copy_in(x, model.u)
+        old = forces.copy()
         forces[:] = reaction.compute(0.0, dynamic=False)
-        log.info("statics: virtual hinges, iteration %d: relative change %.2e, %d Newton "
-                 "iterations", it, change, its)
-        if change < tol:
+        g = place(forces)
+        change_F = float(np.abs(forces - old).max())
+        change_z = float(np.abs(g - z).max() / scale)
+        tol_F = tol if tol is not None else 10.0 * max(atol, rtol * float(np.abs(forces).max()))
+        log.info("statics: virtual hinges, iteration %d: anchor force change %.2e (tolerance "
+                 "%.2e), hinge change %.2e of sigma_h, %d Newton iterations", it, change_F,
+                 tol_F, change_z, its)
+        if it > 1 and (change_F <= tol_F or change_z < 1e-10):
+            for b in bilateral:
+                b.destroy()
             return its_total
+        Z.append(z.ravel() / scale)
+        G.append(g.ravel() / scale)
+        Z, G = Z[-(depth + 1):], G[-(depth + 1):]
+        R = [gg - zz for gg, zz in zip(G, Z)]
+        z_next = G[-1]
+        if len(R) > 1:  # Anderson: the combination of the last images with least residual
+            dR = np.column_stack([R[k + 1] - R[k] for k in range(len(R) - 1)])
+            dG = np.column_stack([G[k + 1] - G[k] for k in range(len(G) - 1)])
+            gamma = np.linalg.lstsq(dR, R[-1], rcond=1e-12)[0]
+            z_next = G[-1] - dG @ gamma
+        z = z_next.reshape(-1, 2) * scale
+        if not (np.all(np.isfinite(z)) and np.all(z[:, 1] > 0)):
+            z = g  # a wild extrapolation: the plain step
+            Z, G = [], []
     raise StaticError(f"the virtual-hinge iteration did not converge in {max_iterations} "
-                      f"iterations (last relative change {change:.2e})")
+                      f"iterations (last anchor force change {change_F:.2e} N, hinge change "
+                      f"{change_z:.2e} of sigma_h)")
+
+
+class StaticProblem:
+    """The static equilibrium of a model as an object that owns its PETSc solvers.
+
+    Creates the SNES (``.snes``, Newton with a backtracking line search), its residual
+    vector and Jacobian matrix, under the options prefix ``petsc_options_prefix`` (default
+    ``<model prefix>static_``, i.e. ``cable_static_``: ``-cable_static_snes_max_it``,
+    ``-cable_static_ksp_type``, ...). The options come, from lowest to highest priority,
+    from the built-in defaults, the case file's ``solver.petsc_options`` (keys starting
+    with ``static_``), ``petsc_options`` (a dict, keys without the prefix) and the options
+    database (the command line). The tension-only model's fallback with compression
+    allowed gets a second SNES with the same prefix, made when first needed.
+
+    :meth:`solve` finds the equilibrium (it may be called again, e.g. after changing a
+    load) and leaves it in ``model.u`` and ``model.u_static``; :meth:`destroy` frees the
+    PETSc objects (also at the end of a ``with`` block)::
+
+        with StaticProblem(model, petsc_options={"snes_monitor": None}) as problem:
+            result = problem.solve()
+    """
+
+    def __init__(self, model, *, petsc_options_prefix: str | None = None,
+                 petsc_options: dict | None = None, max_continuation_steps: int = 200):
+        self.model = model
+        self.prefix = (model.prefix + "static_" if petsc_options_prefix is None
+                       else petsc_options_prefix)
+        self.petsc_options = dict(petsc_options or {})
+        self.max_continuation_steps = max_continuation_steps
+        self.history = SNESHistory()
+        self.snes, self._work = self._make_snes(bilateral=False)
+        self.bilateral_snes: PETSc.SNES | None = None
+        self._bilateral_work: tuple = ()
+        self.reactions: AnchorReactions | None = None
+
+    def _make_snes(self, bilateral: bool) -> tuple[PETSc.SNES, tuple]:
+        return _make_snes(self.model, self.history, bilateral, self.prefix,
+                          self.petsc_options)
+
+    def solve(self) -> StaticResult:
+        """Solve the static equilibrium of the model from its initial guess; leaves it in
+        ``model.u`` and ``model.u_static``. Raises :class:`StaticError`."""
+        model, history, snes = self.model, self.history, self.snes
+        max_continuation_steps = self.max_continuation_steps
+        t_start = time.perf_counter()
+        model.set_time(0.0)
+        guess = model.initial_guess()
+        model.scatter_nodal(guess, model.u)
+        x = model.u.vector.copy()
+        model.load_factor.value = 1.0
+        total_its, steps = 0, 0
+        stages = getattr(model, "static_stages", None)  # a rod: soft-shear pre-solves
+        if stages is not None:
+            last = x.copy()
+            for label in stages():
+                ok, its = _try(snes, x, history)
+                total_its += its
+                if ok:
+                    x.copy(last)
+                    log.info("statics: pre-solve with %s converged in %d iterations", label,
+                             its)
+                else:
+                    last.copy(x)
+                    log.info("statics: pre-solve with %s failed (%s)", label, history.text())
+        ok, its = _try(snes, x, history)
+        total_its += its
+        if not ok and model.tension_only:
+            # every element slack on the guess (e.g. a coarse mesh of a stiff cable: the
+            # chords of the sampled catenary are shorter than the elements): compression
+            # allowed first
+            log.info("statics: tension-only Newton failed from the catenary (%s); solving "
+                     "with compression allowed first", history.text())
+            if self.bilateral_snes is None:
+                self.bilateral_snes, self._bilateral_work = self._make_snes(bilateral=True)
+            model.scatter_nodal(guess, model.u)
+            x = model.u.vector.copy()
+            ok, its = _try(self.bilateral_snes, x, history)
+            total_its += its
+            if ok:
+                ok, its = _try(snes, x, history)
+                total_its += its
+        if not ok:
+            log.info("statics: Newton failed from the catenary (%s); load continuation",
+                     history.text())
+            # what load_factor scales: the extra loads, and for a network the weight as well
+            has_extra = bool(model.case.point_masses or model.case.point_loads
+                             or model.case.loads or model.ramp_weight)
+            if not has_extra:
+                raise StaticError(
+                    "static equilibrium not found: Newton failed from the elastic catenary "
+                    f"and there is no extra load to ramp. Newton history: {history.text()}. "
+                    "Check the geometry (a weightless or very slack cable has no unique "
+                    "equilibrium) or set solver.petsc_options.")
+            model.scatter_nodal(guess, model.u)
+            x = model.u.vector.copy()
+            lam, dlam = 0.0, 0.25
+            last = x.copy()
+            while lam < 1.0:
+                if steps >= max_continuation_steps or dlam < 1e-6:
+                    raise StaticError(
+                        f"load continuation stalled at load factor {lam:.4g} (increment "
+                        f"{dlam:.2e}); last Newton history: {history.text()}")
+                trial = min(1.0, lam + dlam)
+                model.load_factor.value = trial
+                x.copy(last)
+                ok, its = _try(snes, x, history)
+                total_its += its
+                steps += 1
+                if ok:
+                    lam = trial
+                    dlam *= 1.5
+                    log.info("statics: load factor %.4g converged in %d iterations", lam, its)
+                else:
+                    last.copy(x)  # back to the last converged state
+                    dlam *= 0.5
+            model.load_factor.value = 1.0
+        copy_in(x, model.u)
+        if not np.all(np.isfinite(model.u.x.array)):
+            raise StaticError("static solution contains NaN/inf")
+        model.v.x.array[:] = 0.0
+        if self.reactions is None:
+            self.reactions = AnchorReactions(model)
+        reaction = self.reactions
+        forces = reaction.compute(0.0, dynamic=False)
+        if model.hinges:
+            total_its += _hinge_iterations(model, snes, x, history, reaction, forces)
+        model.u_static.x.array[:] = model.u.x.array
+        T = model.tension_field()
+        n_owned = model.mesh.topology.index_map(1).size_local
+        tmax = model.comm.allreduce(float(np.max(T.x.array[:n_owned], initial=-np.inf)),
+                                    op=MPI.MAX)
+        tmin = model.comm.allreduce(float(np.min(T.x.array[:n_owned], initial=np.inf)),
+                                    op=MPI.MIN)
+        slack = model.slack_elements()
+        if slack:
+            log.warning("statics: %d slack element(s) carry no tension", slack)
+        res = StaticResult(forces, total_its, steps, slack, tmax, tmin,
+                           time.perf_counter() - t_start)
+        log.info("statics: converged in %d Newton iterations (%d continuation steps), "
+                 "tension %.6g..%.6g %s, %.2f s", total_its, steps, tmin, tmax,
+                 unit(model.case.units, "force"), res.wall_time)
+        return res
+
+    def destroy(self) -> None:
+        """Free the PETSc objects (SNES, matrices, vectors, the reactions' solver)."""
+        for obj in (self.snes, *self._work, self.bilateral_snes, *self._bilateral_work):
+            if obj is not None:
+                obj.destroy()
+        if self.reactions is not None:
+            self.reactions.destroy()
+            self.reactions = None
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.destroy()
 
 
 def solve_static(model, max_continuation_steps: int = 200) -> StaticResult:
     """Solve the static equilibrium of ``model``; leaves it in ``model.u`` and
-    ``model.u_static``."""
-    t_start = time.perf_counter()
-    history = SNESHistory()
-    snes, _ = _make_snes(model, history)
-    model.set_time(0.0)
-    guess = model.initial_guess()
-    model.scatter_nodal(guess, model.u)
-    x = model.u.vector.copy()
-    model.load_factor.value = 1.0
-    total_its, steps = 0, 0
-    stages = getattr(model, "static_stages", None)  # a rod: soft-shear pre-solves
-    if stages is not None:
-        last = x.copy()
-        for label in stages():
-            ok, its = _try(snes, x, history)
-            total_its += its
-            if ok:
-                x.copy(last)
-                log.info("statics: pre-solve with %s converged in %d iterations", label, its)
-            else:
-                last.copy(x)
-                log.info("statics: pre-solve with %s failed (%s)", label, history.text())
-    ok, its = _try(snes, x, history)
-    total_its += its
-    if not ok and model.tension_only:
-        # every element slack on the guess (e.g. a coarse mesh of a stiff cable: the chords
-        # of the sampled catenary are shorter than the elements): compression allowed first
-        log.info("statics: tension-only Newton failed from the catenary (%s); solving with "
-                 "compression allowed first", history.text())
-        bsnes, _ = _make_snes(model, history, bilateral=True)
-        model.scatter_nodal(guess, model.u)
-        x = model.u.vector.copy()
-        ok, its = _try(bsnes, x, history)
-        total_its += its
-        bsnes.destroy()
-        if ok:
-            ok, its = _try(snes, x, history)
-            total_its += its
-    if not ok:
-        log.info("statics: Newton failed from the catenary (%s); load continuation",
-                 history.text())
-        # what load_factor scales: the extra loads, and for a network the weight as well
-        has_extra = bool(model.case.point_masses or model.case.point_loads or model.case.loads
-                         or model.ramp_weight)
-        if not has_extra:
-            raise StaticError(
-                "static equilibrium not found: Newton failed from the elastic catenary and "
-                f"there is no extra load to ramp. Newton history: {history.text()}. "
-                "Check the geometry (a weightless or very slack cable has no unique "
-                "equilibrium) or set solver.petsc_options.")
-        model.scatter_nodal(guess, model.u)
-        x = model.u.vector.copy()
-        lam, dlam = 0.0, 0.25
-        last = x.copy()
-        while lam < 1.0:
-            if steps >= max_continuation_steps or dlam < 1e-6:
-                raise StaticError(
-                    f"load continuation stalled at load factor {lam:.4g} (increment "
-                    f"{dlam:.2e}); last Newton history: {history.text()}")
-            trial = min(1.0, lam + dlam)
-            model.load_factor.value = trial
-            x.copy(last)
-            ok, its = _try(snes, x, history)
-            total_its += its
-            steps += 1
-            if ok:
-                lam = trial
-                dlam *= 1.5
-                log.info("statics: load factor %.4g converged in %d iterations", lam, its)
-            else:
-                last.copy(x)  # back to the last converged state
-                dlam *= 0.5
-        model.load_factor.value = 1.0
-    copy_in(x, model.u)
-    if not np.all(np.isfinite(model.u.x.array)):
-        raise StaticError("static solution contains NaN/inf")
-    model.v.x.array[:] = 0.0
-    reaction = AnchorForces(model)
-    forces = reaction.compute(0.0, dynamic=False)
-    if model.hinges:
-        total_its += _hinge_iterations(model, snes, x, history, reaction, forces)
-    model.u_static.x.array[:] = model.u.x.array
-    T = model.tension_field()
-    n_owned = model.mesh.topology.index_map(1).size_local
-    tmax = model.comm.allreduce(float(np.max(T.x.array[:n_owned], initial=-np.inf)),
-                                op=MPI.MAX)
-    tmin = model.comm.allreduce(float(np.min(T.x.array[:n_owned], initial=np.inf)),
-                                op=MPI.MIN)
-    slack = model.slack_elements()
-    if slack:
-        log.warning("statics: %d slack element(s) carry no tension", slack)
-    res = StaticResult(forces, total_its, steps, slack, tmax, tmin,
-                       time.perf_counter() - t_start)
-    log.info("statics: converged in %d Newton iterations (%d continuation steps), "
-             "tension %.6g..%.6g %s, %.2f s", total_its, steps, tmin, tmax,
-             unit(model.case.units, "force"), res.wall_time)
-    snes.destroy()
-    return res
+    ``model.u_static`` (a :class:`StaticProblem` made, solved and destroyed)."""
+    with StaticProblem(model, max_continuation_steps=max_continuation_steps) as problem:
+        return problem.solve()

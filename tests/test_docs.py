@@ -1,8 +1,11 @@
-"""The README's case-key table is the code's own reference (docs that match the code); the
-repository documents itself (no reference outside it, docs/theory.md citations resolve)."""
+"""The documentation matches the code: the case-key tables of docs/case-file.md are the
+code's own reference, the paper's cases' static numbers quoted in docs/verification.md and
+the README are what a run gives, every relative link resolves; the repository documents
+itself (no reference outside it, docs/theory.md citations resolve)."""
 
 import re
 import subprocess
+from decimal import Decimal
 from pathlib import Path
 
 import pytest
@@ -11,11 +14,11 @@ from cablefem.case import format_case_reference
 
 
 @pytest.mark.parametrize("marker,network", [("case-keys", False), ("network-keys", True)])
-def test_readme_case_keys_current(marker, network):
-    text = (Path(__file__).resolve().parents[1] / "README.md").read_text()
+def test_case_file_keys_current(marker, network):
+    text = (Path(__file__).resolve().parents[1] / "docs" / "case-file.md").read_text()
     block = text.split(f"<!-- {marker}:start -->")[1].split(f"<!-- {marker}:end -->")[0]
     assert block.strip() == format_case_reference(markdown=True, network=network).strip(), (
-        "README.md is out of date: run .venv/bin/python .ci/readme_keys.py")
+        "docs/case-file.md is out of date: run .venv/bin/python .ci/case_keys.py")
 
 
 # ------------------------------------------------- the repository documents itself
@@ -86,3 +89,96 @@ def test_no_reference_outside_the_repository():
                             for n, k in want_steps if (n, k) not in steps]
     assert cited > 30, f"only {cited} citations of docs/theory.md found: parser broken?"
     assert not missing, "citations of docs/theory.md without a heading:\n" + "\n".join(missing)
+
+
+# ------------------------------------------------------ every relative link resolves
+LINK = re.compile(r"\[[^\]]*\]\(([^)\s]+)\)")
+
+
+def test_relative_links_resolve():
+    """Every relative link [text](target) in README.md and docs/*.md names a file of the
+    repository (the #anchor part is not checked), so a reader never lands on nothing."""
+    pages = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
+    links, broken = 0, []
+    for page in pages:
+        text = page.read_text(encoding="utf-8")
+        for m in LINK.finditer(text):
+            target = m[1].split("#", 1)[0]
+            if not target or re.match(r"[a-z]+:", target):  # in-page anchor, URL
+                continue
+            links += 1
+            if not (page.parent / target).exists():
+                line = text.count("\n", 0, m.start()) + 1
+                broken.append(f"{page.relative_to(ROOT)}:{line}: {m[1]}")
+    assert links > 40, f"only {links} relative links found: parser broken?"
+    assert not broken, "links to missing files:\n" + "\n".join(broken)
+
+
+# ------------------------------- the paper's cases: the numbers the documentation quotes
+def _cells(text: str, row_start: str) -> list[str]:
+    """The cells after the first of a markdown table row that starts with row_start."""
+    line = next(ln for ln in text.splitlines() if ln.startswith("| " + row_start))
+    return [c.strip() for c in line.strip().strip("|").split("|")][1:]
+
+
+def _numbers(cell: str) -> list[str]:
+    return re.findall(r"[-+]?\d+\.\d+(?:e[-+]?\d+)?", cell)
+
+
+def _quoted(text: str, value: float) -> bool:
+    """text is value rounded to the digits it shows (one unit of its last digit: a value
+    next to a rounding boundary may round either way on another machine's BLAS)."""
+    ulp = float(Decimal(1).scaleb(Decimal(text).as_tuple().exponent))
+    return abs(float(text) - value) <= ulp
+
+
+@pytest.fixture(scope="module")
+def paper_statics(tmp_path_factory):
+    from mpi4py import MPI
+
+    from cablefem.app.run import run_case
+    from cablefem.case import load_case
+    from cablefem.verify import closed_form_anchor_moments
+
+    out = {}
+    for name in ("paper_inplane", "paper_spatial"):
+        case = load_case(ROOT / "demos" / f"{name}.toml")
+        folder = MPI.COMM_WORLD.bcast(str(tmp_path_factory.mktemp(name)), root=0)
+        s = run_case(case, folder, dynamics=False, figures=False, progress=False).summary
+        sym = "symmetric" if name == "paper_inplane" else "antisymmetric"
+        out[name] = dict(s["anchors"]["p"], closed_form=closed_form_anchor_moments(case)["p"][
+            "moment"], omega=next(m["omega"] for m in s["modes"] if m["plane"] == "in-plane"
+                                   and m["symmetry"] == sym))
+    return out
+
+
+def test_paper_numbers_quoted_are_computed(paper_statics):
+    """docs/verification.md's table of the paper's two cases (and the README's short one)
+    quote the static anchor tension, angle, layer length, moment (and the layer's part), the
+    closed form with the exact catenary, the FE's relative difference to it and the string's
+    own frequency: each is what a static run of demos/paper_*.toml gives, to the digits
+    shown."""
+    ver = (ROOT / "docs" / "verification.md").read_text(encoding="utf-8")
+    readme = (ROOT / "README.md").read_text(encoding="utf-8")
+    rows = {"tension": _cells(ver, "static tension at the anchors"),
+            "angle": _cells(ver, "static anchor angle"),
+            "moment": _cells(ver, "static anchor moment `M_p"),
+            "closed": _cells(ver, "closed form with the exact catenary"),
+            "omega": _cells(ver, "string's own frequency"),
+            "readme": _cells(readme, "static anchor moment (FE string")}
+    bad = []
+    for k, name in enumerate(("paper_inplane", "paper_spatial")):
+        r = paper_statics[name]
+        want = {"tension": [r["static_tension"]],
+                "angle": [r["static_delta"], r["layer_length"]],
+                "moment": [r["static_moment"], r["static_moment_layer"]],
+                "closed": [r["closed_form"], r["static_moment"] / r["closed_form"] - 1],
+                "omega": [r["omega"]],
+                "readme": [r["static_moment"], r["closed_form"]]}
+        for row, values in want.items():
+            quoted = _numbers(rows[row][k])[:len(values)]
+            if len(quoted) != len(values):
+                bad.append(f"{row}, {name}: cannot read {rows[row][k]!r}")
+            bad += [f"{row}, {name}: quoted {q}, computed {v:.6g}"
+                    for q, v in zip(quoted, values) if not _quoted(q, v)]
+    assert not bad, "numbers in the documentation that a run does not give:\n" + "\n".join(bad)

@@ -69,8 +69,8 @@ def test_second_order_in_time(rho_inf):
     assert observed_order(dts, np.array(errs)) > 1.8, errs
 
 
-@pytest.mark.parametrize("model", ["rayleigh", "rayleigh_k0"])
-def test_rayleigh_damping_ratio(model):
+@pytest.mark.parametrize("damping_model", ["rayleigh", "rayleigh_k0"])
+def test_rayleigh_damping_ratio(damping_model):
     """Rayleigh damping alpha M + beta K with zeta = 2 % at omega_1 and omega_3 (discrete),
     K the current tangent ('rayleigh') or the static one ('rayleigh_k0'): at small amplitude
     (1e-3 of the length, tension change O(1e-6)) both hold the same geometric stiffness, so
@@ -85,7 +85,7 @@ def test_rayleigh_damping_ratio(model):
     ts, ys = [], []
     for t, model, _ in free_vibration(
             n=n, dt=dt, t_end=4 * 2 * np.pi / w1,
-            damping={"model": model, "ratio": zeta, "frequencies": [w1, w3]}):
+            damping={"model": damping_model, "ratio": zeta, "frequencies": [w1, w3]}):
         ts.append(t)
         ys.append(node_value(model, model.u, n // 2, 1))
     ts, ys = np.array(ts), np.array(ys)
@@ -124,8 +124,9 @@ def test_reactions_balance_momentum(make_case):
 
 def test_failure_is_reported_and_output_kept(mpi_tmp_path):
     """A Newton solve that cannot converge (1 iteration allowed and an unreachable
-    tolerance, at every cut of the step) stops the run with a message naming the time and the Newton history; anchors.csv keeps
-    the rows computed so far and summary.json says 'failed'."""
+    tolerance, at every cut of the step) stops the run with a message naming the time and
+    the Newton history; anchors.csv keeps the rows computed so far and summary.json says
+    'failed'."""
     d = level_case(motion={"type": "harmonic", "amplitude": [2e-4, 0, 0], "omega": 32.814,
                            "ramp": 0.0},  # case A's motion from t = 0: Newton fails at once
                    dynamics={"t_end": 1.0, "dt": 0.005},

@@ -18,7 +18,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from cablefem import fatigue as fat
-from cablefem.moments import ANCHOR_COLUMNS, MOMENT_COLUMNS
+from cablefem.io.anchorcsv import ANCHOR_COLUMNS, MOMENT_COLUMNS, read_moments
 
 DS_C = 100.0
 DS_D = DS_C * 0.4 ** (1 / 3)  # (2e6/5e6)^(1/3) ds_C
@@ -369,7 +369,7 @@ def test_read_anchor_csv(tmp_path):
                  "0.0,q,-1,0,0,26.0,,,,,,,,,0\n"
                  "0.5,p,1,0,0,25.5,0.02,0.003,0,0.003,0,3.14,0.004,0.003,1\n"
                  "0.5,q,-1,0,0,26.5,,,,,,,,,0\n")
-    d = fat.read_anchor_csv(p)
+    d = read_moments(p)
     assert d["p"]["time"].tolist() == [0.0, 0.5] and d["p"]["moment"].tolist() == [0.002, 0.003]
     assert d["p"]["moment_vector"].tolist() == [[0, 0.002, 0], [0, 0.003, 0]]
     assert np.isnan(d["q"]["moment"]).all() and d["q"]["valid"].tolist() == [0, 0]
@@ -387,11 +387,11 @@ def test_read_anchor_csv_errors(tmp_path, row, match):
     p.write_text(HEADER + "\n0.0,p,1,0,0,25,0.02,0.002,0,0.002,0,3.14,0.004,0.002,1\n"
                  + row + "\n")
     with pytest.raises(ValueError, match=match) as e:
-        fat.read_anchor_csv(p)
+        read_moments(p)
     assert str(p) in str(e.value)
     p.write_text("time,anchor,Nx\n0,p,1\n")
     with pytest.raises(ValueError, match="lacks column.*tension, moment"):
-        fat.read_anchor_csv(p)
+        read_moments(p)
 
 
 # ------------------------------------------------------------------ properties

@@ -41,7 +41,8 @@ def test_series_resumed_and_partitioned(mpi_tmp_path, make_case):
         one = run_case(case, mpi_tmp_path / "one", MPI.COMM_SELF, **kw)
         assert one.summary["status"] == "completed"
         for name in ("string.xdmf", "moments.xdmf"):
-            a, b = read_series(mpi_tmp_path / "resumed" / name), read_series(mpi_tmp_path / "ref" / name)
+            a = read_series(mpi_tmp_path / "resumed" / name)
+            b = read_series(mpi_tmp_path / "ref" / name)
             c = read_series(mpi_tmp_path / "one" / name)
             assert [t for t, _ in a] == [t for t, _ in b] == [t for t, _ in c]
             assert len(a) == 1 + 60 // 4  # t = 0 and every 4th of 60 steps

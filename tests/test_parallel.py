@@ -25,8 +25,8 @@ def _history(case, comm):
 def test_parallel_equals_serial(make_case):
     """Static anchor forces, frequencies and a 60-step anchor-force history of case A
     (anchor q moving) agree between the partitioned and the serial run to 1e-9 relative:
-    both solve the same equations with direct solvers (PETSc LU on every rank vs PETSc LU) and Newton
-    tolerances of 1e-9 to 1e-10, so they differ by round-off amplified by the solver
+    both solve the same equations with direct solvers (PETSc LU on every rank vs PETSc LU)
+    and Newton tolerances of 1e-9 to 1e-10, so they differ by round-off amplified by the solver
     tolerance, not by a discretisation error."""
     case = make_case(motion={"type": "harmonic", "amplitude": [2e-4, 0, 0], "omega": 32.814},
                      damping={"ratio": 0.005, "frequencies": [16.407, 32.814]})

@@ -8,9 +8,10 @@ have in common, so that both use the same window), and the relative differences
 ``(b - a) / a``; the history error ``RMS(|M|_b - |M|_a) / RMS(|M|_a)``, the pointwise
 difference of the two histories over the same window (:func:`history_error`); also the first
 natural frequency and the wall times (ratio ``b / a``). Warns (log and ``warnings`` in
-``compare.json``) when a run's first output row is not its static state (:func:`start_warnings`):
-such a run did not start clean. Writes ``compare.json``, ``compare.md`` and ``compare_<anchor>.png`` (default: into
-``DIR_B``). No dolfinx objects: rank 0 reads, computes and writes; every rank gets the
+``compare.json``) when a run's first output row is not its static state
+(:func:`start_warnings`): such a run did not start clean. Writes ``compare.json``,
+``compare.md`` and ``compare_<anchor>.png`` (default: into ``DIR_B``). No dolfinx objects:
+rank 0 reads, computes and writes; every rank gets the
 result (and the same ValueError on bad input).
 """
 
@@ -28,7 +29,7 @@ from mpi4py import MPI
 from cablefem import __version__
 from cablefem.app.plots import MAX_PANELS
 from cablefem.app.run import steady_state_stats
-from cablefem.fatigue import read_anchor_csv
+from cablefem.io.anchorcsv import read_moments
 from cablefem.io.series import jsonable, write_json
 
 __all__ = ["compare_runs", "format_table", "history_error", "start_warnings", "FRACTION",
@@ -96,12 +97,7 @@ def _read_run(folder: Path) -> dict:
     if model not in ("string", "beam"):
         raise ValueError(f"{path}: 'model' must be 'string' or 'beam', got {model!r}")
     csv_path = folder / "anchors.csv"
-    if not csv_path.is_file():
-        raise ValueError(f"{csv_path}: no such file")
-    try:
-        data = read_anchor_csv(csv_path)
-    except UnicodeDecodeError:
-        raise ValueError(f"{csv_path}: not a text file") from None
+    data = read_moments(csv_path)  # ValueError: no such file, not a text file, file:line
     unknown = sorted(set(data) - set(anchors))
     if unknown:
         raise ValueError(f"{csv_path}: anchors {unknown} are not in {path} "

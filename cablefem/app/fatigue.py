@@ -17,7 +17,8 @@ import numpy as np
 from mpi4py import MPI
 
 from cablefem.case import Case, CaseError, startup_time
-from cablefem.fatigue import SNCurve, StressSection, fatigue_report, read_anchor_csv, write_report
+from cablefem.fatigue import SNCurve, StressSection, fatigue_report, write_report
+from cablefem.io.anchorcsv import read_moments
 from cablefem.units import unit
 
 __all__ = ["run_fatigue"]
@@ -97,7 +98,7 @@ def run_fatigue(case: Case, rundir: Path, outdir: Path | None = None, *,
         try:
             curve = SNCurve(spec.detail_category, spec.m1, spec.m2, spec.knee, spec.N_C,
                             spec.N_knee, spec.N_cutoff)
-            data = read_anchor_csv(Path(rundir) / "anchors.csv")
+            data = read_moments(Path(rundir) / "anchors.csv")
             groups = {a.name for a in case.anchors if a.kind == "clamped"}
             if case.network is None:
                 clamped = sorted(groups)

@@ -20,14 +20,9 @@ from cablefem.app.plots import anchor_figures
 from cablefem.app.run import _max_excitation, steady_state_stats
 from cablefem.case import Case
 from cablefem.description import stress_free_length
-from cablefem.io.series import AnchorCSV, write_json
-from cablefem.moments import (
-    ANCHOR_COLUMNS,
-    MAX_ANCHOR_ANGLE,
-    MOMENT_COLUMNS,
-    anchor_moments,
-    read_anchor_forces,
-)
+from cablefem.io.anchorcsv import ANCHOR_COLUMNS, MOMENT_COLUMNS, AnchorCSV, read_forces
+from cablefem.io.series import write_json
+from cablefem.moments import MAX_ANCHOR_ANGLE, anchor_moments
 
 __all__ = ["run_post", "case_length"]
 
@@ -59,7 +54,7 @@ def run_post(case: Case, forces_csv: Path, outdir: Path, form: str = "exact",
     if case.network is not None:
         raise ValueError(f"{case.source}: 'cablefem post' takes single-cable cases; for a "
                          "network, its anchor forces come from 'cablefem run'")
-    hist = read_anchor_forces(forces_csv)
+    hist = read_forces(forces_csv)
     if sign == "anchor":
         hist.forces = {k: -v for k, v in hist.forces.items()}
     names = [a.name for a in case.anchors]
@@ -111,16 +106,16 @@ def run_post(case: Case, forces_csv: Path, outdir: Path, form: str = "exact",
         for r, c in zip(reasons, counts):
             log.warning("anchor %s: %d of %d rows invalid: %s", a.name, c, times.size, r)
     cols = ANCHOR_COLUMNS + MOMENT_COLUMNS
+    names = list(hist.forces)
+    N = np.stack([hist.forces[n] for n in names], axis=1)  # (time, anchor, 3): row order
+    table = {"time": np.repeat(times, len(names)), "anchor": names * times.size,
+             "Nx": N[..., 0].ravel(), "Ny": N[..., 1].ravel(), "Nz": N[..., 2].ravel(),
+             "tension": np.linalg.norm(N, axis=2).ravel()}
+    for k in MOMENT_COLUMNS:  # empty at anchors without moments
+        table[k] = np.column_stack([moments[n][k] if n in moments else
+                                    np.full(times.size, np.nan) for n in names]).ravel()
     with AnchorCSV(outdir / "anchors.csv", cols, comm) as out:
-        rows = []
-        for i, t in enumerate(times):
-            for name, N in hist.forces.items():
-                row = {"time": t, "anchor": name, "Nx": N[i, 0], "Ny": N[i, 1],
-                       "Nz": N[i, 2], "tension": float(np.linalg.norm(N[i]))}
-                if name in moments:
-                    row.update({k: moments[name][k][i] for k in MOMENT_COLUMNS})
-                rows.append(row)
-        out.write(rows)
+        out.write(table)
     figs = (anchor_figures(outdir, times, moments, comm, units=case.units)
             if moments and times.size > 1 else [])
     summary = {"cablefem": __version__, "status": "completed", "command": "post",

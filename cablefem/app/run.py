@@ -22,10 +22,11 @@ from cablefem.cable import CableModel
 from cablefem.case import Case, CaseError, check_table_ends
 from cablefem.dynamics import DynamicsError, DynamicsStats, Interrupted, integrate
 from cablefem.errors import RunError, RunInterrupted
-from cablefem.io.checkpoint import case_digest, read_checkpoint, truncate_csv, write_checkpoint
+from cablefem.io import anchorcsv
+from cablefem.io.anchorcsv import FORCE_COLUMNS, AnchorCSV
+from cablefem.io.checkpoint import case_digest, read_checkpoint, write_checkpoint
 from cablefem.io.faults import kill_point
 from cablefem.io.series import (
-    AnchorCSV,
     MomentsWriter,
     OutputError,
     StringWriter,
@@ -36,9 +37,9 @@ from cablefem.io.series import (
 )
 from cablefem.modal import free_dofs, solve_modes
 from cablefem.moments import (
-    ANCHOR_COLUMNS,
     MAX_ANCHOR_ANGLE,
     MOMENT_COLUMNS,
+    AnchorMoments,
     anchor_moments,
     composite_field,
 )
@@ -127,7 +128,7 @@ class _Emitter:
                  static_forces: np.ndarray, resume_after: float | None = None,
                  frames: dict | None = None):
         """``resume_after``: continue the files of an earlier run after that time
-        (``anchors.csv`` already truncated to it); ``frames``: the number of frames of each
+        (``anchors.csv`` is truncated to it); ``frames``: the number of frames of each
         series up to then (``"string"``, ``"moments"``), from the checkpoint."""
         self.model = model
         self.outdir = outdir
@@ -135,23 +136,32 @@ class _Emitter:
         self.omega = omega
         self.resume_after = resume_after
         self.clamped = [a for a in model.anchors if a.kind == "clamped"]
+        #: the moment columns from the anchor forces (the numbers; this class writes them)
+        self.moment_columns = AnchorMoments.from_model(model, omega, form)
         self.network = getattr(model, "is_network", False)
         self.beam = model.is_beam  # a rod: moments from the model, no composite field
         self.rod: dict[str, list[np.ndarray]] = {a.name: [] for a in self.clamped}
         sec = model.case.section  # the single cable's (a network: per anchor, below)
         self.EI, self.EA, self.m = sec.EI, sec.EA, sec.mass
-        cols = ANCHOR_COLUMNS + (MOMENT_COLUMNS if self.clamped else [])
         self.times: list[float] = []
         self.forces: dict[str, list[np.ndarray]] = {a.name: [] for a in model.anchors}
         self.columns: dict[str, dict[str, list]] = {
             a.name: {k: [] for k in MOMENT_COLUMNS} for a in self.clamped}
-        if resume_after is not None:
+        #: per clamped anchor with a virtual hinge: the rows whose layer was in its
+        #: low-tension fallback (cablefem.hinge; this process's rows, not a resumed run's)
+        self.fallback: dict[str, list[bool]] = {}
+        self._names = [a.name for a in model.anchors]
+        self._index = {name: j for j, name in enumerate(self._names)}
+        if resume_after is not None:  # the rows up to the checkpoint, without a kill's rest
+            anchorcsv.truncate(model.comm, outdir / "anchors.csv", resume_after)
             self._load_history(outdir / "anchors.csv")
         frames = frames or {}
         self.string = StringWriter(model, outdir, resume_after, frames.get("string"))
-        self.csv = AnchorCSV(outdir / "anchors.csv", cols, model.comm,
-                             append=resume_after is not None)
-        self._pending = 0
+        self.csv = AnchorCSV(outdir / "anchors.csv", anchorcsv.columns(bool(self.clamped)),
+                             model.comm, append=resume_after is not None)
+        self._pending = 0  # rows recorded, not yet written
+        self._last: dict = {}  # the moment columns of the last written block, per anchor
+        self._last_time = None  # and its last time
         self.last_fields_time = None
         self.moments = None
         # the composite field's stations, from the static layers (resolve half the static
@@ -183,39 +193,45 @@ class _Emitter:
                                          frames.get("moments"), cells=cells)
 
     def _load_history(self, path: Path) -> None:
-        """Histories written before a restart (rank 0 reads, all ranks get them)."""
-        rows = None
-        if self.model.comm.rank == 0:
-            import csv
-
-            with open(path, newline="") as fh:
-                rows = list(csv.DictReader(fh))
-        rows = self.model.comm.bcast(rows, root=0)
-        num = lambda x: float(x) if x != "" else np.nan  # noqa: E731
-        for row in rows:
-            name = row["anchor"]
-            if name == self.model.anchors[0].name:
-                self.times.append(float(row["time"]))
-            self.forces[name].append(np.array([num(row[k]) for k in ("Nx", "Ny", "Nz")]))
-            if name in self.rod:
-                self.rod[name].append(np.array([num(row[k]) for k in ("Mx", "My", "Mz")]))
+        """Histories written before a restart (rank 0 reads ``anchors.csv``, already
+        truncated to the checkpoint; all ranks get them). OutputError if it is not the file
+        this run writes."""
+        comm = self.model.comm
+        data = error = None
+        if comm.rank == 0:
+            try:
+                data = anchorcsv.read(path, FORCE_COLUMNS + (MOMENT_COLUMNS if self.clamped
+                                                             else []), empty_ok=True)
+                counts = {name: data[name]["time"].size if name in data else 0
+                          for name in self._names}
+                if len(set(counts.values())) > 1 or set(data) - set(counts):
+                    raise ValueError(f"{path}: not the rows of this run's anchors "
+                                     f"{self._names} at the same times (rows: {counts})")
+            except ValueError as err:
+                error = str(err)
+        data, error = comm.bcast((data, error), root=0)
+        if error is not None:
+            raise OutputError(error)
+        if not data:
+            return
+        self.times = data[self._names[0]]["time"].tolist()
+        for name in self._names:
+            d = data[name]
+            self.forces[name] = list(np.column_stack([d[c] for c in FORCE_COLUMNS]))
+            if name in self.rod:  # a rod's own moment: the moment vector it wrote
+                self.rod[name] = list(np.column_stack([d[c] for c in ("Mx", "My", "Mz")]))
             if name in self.columns:
-                for k in MOMENT_COLUMNS:
-                    self.columns[name][k].append(num(row[k]))
+                self.columns[name] = {k: d[k].tolist() for k in MOMENT_COLUMNS}
 
     def load_at(self, t: float, mass: float | None = None) -> np.ndarray:
-        """Distributed load per stress-free length at ``t``, weight included."""
-        f = (self.m if mass is None else mass) * self.model.g_vec
-        for _, ld in self.model.loads:
-            f = f + np.asarray(ld.value) * ld.time.value(t)
-        return f
+        """Distributed load per stress-free length at ``t``, weight included
+        (:meth:`cablefem.moments.AnchorMoments.load_at`; the single cable's mass by
+        default)."""
+        return self.moment_columns.load_at(t, self.m if mass is None else mass)
 
     def _moments(self, anc, times: np.ndarray, N: np.ndarray) -> dict:
-        sec = anc.section
-        acc = np.array([anc.acceleration(t) for t in times])
-        load = np.array([self.load_at(t, sec.mass) for t in times])
-        return anchor_moments(N, anc.direction, sec.EI, sec.EA, sec.mass, acc, load,
-                              self.model.length, self.omega, self.form)
+        """The moment columns of clamped anchor ``anc`` (:class:`AnchorMoments`)."""
+        return self.moment_columns.anchor(anc.name, times, N)
 
     # a network: one short line per clamped anchor in moments.xdmf -----------------------
     def _segments_setup(self, static_forces: np.ndarray) -> None:
@@ -257,39 +273,46 @@ class _Emitter:
     def add(self, t: float, forces: np.ndarray) -> None:
         """Record the anchor forces at ``t`` (written in batches)."""
         self.times.append(t)
-        for anc, N in zip(self.model.anchors, forces):
-            self.forces[anc.name].append(np.asarray(N[:3], float))
-            if anc.name in self.rod:
-                self.rod[anc.name].append(np.asarray(N[3:6], float))
+        if getattr(self.model, "hinges", None):  # the law the row's step was solved with
+            for name, flag in self.model.hinges.fallback().items():
+                self.fallback.setdefault(name, []).append(flag)
+        F = np.array(forces, float)  # a copy: the rows below are views of it
+        for name, N in zip(self._names, F):
+            self.forces[name].append(N[:3])
+            if name in self.rod:
+                self.rod[name].append(N[3:6])
         self._pending += 1
         if self._pending >= self.FLUSH_ROWS:
             self.flush()
 
     def flush(self) -> None:
-        """Compute the moment columns of the pending rows and write them to anchors.csv."""
+        """Compute the moment columns of the pending rows (vectorised per anchor) and
+        write them to anchors.csv as one block."""
         n = self._pending
         if n == 0:
             return
         times = np.array(self.times[-n:])
-        per_anchor = {}
-        for anc in self.clamped:
-            res = self._moments(anc, times, np.array(self.forces[anc.name][-n:]))
-            if self.beam:
-                res = rod_moment_columns(res, np.array(self.rod[anc.name][-n:]),
-                                         anc.direction)
-            for k in MOMENT_COLUMNS:
-                self.columns[anc.name][k].extend(res[k].tolist())
-            per_anchor[anc.name] = res
-        rows = []
-        for i, t in enumerate(times):
-            for anc in self.model.anchors:
-                N = self.forces[anc.name][len(self.times) - n + i]
-                row = {"time": t, "anchor": anc.name, "Nx": N[0], "Ny": N[1], "Nz": N[2],
-                       "tension": float(np.linalg.norm(N))}
-                if anc.name in per_anchor:
-                    row.update({k: per_anchor[anc.name][k][i] for k in MOMENT_COLUMNS})
-                rows.append(row)
-        self.csv.write(rows)
+        N = np.array([self.forces[name][-n:] for name in self._names])  # (anchor, time, 3)
+        A = len(self._names)
+        table = {"time": np.repeat(times, A), "anchor": self._names * n,
+                 "tension": np.linalg.norm(N, axis=2).T.ravel()}
+        for k, c in enumerate(FORCE_COLUMNS):
+            table[c] = N[:, :, k].T.ravel()
+        self._last = {}
+        if self.clamped:
+            cols = {k: np.full((n, A), np.nan) for k in MOMENT_COLUMNS}
+            for anc in self.clamped:
+                res = self._moments(anc, times, N[self._index[anc.name]])
+                if self.beam:
+                    res = rod_moment_columns(res, np.array(self.rod[anc.name][-n:]),
+                                             anc.direction)
+                for k in MOMENT_COLUMNS:
+                    self.columns[anc.name][k].extend(res[k].tolist())
+                    cols[k][:, self._index[anc.name]] = res[k]
+                self._last[anc.name] = res
+            table.update({k: v.ravel() for k, v in cols.items()})
+        self._last_time = self.times[-1]
+        self.csv.write(table)
         self._pending = 0
 
     def fields(self, t: float, forces: np.ndarray) -> None:
@@ -299,9 +322,15 @@ class _Emitter:
         self.last_fields_time = t
         if not self.clamped or self.beam:  # a beam's moment field is in string.xdmf
             return
-        idx = {a.name: i for i, a in enumerate(m.anchors)}
-        layers = {c.name: self._moments(c, np.array([t]), forces[idx[c.name]][None, :])
-                  for c in self.clamped}
+        if self._pending and self.times[-1] == t:
+            self.flush()  # this time's row: its layers are those of the field
+        idx = self._index
+        if self._last_time == t and self._last:
+            layers = {c.name: {k: v[-1:] for k, v in self._last[c.name].items()}
+                      for c in self.clamped}
+        else:  # a time without a row (a failed step's state)
+            layers = {c.name: self._moments(c, np.array([t]), forces[idx[c.name]][None, :])
+                      for c in self.clamped}
         if self.network:
             pos, kap, mom = self._segments(t, forces, layers)
             self.moments.write(t, pos, kap, mom, self.stations)
@@ -545,7 +574,6 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
                   "moments": int(resume["frames_moments"])}
         for key, val in base.items():
             base[key] = type(val)(resume[key])
-        truncate_csv(outdir / "anchors.csv", ck.time, comm)
         summary["restarted_from"] = ck.time
         summary["checkpoint"] = {"time": ck.time, "step": ck.step}
         write_json(outdir / "summary.json", summary, comm)
@@ -680,6 +708,13 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
                 warn(summary, f"anchors.{a.name}", f"{backwards} of {len(times)} rows have "
                      "the anchor force more than 90 degrees from the clamp direction: "
                      "outside the method, valid = 0 (check anchors.direction)")
+            fb = emitter.fallback.get(a.name)
+            if fb and any(fb):
+                entry["outer_fallback_fraction"] = float(np.mean(fb))
+                warn(summary, f"anchors.{a.name}", f"{sum(fb)} of {len(fb)} rows with the "
+                     "virtual hinge's layer in its low-tension fallback (it stops following "
+                     "the tension below a quarter of the static one): the first-order "
+                     "correction is only partial there")
             if len(times) > 1:
                 entry["steady_state_moment"] = steady_state_stats(times, mo["moment"])
         summary["anchors"][a.name] = entry

@@ -26,7 +26,7 @@ from cablefem.dynamics import Checkpoint
 from cablefem.io.faults import kill_point
 
 __all__ = ["CHECKPOINT", "case_digest", "write_checkpoint", "read_checkpoint",
-           "truncate_csv", "run_status"]
+           "run_status"]
 
 CHECKPOINT = "checkpoint.npz"
 
@@ -82,24 +82,3 @@ def run_status(outdir: Path, comm: MPI.Comm = MPI.COMM_WORLD) -> dict:
         except (OSError, ValueError):
             out = {}
     return comm.bcast(out, root=0)
-
-
-def truncate_csv(path: Path, t_max: float, comm: MPI.Comm = MPI.COMM_WORLD) -> None:
-    """Keep the header and the complete rows with ``time <= t_max`` (rank 0)."""
-    if comm.rank == 0 and Path(path).is_file():
-        lines = Path(path).read_text().split("\n")
-        keep = [lines[0]]
-        tol = 1e-9 * max(1.0, abs(t_max))
-        for line in lines[1:]:
-            cells = line.split(",")
-            if len(cells) != len(lines[0].split(",")):
-                continue  # a partial last line
-            try:
-                if float(cells[0]) <= t_max + tol:
-                    keep.append(line)
-            except ValueError:
-                continue
-        tmp = Path(path).with_suffix(".csv.tmp")
-        tmp.write_text("\n".join(keep) + "\n")
-        os.replace(tmp, path)
-    comm.Barrier()

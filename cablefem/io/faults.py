@@ -4,7 +4,8 @@ instant can be resumed. Points: ``step`` (after a time step's outputs), ``checkp
 (``checkpoint.npz`` written to its temporary file, not yet renamed), ``xml`` (a series'
 XDMF file written to its temporary file, not yet renamed), ``frame-string`` and
 ``frame-moments`` (in the middle of a frame of that series: one array written, the others
-not). Unset (the normal case), it does nothing.
+not). Unset (the normal case), it does nothing. The variable is read once, when this
+module is imported (a run's process sets it before it starts): a call costs nothing then.
 """
 
 from __future__ import annotations
@@ -15,13 +16,13 @@ import signal
 __all__ = ["kill_point"]
 
 _counts: dict[str, int] = {}
+_SPEC = os.environ.get("CABLEFEM_KILL_AT", "")
 
 
 def kill_point(name: str) -> None:
-    spec = os.environ.get("CABLEFEM_KILL_AT")
-    if not spec:
+    if not _SPEC:
         return
-    where, _, n = spec.partition(":")
+    where, _, n = _SPEC.partition(":")
     if where != name:
         return
     _counts[name] = _counts.get(name, 0) + 1
