@@ -420,9 +420,12 @@ class CableModel:
             return
         self._time = t
         arr = self.u_bc.x.array
+        fixed_done = getattr(self, "_fixed_written", False)
         for anc in self.anchors:
-            if anc.dofs.size:
+            # an anchor without motion is written once (again after invalidate_time)
+            if anc.dofs.size and not (fixed_done and anc.motion is None):
                 arr[anc.flat_dofs] = anc.prescribed("displacement", t)
+        self._fixed_written = True
         for c, ld in self.loads:
             c.value[:] = np.asarray(ld.value) * ld.time.value(t)
         for c, pl in self.point_loads:
@@ -431,6 +434,7 @@ class CableModel:
     def invalidate_time(self) -> None:
         """Make the next :meth:`set_time` write everything again (the hinges changed)."""
         self._time = None
+        self._fixed_written = False
 
     # ------------------------------------------------------------------ fields
     def output_fields(self) -> list[fem.Function]:
