@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import logging
 import time
-from dataclasses import dataclass, field
 
 import numpy as np
 import ufl
@@ -24,13 +23,13 @@ from petsc4py import PETSc
 from ufl.algorithms import expand_derivatives
 
 from cablefem import catenary, forms
+from cablefem.anchor import AnchorBC
 from cablefem.description import CableDescription
 from cablefem.errors import CaseError
 from cablefem.geometry import create_line_mesh, graded_stations, polyline_cable, straight_cable
 from cablefem.jit import quiet_compiler
-from cablefem.motion import Motion
 
-__all__ = ["CableModel", "AnchorBC", "comm_first"]
+__all__ = ["CableModel", "AnchorBC", "comm_first"]  # AnchorBC: from cablefem.anchor
 
 log = logging.getLogger(__name__)
 
@@ -43,69 +42,6 @@ MAX_PLAUSIBLE_STRAIN = 0.05
 PLAUSIBLE_LENGTH_RATIO = (0.9, 3.0)
 
 
-@dataclass
-class AnchorBC:
-    """One anchor of the cable: where it is, how it moves, which degrees of freedom it holds."""
-
-    name: str
-    node: int  #: node index in the cable's station order
-    reference: np.ndarray  #: reference (stress-free) position X of the anchor node, m
-    position: np.ndarray  #: static position of the anchor, m
-    kind: str  #: "clamped" or "pinned"
-    direction: np.ndarray | None  #: unit clamp direction into the cable (clamped only)
-    motion: Motion | None
-    dofs: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int32))
-    owned: bool = False  #: True on the one rank that owns the anchor's dofs
-    section: object = None  #: the Section of the cable at the anchor
-    bs: int = 3  #: components per node of the model (3: string, 6: beam)
-    comps: tuple = (0, 1, 2)  #: the components the anchor prescribes
-    rotation: np.ndarray | None = None  #: beam: Cayley vector held by a clamp
-    moment_map: np.ndarray | None = None  #: beam: reaction of the q rows -> moment
-    offset: np.ndarray = field(default_factory=lambda: np.zeros(3))  #: string: where the
-    #: node is prescribed relative to the anchor (a virtual hinge, cablefem.hinge), m
-
-    def _layout(self) -> tuple[np.ndarray, np.ndarray]:
-        """The unrolled rows and the component of each, computed once per layout (a rod
-        changes ``bs`` and ``comps`` after construction: the cache is keyed on them)."""
-        key = (self.bs, tuple(self.comps), id(self.dofs), self.dofs.size)
-        if getattr(self, "_layout_key", None) != key:
-            comps = np.asarray(self.comps, dtype=np.int64)
-            rows = (self.bs * np.asarray(self.dofs, np.int64)[:, None]
-                    + comps[None, :]).reshape(-1)
-            self._layout_cache = (rows, np.tile(comps, self.dofs.size))
-            self._layout_key = key
-        return self._layout_cache
-
-    @property
-    def flat_dofs(self) -> np.ndarray:
-        """Unrolled indices (in a local array) of the components the anchor prescribes
-        (computed once; do not modify the array)."""
-        return self._layout()[0]
-
-    def prescribed(self, kind: str, t: float) -> np.ndarray:
-        """Values of ``kind`` ("displacement", "velocity", "acceleration") at ``t`` for
-        :attr:`flat_dofs`."""
-        val = getattr(self, kind)(t)
-        if kind == "displacement":
-            val = val + self.offset
-        if self.bs == 6:
-            rot = self.rotation if kind == "displacement" and self.rotation is not None \
-                else np.zeros(3)
-            val = np.concatenate([val, rot])
-        return np.asarray(val)[self._layout()[1]]
-
-    def displacement(self, t: float) -> np.ndarray:
-        """Prescribed displacement of the anchor node from its reference position, m."""
-        d = self.position - self.reference
-        if self.motion is not None:
-            d = d + self.motion.displacement(t)
-        return d
-
-    def velocity(self, t: float) -> np.ndarray:
-        return np.zeros(3) if self.motion is None else np.asarray(self.motion.velocity(t))
-
-    def acceleration(self, t: float) -> np.ndarray:
-        return np.zeros(3) if self.motion is None else np.asarray(self.motion.acceleration(t))
 
 
 def comm_first(comm, description) -> tuple[MPI.Comm, CableDescription]:
@@ -509,9 +445,12 @@ class CableModel:
             return
         self._time = t
         arr = self.u_bc.x.array
+        fixed_done = getattr(self, "_fixed_written", False)
         for anc in self.anchors:
-            if anc.dofs.size:
+            # an anchor without motion is written once (again after invalidate_time)
+            if anc.dofs.size and not (fixed_done and anc.motion is None):
                 arr[anc.flat_dofs] = anc.prescribed("displacement", t)
+        self._fixed_written = True
         for c, ld in self.loads:
             c.value[:] = np.asarray(ld.value) * ld.time.value(t)
         for c, pl in self.point_loads:
@@ -520,6 +459,7 @@ class CableModel:
     def invalidate_time(self) -> None:
         """Make the next :meth:`set_time` write everything again (the hinges changed)."""
         self._time = None
+        self._fixed_written = False
 
     # ------------------------------------------------------------------ fields
     def output_fields(self) -> list[fem.Function]:

@@ -88,7 +88,7 @@ class AnchorReactions:
         m = self.model
         m.a.x.array[:] = 0.0
         for anc in m.anchors:
-            if anc.dofs.size:
+            if anc.dofs.size and anc.motion is not None:  # the others: zero, set above
                 m.a.x.array[anc.flat_dofs] = anc.prescribed("acceleration", t)
         self._assemble()
         self.R.scale(-1.0)

@@ -1,4 +1,5 @@
-"""Output: XDMF time series for ParaView, CSV histories and the JSON summary, MPI-correct.
+"""The XDMF time series for ParaView (``string.xdmf``, ``moments.xdmf``, ``modes.xdmf``) and
+the cleaning of an output folder, MPI-correct (rank 0 writes).
 
 Every output survives a kill at any instant: what a killed run leaves is either complete or
 discarded by ``cablefem run --restart`` (``docs/outputs.md``).
@@ -13,9 +14,8 @@ discarded by ``cablefem run --restart`` (``docs/outputs.md``).
   positions; ``dynamic_displacement`` moves them to the current ones.
 * ``series/<name>/``: the heavy data of both: ``mesh.h5`` and one ``part-NNNN.h5`` per
   checkpoint interval.
-* ``anchors.csv``: one row per output time and anchor, written by rank 0 in blocks handed
-  to the operating system at once (:mod:`cablefem.io.anchorcsv`).
-* ``summary.json``: written atomically (temporary file, then rename) by rank 0.
+
+``anchors.csv`` is :mod:`cablefem.io.anchorcsv`'s, ``summary.json`` :mod:`cablefem.io.summary`'s.
 """
 
 from __future__ import annotations
