@@ -112,6 +112,10 @@ def case_options(model, solver: str = "") -> dict[str, object]:
 
 
 def _fmt(val: object) -> str:
+    """An option's value as PETSc reads it (``None``: a flag without a value, as
+    ``-snes_monitor`` on the command line)."""
+    if val is None:
+        return ""
     if isinstance(val, bool):
         return "true" if val else "false"
     return str(val)

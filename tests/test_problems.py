@@ -76,6 +76,17 @@ def test_static_problem_owns_its_snes_under_its_prefix():
         opts.delValue("mine_snes_max_it")
 
 
+def test_flag_options_without_a_value():
+    """``petsc_options={"snes_monitor": None}``: a flag, as ``-cable_static_snes_monitor``
+    on the command line (docs/library.md). Before, None became the text "None" and PETSc
+    refused the viewer (error 56) before solving. The solve is the same as without it."""
+    model = _model()
+    ref = solve_static(model).anchor_forces
+    with StaticProblem(model, petsc_options={"snes_converged_reason": None,
+                                             "snes_monitor": None}) as problem:
+        np.testing.assert_array_equal(problem.solve().anchor_forces, ref)
+
+
 # ---------------------------------------------------------------------------- modes
 def test_modal_problem_owns_its_eps():
     """The EPS is reachable with its prefix and options; the frequencies equal
