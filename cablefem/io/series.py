@@ -211,7 +211,30 @@ def _frames_until(path: Path, t_max: float) -> list[ET.Element]:
     return out
 
 
-class StringWriter:
+class _SeriesWriter:
+    """What the two series writers share: their :class:`Series` (``self.series``), its frame
+    count, checkpoint and close; a context manager."""
+
+    series: Series
+
+    @property
+    def frames(self) -> int:
+        return self.series.frames
+
+    def checkpoint(self) -> None:
+        self.series.checkpoint()
+
+    def close(self) -> None:
+        self.series.close()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+
+class StringWriter(_SeriesWriter):
     """``string.xdmf``: the string's fields over time (collective; see :class:`Series`).
 
     The fields are gathered to rank 0 in the order of the reference geometry's nodes and
@@ -280,24 +303,8 @@ class StringWriter:
                 point["dynamic_displacement"] = values[f.name] - self.static
         self.series.write(t, point, cell)
 
-    @property
-    def frames(self) -> int:
-        return self.series.frames
 
-    def checkpoint(self) -> None:
-        self.series.checkpoint()
-
-    def close(self) -> None:
-        self.series.close()
-
-    def __enter__(self):
-        return self
-
-    def __exit__(self, *exc):
-        self.close()
-
-
-class MomentsWriter:
+class MomentsWriter(_SeriesWriter):
     """``moments.xdmf``: composite curvature and moment on a line mesh of its own (data on
     rank 0; collective, see :class:`Series`). The mesh's points are the static deformed
     positions; ``dynamic_displacement`` moves them to the current ones."""
@@ -326,16 +333,6 @@ class MomentsWriter:
             raise FloatingPointError(f"non-finite composite {bad} at t = {t:g}")
         if self.comm.rank == 0:
             self.series.write(t, data)
-
-    @property
-    def frames(self) -> int:
-        return self.series.frames
-
-    def checkpoint(self) -> None:
-        self.series.checkpoint()
-
-    def close(self) -> None:
-        self.series.close()
 
 
 #: what a run writes into its folder, removed before a new (not resumed) run: the current
