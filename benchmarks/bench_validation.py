@@ -1,0 +1,285 @@
+"""Validation matrix: the string + asymptotics route against the project's converged rod.
+
+For every case of the matrix, four runs of the command line (each a separate process):
+
+* the string, by the route under test (``--outer-correction``, default: the case's own
+  setting, that is the default route);
+* the rod (``--model beam``), and the rod refined (``--refine 2``) and with the time step
+  halved: the reference's own convergence, reported beside the comparison;
+
+and ``cablefem compare`` of the rod (reference, ``a``) against the string (``b``): at every
+clamped anchor the static moment, the steady-state peak and RMS of ``|M|`` (last third of the
+run), the history error ``RMS(|M|_string - |M|_rod) / RMS(|M|_rod)`` over that window, the
+first frequency, the wall times, and whether the string's run warned.
+
+The matrix: the paper's cases A (parametric, in-plane) and B (the bending plane turns); an
+inclined SI stay cable with clamps along the chord and a moving deck anchor; horizontal clamps
+on a 10 %-sag cable (anchor angles of about 20-25 degrees) at eps = 0.005, 0.03 and 0.08,
+the far anchor moving out of plane; a clamped-pinned cable. A clamp in a network is not in
+the matrix: the rod takes single cables only.
+
+    python benchmarks/bench_validation.py [--cases A,B,...] [--outer-correction hinge]
+        [--t-end-scale 1.0] [--json out.json] [--keep DIR]
+
+Prints the JSON document and a Markdown table (for the README and docs/verification.md).
+Aims (issue 12), for eps <= 0.03 and anchor angles up to 30 degrees: static within 0.5 %,
+RMS within 1 %, peak within 2 %, history within 5 %; outside, the run's warnings fire.
+Slow: every case runs the rod three times (several minutes each on one core).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import platform
+import subprocess
+import sys
+import tempfile
+import time
+import tomllib
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+DEMOS = ROOT / "demos"
+
+
+def _toml_value(v) -> str:
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, str):
+        return json.dumps(v)
+    if isinstance(v, (list, tuple)):
+        return "[" + ", ".join(_toml_value(x) for x in v) + "]"
+    return repr(v)
+
+
+def to_toml(data: dict, prefix: str = "") -> str:
+    """A case dict as TOML (tables and arrays of tables; enough for case files)."""
+    lines, tables, arrays = [], [], []
+    for k, v in data.items():
+        if isinstance(v, dict):
+            tables.append((k, v))
+        elif isinstance(v, list) and v and all(isinstance(x, dict) for x in v):
+            arrays.append((k, v))
+        else:
+            lines.append(f"{k} = {_toml_value(v)}")
+    out = "\n".join(lines) + ("\n" if lines else "")
+    for k, v in tables:
+        name = f"{prefix}{k}"
+        out += f"\n[{name}]\n" + to_toml(v, name + ".")
+    for k, items in arrays:
+        name = f"{prefix}{k}"
+        for item in items:
+            sub = {a: b for a, b in item.items() if not isinstance(b, dict)}
+            out += f"\n[[{name}]]\n" + to_toml(sub, name + ".")
+            for a, b in item.items():
+                if isinstance(b, dict):
+                    out += f"\n[{name}.{a}]\n" + to_toml(b, f"{name}.{a}.")
+    return out
+
+
+def _demo(name: str) -> dict:
+    return tomllib.loads((DEMOS / name).read_text())
+
+
+def _sagging(eps: float) -> dict:
+    """10 % sag (chord 0.974 l), clamped horizontally at both ends (anchor angles about
+    0.4 rad), dimensionless (l = w = g = 1), anchor q moving out of plane below the first
+    frequency (about 3.5)."""
+    d = _demo("paper_inplane.toml")
+    d["title"] = f"10 % sag, horizontal clamps, eps = {eps:g}, q moving out of plane"
+    d["section"]["EI"] = eps**2
+    d["anchors"][1]["position"] = [0.974, 0.0, 0.0]
+    d["anchors"][1]["motion"] = {"type": "harmonic", "amplitude": [0.0, 0.01, 0.0],
+                                 "omega": 2.5}
+    d["damping"] = {"model": "rayleigh", "ratio": 0.01, "frequencies": [3.5, 7.0]}
+    d["dynamics"].update({"t_end": 30.0, "dt": 0.005})
+    return d
+
+
+def _stay() -> dict:
+    """An inclined 150 m stay cable (SI): deck anchor p moving vertically at 0.9 of the first
+    frequency (about 5 rad/s), pylon anchor q, clamps along the chord."""
+    return {
+        "title": "Inclined SI stay cable, moving deck anchor",
+        "section": {"EA": 1.5e9, "EI": 5.0e5, "mass": 60.0},
+        "gravity": {"g": 9.81},
+        "geometry": {"horizontal_tension": 3.0e6},
+        "mesh": {"elements": 60},
+        "anchors": [
+            {"name": "p", "position": [0.0, 0.0, 0.0],
+             "motion": {"type": "harmonic", "amplitude": [0.0, 0.0, 0.05], "omega": 4.5}},
+            {"name": "q", "position": [130.0, 0.0, 75.0]}],
+        "damping": {"model": "rayleigh", "ratio": 0.005, "frequencies": [5.0, 10.0]},
+        "dynamics": {"t_end": 40.0, "dt": 0.01, "fields_every": 100},
+    }
+
+
+def _clamped_pinned() -> dict:
+    d = _demo("paper_inplane.toml")
+    d["title"] = "Case A with anchor q pinned"
+    d["anchors"][1]["type"] = "pinned"
+    d["anchors"][1].pop("direction", None)
+    return d
+
+
+CASES = {
+    "A": ("paper case A: in-plane, parametric (eps 0.02)", lambda: _demo("paper_inplane.toml")),
+    "B": ("paper case B: the bending plane turns (eps 0.02)",
+          lambda: _demo("paper_spatial.toml")),
+    "stay": ("inclined SI stay cable, moving deck anchor", _stay),
+    "sag005": ("10 % sag, horizontal clamps, eps 0.005", lambda: _sagging(0.005)),
+    "sag03": ("10 % sag, horizontal clamps, eps 0.03", lambda: _sagging(0.03)),
+    "sag08": ("10 % sag, horizontal clamps, eps 0.08", lambda: _sagging(0.08)),
+    "clamped_pinned": ("case A, q pinned", _clamped_pinned),
+}
+
+
+def _run(case_file: Path, out: Path, *extra: str) -> dict:
+    t0 = time.perf_counter()
+    res = subprocess.run([sys.executable, "-m", "cablefem", "run", str(case_file), "--output",
+                          str(out), "--no-figures", "-q", *extra],
+                         capture_output=True, text=True, cwd=ROOT)
+    wall = time.perf_counter() - t0
+    summary = {}
+    if (out / "summary.json").is_file():
+        summary = json.loads((out / "summary.json").read_text())
+    return {"exit": res.returncode, "wall_s": wall, "stderr": res.stderr[-2000:],
+            "warnings": summary.get("warnings", [])}
+
+
+def _compare(ref: Path, other: Path, out: Path) -> dict:
+    from cablefem.app.compare import compare_runs
+
+    return compare_runs(ref, other, out)
+
+
+def _rel(pair: dict | None) -> float | None:
+    if not pair:
+        return None
+    v = pair.get("rel_diff")
+    return None if v is None or (isinstance(v, float) and math.isnan(v)) else v
+
+
+def _digest(cmp: dict) -> dict:
+    """Relative differences (other - reference) / reference per clamped anchor."""
+    out = {}
+    for name, e in cmp["anchors"].items():
+        out[name] = {
+            "static_moment": _rel(e.get("static_moment")),
+            "steady_peak": _rel(e.get("steady_peak")),
+            "steady_rms": _rel(e.get("steady_rms")),
+            "history_error": e["history_error"]["value"],
+            "rod_static_moment": e["static_moment"]["a"],
+            "rod_steady_rms": (e.get("steady_rms") or {}).get("a")}
+    out["first_frequency"] = _rel(cmp["first_frequency"]["omega"])
+    return out
+
+
+def run_case(key: str, work: Path, correction: str | None, t_scale: float) -> dict:
+    title, make = CASES[key]
+    data = make()
+    data["dynamics"]["t_end"] = data["dynamics"]["t_end"] * t_scale
+    folder = work / key
+    folder.mkdir(parents=True, exist_ok=True)
+    case_file = folder / "case.toml"
+    case_file.write_text(to_toml(data))
+    half = json.loads(json.dumps(data))
+    half["dynamics"]["dt"] = data["dynamics"]["dt"] / 2.0
+    half["dynamics"]["output_every"] = 2 * data["dynamics"].get("output_every", 1)
+    half["dynamics"]["fields_every"] = 2 * data["dynamics"].get("fields_every", 50)
+    half_file = folder / "case_half_dt.toml"
+    half_file.write_text(to_toml(half))
+    routes = correction.split(",") if correction else [None]
+    runs = {f"string_{r or 'default'}": _run(case_file, folder / f"string_{r or 'default'}",
+                                             *(["--outer-correction", r] if r else []))
+            for r in routes}
+    runs.update({
+            "rod": _run(case_file, folder / "rod", "--model", "beam"),
+            "rod_refined": _run(case_file, folder / "rod_refined", "--model", "beam",
+                                "--refine", "2"),
+            "rod_half_dt": _run(half_file, folder / "rod_half_dt", "--model", "beam")})
+    strings = [k for k in runs if k.startswith("string_")]
+    entry = {"title": title, "runs": {k: {kk: v[kk] for kk in ("exit", "wall_s")}
+                                      for k, v in runs.items()},
+             "string_warnings": {k: [w.get("message") for w in runs[k]["warnings"]]
+                                 for k in strings}}
+    failed = [k for k, v in runs.items() if v["exit"] != 0]
+    if failed:
+        entry["failed"] = {k: runs[k]["stderr"] for k in failed}
+        return entry
+    entry["string_vs_rod"] = {k[len("string_"):]: _digest(_compare(folder / "rod", folder / k,
+                                                                  folder / f"cmp_{k}"))
+                              for k in strings}
+    entry["rod_refinement"] = _digest(_compare(folder / "rod", folder / "rod_refined",
+                                               folder / "cmp_refine"))
+    entry["rod_half_dt"] = _digest(_compare(folder / "rod", folder / "rod_half_dt",
+                                            folder / "cmp_dt"))
+    entry["wall_ratio_rod_over_string"] = {k[len("string_"):]: runs["rod"]["wall_s"]
+                                            / runs[k]["wall_s"] for k in strings}
+    return entry
+
+
+def _pct(x) -> str:
+    return "-" if x is None else f"{100 * x:+.2f} %"
+
+
+def table(results: dict) -> str:
+    rows = ["| case | route | anchor | static | peak | RMS | history | omega1 | rod: refine / "
+            "dt/2 (RMS) | warned |", "|---|---|---|---|---|---|---|---|---|---|"]
+    for key, e in results.items():
+        if "string_vs_rod" not in e:
+            rows.append(f"| {key} | failed: {', '.join(e.get('failed', {}))} |||||||")
+            continue
+        r, h = e["rod_refinement"], e["rod_half_dt"]
+        for route, d in e["string_vs_rod"].items():
+            for name, a in d.items():
+                if name == "first_frequency":
+                    continue
+                conv = f"{_pct(r[name]['steady_rms'])} / {_pct(h[name]['steady_rms'])}"
+                hist = a["history_error"]
+                hist_text = "-" if hist is None or hist != hist else f"{100 * hist:.1f} %"
+                warned = "yes" if e["string_warnings"][f"string_{route}"] else "no"
+                rows.append(f"| {key} | {route} | {name} | {_pct(a['static_moment'])} | "
+                            f"{_pct(a['steady_peak'])} | {_pct(a['steady_rms'])} | "
+                            f"{hist_text} | {_pct(d['first_frequency'])} | {conv} | "
+                            f"{warned} |")
+    return "\n".join(rows)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__,
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--cases", default=",".join(CASES),
+                    help=f"comma-separated subset of {', '.join(CASES)}")
+    ap.add_argument("--outer-correction", default=None,
+                    help="the string's route(s), comma-separated from none, hinge (default: "
+                         "each case's own setting, i.e. the default route)")
+    ap.add_argument("--t-end-scale", type=float, default=1.0,
+                    help="scale every case's t_end (shorter runs for a quick look)")
+    ap.add_argument("--json", type=Path, default=None)
+    ap.add_argument("--keep", type=Path, default=None, help="keep the run folders here")
+    args = ap.parse_args()
+    keys = [k.strip() for k in args.cases.split(",") if k.strip()]
+    unknown = [k for k in keys if k not in CASES]
+    if unknown:
+        ap.error(f"unknown case(s) {unknown}; known: {list(CASES)}")
+    with tempfile.TemporaryDirectory() as tmp:
+        work = args.keep or Path(tmp)
+        results = {k: run_case(k, work, args.outer_correction, args.t_end_scale)
+                   for k in keys}
+    doc = {"date": time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()),
+           "machine": platform.machine(), "python": platform.python_version(),
+           "outer_correction": args.outer_correction or "case default",
+           "t_end_scale": args.t_end_scale, "cases": results}
+    text = json.dumps(doc, indent=2)
+    if args.json:
+        args.json.write_text(text)
+    print(text)
+    print()
+    print(table(results))
+
+
+if __name__ == "__main__":
+    main()
