@@ -206,18 +206,19 @@ def run_case(key: str, work: Path, correction: str | None, t_scale: float) -> di
              "string_warnings": {k: [w.get("message") for w in runs[k]["warnings"]]
                                  for k in strings}}
     failed = [k for k, v in runs.items() if v["exit"] != 0]
-    if failed:
+    if failed:  # said in the table; what did run is still compared
         entry["failed"] = {k: runs[k]["stderr"] for k in failed}
+    if "rod" in failed:
         return entry
     entry["string_vs_rod"] = {k[len("string_"):]: _digest(_compare(folder / "rod", folder / k,
                                                                   folder / f"cmp_{k}"))
-                              for k in strings}
-    entry["rod_refinement"] = _digest(_compare(folder / "rod", folder / "rod_refined",
-                                               folder / "cmp_refine"))
-    entry["rod_half_dt"] = _digest(_compare(folder / "rod", folder / "rod_half_dt",
-                                            folder / "cmp_dt"))
+                              for k in strings if k not in failed}
+    for key, run in (("rod_refinement", "rod_refined"), ("rod_half_dt", "rod_half_dt")):
+        if run not in failed:
+            entry[key] = _digest(_compare(folder / "rod", folder / run, folder / f"cmp_{run}"))
     entry["wall_ratio_rod_over_string"] = {k[len("string_"):]: runs["rod"]["wall_s"]
-                                            / runs[k]["wall_s"] for k in strings}
+                                            / runs[k]["wall_s"] for k in strings
+                                            if k not in failed}
     return entry
 
 
@@ -230,14 +231,20 @@ def table(results: dict) -> str:
             "dt/2 (RMS) | warned |", "|---|---|---|---|---|---|---|---|---|---|"]
     for key, e in results.items():
         if "string_vs_rod" not in e:
-            rows.append(f"| {key} | failed: {', '.join(e.get('failed', {}))} |||||||")
+            rows.append(f"| {key} | - | - | failed: {', '.join(e.get('failed', {}))} "
+                        "||||||")
             continue
-        r, h = e["rod_refinement"], e["rod_half_dt"]
+        r, h = e.get("rod_refinement"), e.get("rod_half_dt")
+        for k in e.get("failed", {}):
+            if k.startswith("string_"):
+                rows.append(f"| {key} | {k[len('string_'):]} | - | the run failed "
+                            "(see the JSON) ||||||")
         for route, d in e["string_vs_rod"].items():
             for name, a in d.items():
                 if name == "first_frequency":
                     continue
-                conv = f"{_pct(r[name]['steady_rms'])} / {_pct(h[name]['steady_rms'])}"
+                conv = (f"{_pct(r[name]['steady_rms']) if r else 'failed'} / "
+                        f"{_pct(h[name]['steady_rms']) if h else 'failed'}")
                 hist = a["history_error"]
                 hist_text = "-" if hist is None or hist != hist else f"{100 * hist:.1f} %"
                 warned = "yes" if e["string_warnings"][f"string_{route}"] else "no"
