@@ -27,9 +27,42 @@ from dataclasses import dataclass
 import numpy as np
 
 from cablefem import asymptotics
-from cablefem.io.anchorcsv import ANCHOR_COLUMNS, MOMENT_COLUMNS
+from cablefem.io.anchorcsv import ANCHOR_COLUMNS, MOMENT_COLUMNS, OPTIONAL_MOMENT_COLUMNS
 
-__all__ = ["ANCHOR_COLUMNS", "MOMENT_COLUMNS", "MAX_ANCHOR_ANGLE", "anchor_moments"]
+__all__ = ["ANCHOR_COLUMNS", "MOMENT_COLUMNS", "OPTIONAL_MOMENT_COLUMNS", "MAX_ANCHOR_ANGLE",
+           "ERROR_THRESHOLD", "anchor_moments", "error_estimate"]
+
+#: Estimated relative error of the anchor moment above which a run warns (docs/theory.md
+#: §5): 2 %, the accuracy at which the leading order stops being better than the inputs
+#: (EI of a stranded cable, tension) and below which a fatigue life (S-N slope 3 to 5)
+#: moves by less than 10 %.
+ERROR_THRESHOLD = 0.02
+#: Clamped ends whose virtual hinges shorten the string (a cable clamped at both ends).
+HINGED_ENDS = 2
+
+
+def error_estimate(delta: np.ndarray, tension: np.ndarray, EI: float, EA: float,
+                   length: float | None, period_ratio: np.ndarray | None = None,
+                   outer_order: int = 0) -> np.ndarray:
+    """Estimated relative error of the anchor moment (docs/theory.md §5), per row.
+
+    ``e_outer = HINGED_ENDS h / l`` is the size of the first-order outer correction: the
+    virtual hinge (:func:`cablefem.asymptotics.virtual_hinge`) moves each clamped end of the
+    string by ``h`` (one layer length at small Delta, ``ell0 / cos(Delta/2)`` at finite
+    Delta), which changes the string's free length, hence its anchor angle and its
+    frequencies, by that relative amount. The leading order (``outer_order = 0``) neglects
+    it: estimate ``e_outer``; with the hinge (``outer_order = 1``) the next order,
+    ``e_outer**2``. ``period_ratio**2`` (the layer's neglected inertia, which is also the
+    span's bending frequency shift ``EI m omega^2 / T^2``, twice it) is added. NaN where
+    the tension is not positive (slack rows) or the length unknown.
+    """
+    h, _ = asymptotics.virtual_hinge(delta, tension, EI, EA)
+    with np.errstate(invalid="ignore"):
+        e = HINGED_ENDS * h / (length if length else np.nan)
+        e = e if outer_order == 0 else e * e
+        if period_ratio is not None:
+            e = e + np.nan_to_num(np.asarray(period_ratio, float) ** 2, nan=0.0)
+    return e
 
 #: Largest angle Delta between the clamp direction and the anchor force that the layer
 #: describes. The clamp turns the cable by Delta within the layer; beyond 90 degrees the
@@ -41,7 +74,8 @@ MAX_ANCHOR_ANGLE = np.pi / 2
 
 def anchor_moments(forces: np.ndarray, direction: np.ndarray, EI: float, EA: float,
                    mass: float, accel: np.ndarray, load: np.ndarray, length: float,
-                   omega: float | None = None, form: str = "exact") -> dict[str, np.ndarray]:
+                   omega: float | None = None, form: str = "exact",
+                   outer_order: int = 0) -> dict[str, np.ndarray]:
     """Anchor moment columns for one clamped anchor over ``n`` times.
 
     Rows with ``delta`` above :data:`MAX_ANCHOR_ANGLE` are invalid; ``invalid_reason``
@@ -55,6 +89,8 @@ def anchor_moments(forces: np.ndarray, direction: np.ndarray, EI: float, EA: flo
     accel : (n, 3) acceleration of the anchor, m/s². load : (3,) or (n, 3) distributed
         load per stress-free length at the anchor, weight included, N/m.
     omega : highest excitation circular frequency (rad/s) for the quasi-static check.
+    outer_order : 0 for the leading-order outer solution, 1 with the virtual hinge: the
+        order of ``error_estimate`` (:func:`error_estimate`).
     """
     N = np.atleast_2d(np.asarray(forces, float))
     qs = (mass, omega) if omega else None
@@ -75,6 +111,8 @@ def anchor_moments(forces: np.ndarray, direction: np.ndarray, EI: float, EA: flo
     return {"delta": lay.delta, "moment": np.linalg.norm(M, axis=1), "Mx": M[:, 0],
             "My": M[:, 1], "Mz": M[:, 2], "psi0": lay.psi0, "layer_length": lay.layer_length,
             "moment_layer": lay.moment, "valid": valid.astype(int),
+            "error_estimate": error_estimate(lay.delta, lay.tension, EI, EA, length,
+                                             lay.period_ratio, outer_order),
             "invalid_reason": reason, "tension": lay.tension, "normal": lay.normal,
             "slack": lay.slack}
 
@@ -153,14 +191,14 @@ class AnchorMoments:
 
     def __init__(self, anchors: list[ClampedAnchor], gravity: np.ndarray, length: float,
                  loads: list[tuple[np.ndarray, object]] = (), omega: float | None = None,
-                 form: str = "exact") -> None:
+                 form: str = "exact", outer_order: int = 0) -> None:
         """``gravity``: (3,) acceleration of gravity, m/s²; ``loads``: (value (3,) N/m,
         time function with ``value(t)``) of each distributed load."""
         self.anchors = list(anchors)
         self.gravity = np.asarray(gravity, float)
         self.length = float(length)
         self.loads = [(np.asarray(v, float), tf) for v, tf in loads]
-        self.omega, self.form = omega, form
+        self.omega, self.form, self.outer_order = omega, form, outer_order
         self._by_name = {a.name: a for a in self.anchors}
 
     @classmethod
@@ -171,7 +209,8 @@ class AnchorMoments:
                                  a.section.EA, a.section.mass, a.motion)
                    for i, a in enumerate(model.anchors) if a.kind == "clamped"]
         loads = [(np.asarray(ld.value, float), ld.time) for _, ld in model.loads]
-        return cls(clamped, model.g_vec, model.length, loads, omega, form)
+        order = 1 if getattr(model, "hinges", None) else 0
+        return cls(clamped, model.g_vec, model.length, loads, omega, form, order)
 
     @property
     def names(self) -> list[str]:
@@ -193,7 +232,7 @@ class AnchorMoments:
         load = np.array([self.load_at(t, a.mass) for t in times]).reshape(-1, 3)
         return anchor_moments(np.asarray(forces, float)[:, :3], a.direction, a.EI, a.EA,
                               a.mass, a.acceleration(times), load, self.length, self.omega,
-                              self.form)
+                              self.form, self.outer_order)
 
     def compute(self, times: np.ndarray, forces) -> dict[str, dict[str, np.ndarray]]:
         """Columns of every clamped anchor: ``{name: {column: (n,) array}}``. ``forces``:

@@ -29,7 +29,7 @@ from typing import Mapping, Sequence
 
 import numpy as np
 
-__all__ = ["ANCHOR_COLUMNS", "MOMENT_COLUMNS", "FORCE_COLUMNS", "INTEGER_COLUMNS",
+__all__ = ["ANCHOR_COLUMNS", "MOMENT_COLUMNS", "OPTIONAL_MOMENT_COLUMNS", "FORCE_COLUMNS", "INTEGER_COLUMNS",
            "columns", "AnchorCSV", "format_rows", "read", "read_forces", "read_moments",
            "AnchorHistory", "truncate"]
 
@@ -37,7 +37,9 @@ __all__ = ["ANCHOR_COLUMNS", "MOMENT_COLUMNS", "FORCE_COLUMNS", "INTEGER_COLUMNS
 ANCHOR_COLUMNS = ["time", "anchor", "Nx", "Ny", "Nz", "tension"]
 #: The anchor moment and the boundary layer's quantities (clamped anchors; empty at others).
 MOMENT_COLUMNS = ["delta", "moment", "Mx", "My", "Mz", "psi0", "layer_length",
-                  "moment_layer", "valid"]
+                  "moment_layer", "valid", "error_estimate"]
+#: Moment columns that files of older versions lack: readers accept them absent (NaN).
+OPTIONAL_MOMENT_COLUMNS = ("error_estimate",)
 FORCE_COLUMNS = ["Nx", "Ny", "Nz"]
 #: Columns written as integers (all others but ``anchor`` are floats).
 INTEGER_COLUMNS = ("valid",)
@@ -238,16 +240,19 @@ def read_forces(path: str | Path) -> AnchorHistory:
 
 def read_moments(path: str | Path) -> dict[str, dict[str, np.ndarray]]:
     """cablefem's ``anchors.csv`` for fatigue and comparisons: anchor -> ``time, tension,
-    moment, valid`` arrays (empty fields -> NaN; an empty ``valid`` -> 0, a missing one
+    moment, valid, error_estimate`` arrays (``error_estimate`` NaN in files without it) (empty fields -> NaN; an empty ``valid`` -> 0, a missing one
     -> 1 where the moment is finite) and, when the columns exist, ``moment_vector``
     (n, 3) from ``Mx, My, Mz``. ValueError names the file, line and column of malformed
     input."""
-    data = read(path, ["tension", "moment"], optional=["valid", "Mx", "My", "Mz"])
+    data = read(path, ["tension", "moment"],
+                optional=["valid", "Mx", "My", "Mz", *OPTIONAL_MOMENT_COLUMNS])
     out = {}
     for name, d in data.items():
         e = {"time": d["time"], "tension": d["tension"], "moment": d["moment"]}
         e["valid"] = (np.nan_to_num(d["valid"]) if "valid" in d
                       else np.isfinite(d["moment"]).astype(float))
+        for c in OPTIONAL_MOMENT_COLUMNS:
+            e[c] = d[c] if c in d else np.full(d["time"].size, np.nan)
         if all(c in d for c in ("Mx", "My", "Mz")):
             e["moment_vector"] = np.column_stack([d["Mx"], d["My"], d["Mz"]])
         out[name] = e
