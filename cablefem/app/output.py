@@ -20,7 +20,6 @@ from cablefem.io.series import (
 )
 from cablefem.moments import (
     MOMENT_COLUMNS,
-    OPTIONAL_MOMENT_COLUMNS,
     AnchorMoments,
     composite_field,
 )
@@ -128,9 +127,8 @@ class RunOutput:
         data = error = None
         if comm.rank == 0:
             try:
-                req = [c for c in MOMENT_COLUMNS if c not in OPTIONAL_MOMENT_COLUMNS]
-                data = anchorcsv.read(path, FORCE_COLUMNS + (req if self.clamped else []),
-                                      optional=OPTIONAL_MOMENT_COLUMNS, empty_ok=True)
+                data = anchorcsv.read(path, FORCE_COLUMNS + (MOMENT_COLUMNS if self.clamped
+                                                             else []), empty_ok=True)
                 counts = {name: data[name]["time"].size if name in data else 0
                           for name in self._names}
                 if len(set(counts.values())) > 1 or set(data) - set(counts):
@@ -150,8 +148,7 @@ class RunOutput:
             if name in self.rod:  # a rod's own moment: the moment vector it wrote
                 self.rod[name] = list(np.column_stack([d[c] for c in ("Mx", "My", "Mz")]))
             if name in self.columns:
-                nan = np.full(d["time"].size, np.nan)
-                self.columns[name] = {k: d.get(k, nan).tolist() for k in MOMENT_COLUMNS}
+                self.columns[name] = {k: d[k].tolist() for k in MOMENT_COLUMNS}
 
     def load_at(self, t: float, mass: float | None = None) -> np.ndarray:
         """Distributed load per stress-free length at ``t``, weight included

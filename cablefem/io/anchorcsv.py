@@ -133,7 +133,8 @@ def _text(s: str) -> str:
 def read(path: str | Path, cols: Sequence[str], optional: Sequence[str] = (),
          finite: Sequence[str] = (), empty_ok: bool = False
          ) -> dict[str, dict[str, np.ndarray]]:
-    """Read the columns ``cols`` (required) and those of ``optional`` the header has:
+    """Read the columns ``cols`` (required, but for :data:`OPTIONAL_MOMENT_COLUMNS`, NaN
+    when a file of an older version lacks them) and those of ``optional`` the header has:
     anchor -> column -> float array over that anchor's rows, anchors in the order of
     their first row; empty cells are NaN (the ``finite`` columns refuse them); ``"line"``
     holds each row's line in the file.
@@ -144,15 +145,20 @@ def read(path: str | Path, cols: Sequence[str], optional: Sequence[str] = (),
     path = Path(path)
     if not path.is_file():
         raise ValueError(f"{path}: no such file")
+    late = [c for c in cols if c in OPTIONAL_MOMENT_COLUMNS]  # absent in older files
+    cols = [c for c in cols if c not in late]
     try:
         with path.open(newline="") as fh:
-            out = _read(path, fh, list(cols), list(optional), set(finite))
+            out = _read(path, fh, list(cols), list(optional) + late, set(finite))
     except UnicodeDecodeError:
         raise ValueError(f"{path}: not a text file") from None
     except csv.Error as err:
         raise ValueError(f"{path}: not a CSV file ({err})") from None
     if not out and not empty_ok:
         raise ValueError(f"{path}: no data rows")
+    for d in out.values():
+        for c in late:
+            d.setdefault(c, np.full(d["time"].size, np.nan))
     return out
 
 
