@@ -30,7 +30,8 @@ from cablefem import asymptotics
 from cablefem.io.anchorcsv import ANCHOR_COLUMNS, MOMENT_COLUMNS, OPTIONAL_MOMENT_COLUMNS
 
 __all__ = ["ANCHOR_COLUMNS", "MOMENT_COLUMNS", "OPTIONAL_MOMENT_COLUMNS", "MAX_ANCHOR_ANGLE",
-           "ERROR_THRESHOLD", "anchor_moments", "error_estimate"]
+           "ERROR_THRESHOLD", "anchor_moments", "error_estimate",
+           "resonance_factor"]
 
 #: Estimated relative error of the anchor moment above which a run warns (docs/theory.md
 #: §5): 2 %, the accuracy at which the leading order stops being better than the inputs
@@ -41,9 +42,31 @@ ERROR_THRESHOLD = 0.02
 HINGED_ENDS = 2
 
 
+def resonance_factor(omega: float | None, omegas, damping_ratio) -> float:
+    """How much a relative error of the natural frequencies grows in the response to a
+    harmonic excitation at ``omega`` (rad/s) (docs/theory.md §5):
+    ``1 / sqrt(d**2 + zeta**2)`` with ``d = |omega / (k omega_n) - 1|`` the smallest relative
+    detuning from a primary (k = 1) or parametric (k = 2) resonance of the modes
+    ``omegas`` and ``zeta`` the damping ratio there (``damping_ratio(omega_n)``); at least
+    1 (far from resonance the response follows the load quasi-statically)."""
+    if not omega or omegas is None or len(omegas) == 0:
+        return 1.0
+    best = 1.0
+    for w in np.asarray(omegas, float):
+        if not w > 0:
+            continue
+        z = max(float(damping_ratio(w)), 0.0)
+        for k in (1, 2):
+            d = abs(omega / (k * w) - 1.0)
+            best = max(best, 1.0 / max(np.hypot(d, z), 1e-12))
+    return best
+
+
 def error_estimate(delta: np.ndarray, tension: np.ndarray, EI: float, EA: float,
                    length: float | None, period_ratio: np.ndarray | None = None,
-                   outer_order: int = 0) -> np.ndarray:
+                   outer_order: int = 0, amplification: float = 1.0,
+                   moment: np.ndarray | None = None, static_moment: float | None = None
+                   ) -> np.ndarray:
     """Estimated relative error of the anchor moment (docs/theory.md §5), per row.
 
     ``e_outer = HINGED_ENDS h / l`` is the size of the first-order outer correction: the
@@ -55,14 +78,25 @@ def error_estimate(delta: np.ndarray, tension: np.ndarray, EI: float, EA: float,
     ``e_outer**2``. ``period_ratio**2`` (the layer's neglected inertia, which is also the
     span's bending frequency shift ``EI m omega^2 / T^2``, twice it) is added. NaN where
     the tension is not positive (slack rows) or the length unknown.
+
+    Near a resonance the outer error is also a frequency error of the same relative size,
+    which the response amplifies by ``amplification`` (:func:`resonance_factor`): with the
+    row's ``moment`` and the ``static_moment``, the outer term becomes
+    ``e_outer (M_s + amplification |M - M_s|) / max(M, M_s)`` (relative to the static
+    moment where the moment passes through small values). The estimate is at most 1: an
+    error of the size of the moment itself (a history whose phase is not determined).
     """
     h, _ = asymptotics.virtual_hinge(delta, tension, EI, EA)
     with np.errstate(invalid="ignore"):
         e = HINGED_ENDS * h / (length if length else np.nan)
         e = e if outer_order == 0 else e * e
+        if amplification > 1 and moment is not None and static_moment is not None:
+            M = np.asarray(moment, float)
+            Ms = abs(static_moment)
+            e = e * (Ms + amplification * np.abs(M - static_moment)) / np.maximum(M, Ms)
         if period_ratio is not None:
             e = e + np.nan_to_num(np.asarray(period_ratio, float) ** 2, nan=0.0)
-    return e
+    return np.minimum(e, 1.0)
 
 #: Largest angle Delta between the clamp direction and the anchor force that the layer
 #: describes. The clamp turns the cable by Delta within the layer; beyond 90 degrees the
@@ -75,7 +109,8 @@ MAX_ANCHOR_ANGLE = np.pi / 2
 def anchor_moments(forces: np.ndarray, direction: np.ndarray, EI: float, EA: float,
                    mass: float, accel: np.ndarray, load: np.ndarray, length: float,
                    omega: float | None = None, form: str = "exact",
-                   outer_order: int = 0) -> dict[str, np.ndarray]:
+                   outer_order: int = 0, amplification: float = 1.0,
+                   static_moment: float | None = None) -> dict[str, np.ndarray]:
     """Anchor moment columns for one clamped anchor over ``n`` times.
 
     Rows with ``delta`` above :data:`MAX_ANCHOR_ANGLE` are invalid; ``invalid_reason``
@@ -90,7 +125,8 @@ def anchor_moments(forces: np.ndarray, direction: np.ndarray, EI: float, EA: flo
         load per stress-free length at the anchor, weight included, N/m.
     omega : highest excitation circular frequency (rad/s) for the quasi-static check.
     outer_order : 0 for the leading-order outer solution, 1 with the virtual hinge: the
-        order of ``error_estimate`` (:func:`error_estimate`).
+        order of ``error_estimate`` (:func:`error_estimate`); ``amplification`` and
+        ``static_moment`` (N m) its resonance factor and the static moment it applies to.
     """
     N = np.atleast_2d(np.asarray(forces, float))
     qs = (mass, omega) if omega else None
@@ -112,7 +148,8 @@ def anchor_moments(forces: np.ndarray, direction: np.ndarray, EI: float, EA: flo
             "My": M[:, 1], "Mz": M[:, 2], "psi0": lay.psi0, "layer_length": lay.layer_length,
             "moment_layer": lay.moment, "valid": valid.astype(int),
             "error_estimate": error_estimate(lay.delta, lay.tension, EI, EA, length,
-                                             lay.period_ratio, outer_order),
+                                             lay.period_ratio, outer_order, amplification,
+                                             np.linalg.norm(M, axis=1), static_moment),
             "invalid_reason": reason, "tension": lay.tension, "normal": lay.normal,
             "slack": lay.slack}
 
@@ -199,6 +236,9 @@ class AnchorMoments:
         self.length = float(length)
         self.loads = [(np.asarray(v, float), tf) for v, tf in loads]
         self.omega, self.form, self.outer_order = omega, form, outer_order
+        #: resonance factor of the error estimate and static moment per anchor
+        #: (:meth:`set_resonance`)
+        self.amplification, self.static_moments = 1.0, {}
         self._by_name = {a.name: a for a in self.anchors}
 
     @classmethod
@@ -211,6 +251,16 @@ class AnchorMoments:
         loads = [(np.asarray(ld.value, float), ld.time) for _, ld in model.loads]
         order = 1 if getattr(model, "hinges", None) else 0
         return cls(clamped, model.g_vec, model.length, loads, omega, form, order)
+
+    def set_resonance(self, amplification: float, static_forces) -> None:
+        """Let the error estimate of the dynamic part of the moments grow by
+        ``amplification`` (:func:`resonance_factor`) about the static moments of the
+        anchor forces ``static_forces`` (n_anchors, 3+) in the model's anchor order."""
+        self.amplification = 1.0
+        F = np.asarray(static_forces, float)
+        self.static_moments = {a.name: float(self.anchor(a.name, [0.0], F[a.index, None, :3])[
+            "moment"][0]) for a in self.anchors}
+        self.amplification = float(amplification)
 
     @property
     def names(self) -> list[str]:
@@ -232,7 +282,8 @@ class AnchorMoments:
         load = np.array([self.load_at(t, a.mass) for t in times]).reshape(-1, 3)
         return anchor_moments(np.asarray(forces, float)[:, :3], a.direction, a.EI, a.EA,
                               a.mass, a.acceleration(times), load, self.length, self.omega,
-                              self.form, self.outer_order)
+                              self.form, self.outer_order, self.amplification,
+                              self.static_moments.get(name))
 
     def compute(self, times: np.ndarray, forces) -> dict[str, dict[str, np.ndarray]]:
         """Columns of every clamped anchor: ``{name: {column: (n,) array}}``. ``forces``:

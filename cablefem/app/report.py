@@ -72,6 +72,14 @@ def _max_excitation(case: Case) -> float | None:
     return max(om) if om else None
 
 
+def _damping_ratio(case: Case):
+    """The modal damping ratio at omega (rad/s) of the case's damping (0 without)."""
+    d = case.damping
+    if d is None or getattr(d, "model", "none") == "none":
+        return lambda w: 0.0
+    return d.ratio_at
+
+
 def _g(x) -> str:
     return "n/a" if x is None else f"{x:.4g}"
 
@@ -116,7 +124,10 @@ def anchor_validity(summary: dict, name: str, times: np.ndarray, mo: dict,
     if above.any():
         warn(summary, key, f"{above.sum()} of {n} rows of the output window "
              f"({out['above_threshold_fraction']:.0%}) have an estimated moment error above "
-             f"{threshold:.0%} (max {out['max']:.1%}): the layer is not thin enough against "
-             "the cable (ell/l) at this anchor angle for this order of the outer solution"
-             " (solver.outer_correction = 'hinge' reduces it; see error_estimate)")
+             f"{threshold:.0%} (max {out['max']:.1%}): the terms this order of the outer "
+             "solution neglects (ell/l at this anchor angle, amplified near a resonance by "
+             f"the factor {summary.get('error_resonance_factor', 1.0):.3g}) are too large"
+             + (" (solver.outer_correction = 'hinge' reduces them)"
+                if summary.get("outer_correction") == "none" else "")
+             + "; see error_estimate in anchors.csv")
     return out

@@ -20,6 +20,7 @@ from cablefem.app.log import Progress, quiet_compiler
 from cablefem.app.output import RunOutput, rod_moment_columns
 from cablefem.app.report import (
     _g,
+    _damping_ratio,
     _max_excitation,
     _section_name,
     anchor_validity,
@@ -46,6 +47,7 @@ from cablefem.moments import (
     ERROR_THRESHOLD,
     MAX_ANCHOR_ANGLE,
     anchor_moments,
+    resonance_factor,
 )
 from cablefem.network import NetworkModel
 from cablefem.statics import solve_static
@@ -288,6 +290,10 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
                            None if resume is None else resume["checkpoint"].time, frames)
     except OutputError as err:
         raise RunError(f"{err}; run the case again") from err
+    if n_modes and omega and kind != "beam":  # the error estimate near a resonance
+        amp = resonance_factor(omega, modal.omegas, _damping_ratio(case))
+        emitter.moment_columns.set_resonance(amp, static.anchor_forces)
+        summary["error_resonance_factor"] = amp
     if resume is not None:  # after the emitter, which takes its reference from the statics
         model.scatter_nodal(resume["u"], model.u)
         model.scatter_nodal(resume["v"], model.v)
