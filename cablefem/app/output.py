@@ -74,6 +74,8 @@ class RunOutput:
         self.forces: dict[str, list[np.ndarray]] = {a.name: [] for a in model.anchors}
         self.columns: dict[str, dict[str, list]] = {
             a.name: {k: [] for k in MOMENT_COLUMNS} for a in self.clamped}
+        #: per clamped anchor: why each row of this process is invalid ("" when valid)
+        self.reasons: dict[str, list[str]] = {}
         #: per clamped anchor with a virtual hinge: the rows whose layer was in its
         #: low-tension fallback (cablefem.hinge; this process's rows, not a resumed run's)
         self.fallback: dict[str, list[bool]] = {}
@@ -233,6 +235,7 @@ class RunOutput:
                 if self.beam:
                     res = rod_moment_columns(res, np.array(self.rod[anc.name][-n:]),
                                              anc.direction)
+                self.reasons.setdefault(anc.name, []).extend(res["invalid_reason"].tolist())
                 for k in MOMENT_COLUMNS:
                     self.columns[anc.name][k].extend(res[k].tolist())
                     cols[k][:, self._index[anc.name]] = res[k]

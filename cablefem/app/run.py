@@ -428,7 +428,10 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
                      "virtual hinge's layer in its low-tension fallback (it stops following "
                      "the tension below a quarter of the static one): the first-order "
                      "correction is only partial there")
-            entry["validity"] = anchor_validity(summary, a.name, times, mo, ERROR_THRESHOLD)
+            why = emitter.reasons.get(a.name, [])  # this process's rows (not a resumed run's)
+            why = ["(not recorded)"] * (len(times) - len(why)) + why
+            entry["validity"] = anchor_validity(summary, a.name, times,
+                                                {**mo, "invalid_reason": why}, ERROR_THRESHOLD)
             if len(times) > 1:
                 entry["steady_state_moment"] = steady_state_stats(times, mo["moment"])
         summary["anchors"][a.name] = entry
