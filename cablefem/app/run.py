@@ -19,8 +19,8 @@ from cablefem import __version__
 from cablefem.app.log import Progress, quiet_compiler
 from cablefem.app.output import RunOutput, rod_moment_columns
 from cablefem.app.report import (
-    _g,
     _damping_ratio,
+    _g,
     _max_excitation,
     _section_name,
     anchor_validity,

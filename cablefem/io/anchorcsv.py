@@ -29,8 +29,8 @@ from typing import Mapping, Sequence
 
 import numpy as np
 
-__all__ = ["ANCHOR_COLUMNS", "MOMENT_COLUMNS", "OPTIONAL_MOMENT_COLUMNS", "FORCE_COLUMNS", "INTEGER_COLUMNS",
-           "columns", "AnchorCSV", "format_rows", "read", "read_forces", "read_moments",
+__all__ = ["ANCHOR_COLUMNS", "MOMENT_COLUMNS", "OPTIONAL_MOMENT_COLUMNS", "FORCE_COLUMNS",
+           "INTEGER_COLUMNS", "columns", "AnchorCSV", "format_rows", "read", "read_forces", "read_moments",
            "AnchorHistory", "truncate"]
 
 #: The anchor force (of the span on the anchor, into the span) and its magnitude.
@@ -246,8 +246,9 @@ def read_forces(path: str | Path) -> AnchorHistory:
 
 def read_moments(path: str | Path) -> dict[str, dict[str, np.ndarray]]:
     """cablefem's ``anchors.csv`` for fatigue and comparisons: anchor -> ``time, tension,
-    moment, valid, error_estimate`` arrays (``error_estimate`` NaN in files without it) (empty fields -> NaN; an empty ``valid`` -> 0, a missing one
-    -> 1 where the moment is finite) and, when the columns exist, ``moment_vector``
+    moment, valid, error_estimate`` arrays (empty fields -> NaN; an empty ``valid`` -> 0,
+    a missing one -> 1 where the moment is finite; ``error_estimate`` NaN in files of
+    older versions without it) and, when the columns exist, ``moment_vector``
     (n, 3) from ``Mx, My, Mz``. ValueError names the file, line and column of malformed
     input."""
     data = read(path, ["tension", "moment"],
