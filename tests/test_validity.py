@@ -51,7 +51,10 @@ def _static_moment(model) -> tuple[float, float]:
 
 
 def _rod_moment(case) -> float:
-    return float(np.linalg.norm(solve_static(BeamModel(comm, case)).anchor_forces[0][3:6]))
+    """The reference rod's static anchor moment, on each process alone (its Newton from
+    the catenary does not converge for this cable when partitioned over two ranks)."""
+    rod = BeamModel(MPI.COMM_SELF, case)
+    return float(np.linalg.norm(solve_static(rod).anchor_forces[0][3:6]))
 
 
 @pytest.mark.parametrize("EI,measured", [(9e-4, 0.056), (6.4e-3, 0.16)])

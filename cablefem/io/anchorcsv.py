@@ -30,8 +30,8 @@ from typing import Mapping, Sequence
 import numpy as np
 
 __all__ = ["ANCHOR_COLUMNS", "MOMENT_COLUMNS", "OPTIONAL_MOMENT_COLUMNS", "FORCE_COLUMNS",
-           "INTEGER_COLUMNS", "columns", "AnchorCSV", "format_rows", "read", "read_forces", "read_moments",
-           "AnchorHistory", "truncate"]
+           "INTEGER_COLUMNS", "columns", "AnchorCSV", "format_rows", "read", "read_forces",
+           "read_moments", "AnchorHistory", "truncate"]
 
 #: The anchor force (of the span on the anchor, into the span) and its magnitude.
 ANCHOR_COLUMNS = ["time", "anchor", "Nx", "Ny", "Nz", "tension"]
