@@ -56,14 +56,20 @@ def columns(clamped: bool) -> list[str]:
 class AnchorCSV:
     """``anchors.csv`` opened for writing by rank 0 (the other ranks' calls do nothing).
 
-    ``append=True`` continues an existing file (a resumed run, after :func:`truncate`);
-    otherwise the file is replaced and starts with the header."""
+    ``append=True`` continues an existing file (a resumed run, after :func:`truncate`) in
+    the columns of its header (a file of an older version without the optional columns
+    stays without them); otherwise the file is replaced and starts with the header."""
 
     def __init__(self, path: Path, columns: Sequence[str], comm=None, append: bool = False):
         self.columns = list(columns)
         self.fh = None
         if _rank(comm) == 0:
             resume = append and Path(path).is_file()
+            if resume:  # the file's own columns (an older version's file lacks optional ones)
+                with open(path, newline="") as fh:
+                    head = [h.strip() for h in next(csv.reader(fh), [])]
+                if head and set(head) <= set(self.columns):
+                    self.columns = head
             self.fh = open(path, "a" if resume else "w", newline="")
             if not resume:
                 self.fh.write(",".join(self.columns) + "\n")
