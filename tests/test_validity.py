@@ -189,3 +189,21 @@ def test_old_anchors_csv_without_the_column_still_reads(mpi_tmp_path, make_case)
         assert np.array_equal(d["moment"], new_d[name]["moment"], equal_nan=True)
     rep = compare_runs(mpi_tmp_path / "new", old)
     assert rep is not None
+
+
+def test_resuming_an_older_file_keeps_its_columns(tmp_path):
+    """A run resumed on an anchors.csv of an older version (no error_estimate) appends rows
+    in that file's columns: every row has the header's number of fields and reads back."""
+    old_cols = [c for c in anchorcsv.columns(True) if c != "error_estimate"]
+    path = tmp_path / "anchors.csv"
+    row = {c: [1.0] for c in old_cols}
+    row["anchor"] = ["p"]
+    with anchorcsv.AnchorCSV(path, old_cols, MPI.COMM_SELF) as out:
+        out.write(row)
+    new_row = {**{c: [2.0] for c in anchorcsv.columns(True)}, "anchor": ["p"], "valid": [1]}
+    with anchorcsv.AnchorCSV(path, anchorcsv.columns(True), MPI.COMM_SELF,
+                             append=True) as out:
+        out.write(new_row)
+    d = anchorcsv.read(path, anchorcsv.columns(True)[2:])["p"]
+    assert np.array_equal(d["time"], [1.0, 2.0])
+    assert np.all(np.isnan(d["error_estimate"]))  # the older file's rows have none
