@@ -69,7 +69,8 @@ def error_estimate(delta: np.ndarray, tension: np.ndarray, EI: float, EA: float,
                    ) -> np.ndarray:
     """Estimated relative error of the anchor moment (docs/theory.md §5), per row.
 
-    ``e_outer = HINGED_ENDS h / l`` is the size of the first-order outer correction: the
+    ``e_outer = HINGED_ENDS h / (lambda l)`` (``lambda = 1 + T/EA``: the stretched
+    length, as ``h`` is a distance) is the size of the first-order outer correction: the
     virtual hinge (:func:`cablefem.asymptotics.virtual_hinge`) moves each clamped end of the
     string by ``h`` (one layer length at small Delta, ``ell0 / cos(Delta/2)`` at finite
     Delta), which changes the string's free length, hence its anchor angle and its
@@ -88,7 +89,8 @@ def error_estimate(delta: np.ndarray, tension: np.ndarray, EI: float, EA: float,
     """
     h, _ = asymptotics.virtual_hinge(delta, tension, EI, EA)
     with np.errstate(invalid="ignore"):
-        e = HINGED_ENDS * h / (length if length else np.nan)
+        stretch = 1 + np.asarray(tension, float) / EA  # h is a distance, l stress-free
+        e = HINGED_ENDS * h / (stretch * (length if length else np.nan))
         e = e if outer_order == 0 else e * e
         if amplification > 1 and moment is not None and static_moment is not None:
             M = np.asarray(moment, float)
