@@ -27,9 +27,78 @@ from dataclasses import dataclass
 import numpy as np
 
 from cablefem import asymptotics
-from cablefem.io.anchorcsv import ANCHOR_COLUMNS, MOMENT_COLUMNS
+from cablefem.io.anchorcsv import ANCHOR_COLUMNS, MOMENT_COLUMNS, OPTIONAL_MOMENT_COLUMNS
 
-__all__ = ["ANCHOR_COLUMNS", "MOMENT_COLUMNS", "MAX_ANCHOR_ANGLE", "anchor_moments"]
+__all__ = ["ANCHOR_COLUMNS", "MOMENT_COLUMNS", "OPTIONAL_MOMENT_COLUMNS", "MAX_ANCHOR_ANGLE",
+           "ERROR_THRESHOLD", "anchor_moments", "error_estimate",
+           "resonance_factor"]
+
+#: Estimated relative error of the anchor moment above which a run warns (docs/theory.md
+#: §5): 2 %, the accuracy at which the leading order stops being better than the inputs
+#: (EI of a stranded cable, tension) and below which a fatigue life (S-N slope 3 to 5)
+#: moves by less than 10 %.
+ERROR_THRESHOLD = 0.02
+#: Clamped ends whose virtual hinges shorten the string (a cable clamped at both ends).
+HINGED_ENDS = 2
+
+
+def resonance_factor(omega: float | None, omegas, damping_ratio) -> float:
+    """How much a relative error of the natural frequencies grows in the response to a
+    harmonic excitation at ``omega`` (rad/s) (docs/theory.md §5):
+    ``1 / sqrt(d**2 + zeta**2)`` with ``d = |omega / (k omega_n) - 1|`` the smallest relative
+    detuning from a primary (k = 1) or parametric (k = 2) resonance of the modes
+    ``omegas`` and ``zeta`` the damping ratio there (``damping_ratio(omega_n)``); at least
+    1 (far from resonance the response follows the load quasi-statically)."""
+    if not omega or omegas is None or len(omegas) == 0:
+        return 1.0
+    best = 1.0
+    for w in np.asarray(omegas, float):
+        if not w > 0:
+            continue
+        z = max(float(damping_ratio(w)), 0.0)
+        for k in (1, 2):
+            d = abs(omega / (k * w) - 1.0)
+            best = max(best, 1.0 / max(np.hypot(d, z), 1e-12))
+    return best
+
+
+def error_estimate(delta: np.ndarray, tension: np.ndarray, EI: float, EA: float,
+                   length: float | None, period_ratio: np.ndarray | None = None,
+                   outer_order: int = 0, amplification: float = 1.0,
+                   moment: np.ndarray | None = None, static_moment: float | None = None
+                   ) -> np.ndarray:
+    """Estimated relative error of the anchor moment (docs/theory.md §5), per row.
+
+    ``e_outer = HINGED_ENDS h / (lambda l)`` (``lambda = 1 + T/EA``: the stretched
+    length, as ``h`` is a distance) is the size of the first-order outer correction: the
+    virtual hinge (:func:`cablefem.asymptotics.virtual_hinge`) moves each clamped end of the
+    string by ``h`` (one layer length at small Delta, ``ell0 / cos(Delta/2)`` at finite
+    Delta), which changes the string's free length, hence its anchor angle and its
+    frequencies, by that relative amount. The leading order (``outer_order = 0``) neglects
+    it: estimate ``e_outer``; with the hinge (``outer_order = 1``) the next order,
+    ``e_outer**2``. ``period_ratio**2`` (the layer's neglected inertia, which is also the
+    span's bending frequency shift ``EI m omega^2 / T^2``, twice it) is added. NaN where
+    the tension is not positive (slack rows) or the length unknown.
+
+    Near a resonance the outer error is also a frequency error of the same relative size,
+    which the response amplifies by ``amplification`` (:func:`resonance_factor`): with the
+    row's ``moment`` and the ``static_moment``, the outer term becomes
+    ``e_outer (M_s + amplification |M - M_s|) / max(M, M_s)`` (relative to the static
+    moment where the moment passes through small values). The estimate is at most 1: an
+    error of the size of the moment itself (a history whose phase is not determined).
+    """
+    h, _ = asymptotics.virtual_hinge(delta, tension, EI, EA)
+    with np.errstate(invalid="ignore"):
+        stretch = 1 + np.asarray(tension, float) / EA  # h is a distance, l stress-free
+        e = HINGED_ENDS * h / (stretch * (length if length else np.nan))
+        e = e if outer_order == 0 else e * e
+        if amplification > 1 and moment is not None and static_moment is not None:
+            M = np.asarray(moment, float)
+            Ms = abs(static_moment)
+            e = e * (Ms + amplification * np.abs(M - static_moment)) / np.maximum(M, Ms)
+        if period_ratio is not None:
+            e = e + np.nan_to_num(np.asarray(period_ratio, float) ** 2, nan=0.0)
+    return np.minimum(e, 1.0)
 
 #: Largest angle Delta between the clamp direction and the anchor force that the layer
 #: describes. The clamp turns the cable by Delta within the layer; beyond 90 degrees the
@@ -41,7 +110,9 @@ MAX_ANCHOR_ANGLE = np.pi / 2
 
 def anchor_moments(forces: np.ndarray, direction: np.ndarray, EI: float, EA: float,
                    mass: float, accel: np.ndarray, load: np.ndarray, length: float,
-                   omega: float | None = None, form: str = "exact") -> dict[str, np.ndarray]:
+                   omega: float | None = None, form: str = "exact",
+                   outer_order: int = 0, amplification: float = 1.0,
+                   static_moment: float | None = None) -> dict[str, np.ndarray]:
     """Anchor moment columns for one clamped anchor over ``n`` times.
 
     Rows with ``delta`` above :data:`MAX_ANCHOR_ANGLE` are invalid; ``invalid_reason``
@@ -55,6 +126,9 @@ def anchor_moments(forces: np.ndarray, direction: np.ndarray, EI: float, EA: flo
     accel : (n, 3) acceleration of the anchor, m/s². load : (3,) or (n, 3) distributed
         load per stress-free length at the anchor, weight included, N/m.
     omega : highest excitation circular frequency (rad/s) for the quasi-static check.
+    outer_order : 0 for the leading-order outer solution, 1 with the virtual hinge: the
+        order of ``error_estimate`` (:func:`error_estimate`); ``amplification`` and
+        ``static_moment`` (N m) its resonance factor and the static moment it applies to.
     """
     N = np.atleast_2d(np.asarray(forces, float))
     qs = (mass, omega) if omega else None
@@ -75,6 +149,9 @@ def anchor_moments(forces: np.ndarray, direction: np.ndarray, EI: float, EA: flo
     return {"delta": lay.delta, "moment": np.linalg.norm(M, axis=1), "Mx": M[:, 0],
             "My": M[:, 1], "Mz": M[:, 2], "psi0": lay.psi0, "layer_length": lay.layer_length,
             "moment_layer": lay.moment, "valid": valid.astype(int),
+            "error_estimate": error_estimate(lay.delta, lay.tension, EI, EA, length,
+                                             lay.period_ratio, outer_order, amplification,
+                                             np.linalg.norm(M, axis=1), static_moment),
             "invalid_reason": reason, "tension": lay.tension, "normal": lay.normal,
             "slack": lay.slack}
 
@@ -153,14 +230,17 @@ class AnchorMoments:
 
     def __init__(self, anchors: list[ClampedAnchor], gravity: np.ndarray, length: float,
                  loads: list[tuple[np.ndarray, object]] = (), omega: float | None = None,
-                 form: str = "exact") -> None:
+                 form: str = "exact", outer_order: int = 0) -> None:
         """``gravity``: (3,) acceleration of gravity, m/s²; ``loads``: (value (3,) N/m,
         time function with ``value(t)``) of each distributed load."""
         self.anchors = list(anchors)
         self.gravity = np.asarray(gravity, float)
         self.length = float(length)
         self.loads = [(np.asarray(v, float), tf) for v, tf in loads]
-        self.omega, self.form = omega, form
+        self.omega, self.form, self.outer_order = omega, form, outer_order
+        #: resonance factor of the error estimate and static moment per anchor
+        #: (:meth:`set_resonance`)
+        self.amplification, self.static_moments = 1.0, {}
         self._by_name = {a.name: a for a in self.anchors}
 
     @classmethod
@@ -171,7 +251,18 @@ class AnchorMoments:
                                  a.section.EA, a.section.mass, a.motion)
                    for i, a in enumerate(model.anchors) if a.kind == "clamped"]
         loads = [(np.asarray(ld.value, float), ld.time) for _, ld in model.loads]
-        return cls(clamped, model.g_vec, model.length, loads, omega, form)
+        order = 1 if getattr(model, "hinges", None) else 0
+        return cls(clamped, model.g_vec, model.length, loads, omega, form, order)
+
+    def set_resonance(self, amplification: float, static_forces) -> None:
+        """Let the error estimate of the dynamic part of the moments grow by
+        ``amplification`` (:func:`resonance_factor`) about the static moments of the
+        anchor forces ``static_forces`` (n_anchors, 3+) in the model's anchor order."""
+        self.amplification = 1.0
+        F = np.asarray(static_forces, float)
+        self.static_moments = {a.name: float(self.anchor(a.name, [0.0], F[a.index, None, :3])[
+            "moment"][0]) for a in self.anchors}
+        self.amplification = float(amplification)
 
     @property
     def names(self) -> list[str]:
@@ -193,7 +284,8 @@ class AnchorMoments:
         load = np.array([self.load_at(t, a.mass) for t in times]).reshape(-1, 3)
         return anchor_moments(np.asarray(forces, float)[:, :3], a.direction, a.EI, a.EA,
                               a.mass, a.acceleration(times), load, self.length, self.omega,
-                              self.form)
+                              self.form, self.outer_order, self.amplification,
+                              self.static_moments.get(name))
 
     def compute(self, times: np.ndarray, forces) -> dict[str, dict[str, np.ndarray]]:
         """Columns of every clamped anchor: ``{name: {column: (n,) array}}``. ``forces``:

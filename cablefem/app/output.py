@@ -40,6 +40,8 @@ def rod_moment_columns(res: dict, M: np.ndarray, direction: np.ndarray) -> dict:
         tp = np.cross(M / mag[:, None], direction)  # in the bending plane, normal to c
         out["psi0"] = np.where(mag > 0, np.arctan2(tp @ f2, tp @ f1), np.nan)
     out["valid"] = np.isfinite(mag).astype(int)
+    # the rod resolves the layer itself: the asymptotic error estimate does not apply
+    out["error_estimate"] = np.full(mag.shape, np.nan)
     return out
 
 
@@ -72,6 +74,8 @@ class RunOutput:
         self.forces: dict[str, list[np.ndarray]] = {a.name: [] for a in model.anchors}
         self.columns: dict[str, dict[str, list]] = {
             a.name: {k: [] for k in MOMENT_COLUMNS} for a in self.clamped}
+        #: per clamped anchor: why each row of this process is invalid ("" when valid)
+        self.reasons: dict[str, list[str]] = {}
         #: per clamped anchor with a virtual hinge: the rows whose layer was in its
         #: low-tension fallback (cablefem.hinge; this process's rows, not a resumed run's)
         self.fallback: dict[str, list[bool]] = {}
@@ -231,6 +235,7 @@ class RunOutput:
                 if self.beam:
                     res = rod_moment_columns(res, np.array(self.rod[anc.name][-n:]),
                                              anc.direction)
+                self.reasons.setdefault(anc.name, []).extend(res["invalid_reason"].tolist())
                 for k in MOMENT_COLUMNS:
                     self.columns[anc.name][k].extend(res[k].tolist())
                     cols[k][:, self._index[anc.name]] = res[k]

@@ -17,12 +17,13 @@ from mpi4py import MPI
 
 from cablefem import __version__
 from cablefem.app.plots import anchor_figures
+from cablefem.app.report import anchor_validity
 from cablefem.app.run import _max_excitation, steady_state_stats
 from cablefem.case import Case
 from cablefem.description import stress_free_length
 from cablefem.io.anchorcsv import ANCHOR_COLUMNS, MOMENT_COLUMNS, AnchorCSV, read_forces
 from cablefem.io.series import write_json
-from cablefem.moments import MAX_ANCHOR_ANGLE, anchor_moments
+from cablefem.moments import ERROR_THRESHOLD, MAX_ANCHOR_ANGLE, anchor_moments
 
 __all__ = ["run_post", "case_length"]
 
@@ -71,7 +72,8 @@ def run_post(case: Case, forces_csv: Path, outdir: Path, form: str = "exact",
     g_vec = np.asarray(case.gravity.direction, float) * case.gravity.g
     times = hist.times
     omega = _max_excitation(case)
-    moments, summary_anchors = {}, {}
+    moments, summary_anchors, warnings = {}, {}, {}
+    order = 1 if getattr(case.solver, "outer_correction", "none") == "hinge" else 0
     for a in case.anchors:
         if a.name not in hist.forces or a.kind != "clamped":
             continue
@@ -80,7 +82,7 @@ def run_post(case: Case, forces_csv: Path, outdir: Path, form: str = "exact",
                                                  for ld in case.loads), np.zeros(3))
                          for t in times])
         res = anchor_moments(hist.forces[a.name], a.direction, sec.EI, sec.EA, sec.mass, acc,
-                             load, length, omega, form)
+                             load, length, omega, form, order)
         backwards = res["delta"] > MAX_ANCHOR_ANGLE
         taut = ~res["slack"]
         if np.count_nonzero(backwards) > MAX_BACKWARDS_SHARE * max(np.count_nonzero(taut), 1):
@@ -102,7 +104,8 @@ def run_post(case: Case, forces_csv: Path, outdir: Path, form: str = "exact",
             "static_moment": float(res["moment"][0]),
             "valid_fraction": float(np.mean(res["valid"])),
             "invalid_rows": {str(r): int(c) for r, c in zip(reasons, counts)},
-            "steady_state_moment": steady_state_stats(times, res["moment"])}
+            "steady_state_moment": steady_state_stats(times, res["moment"]),
+            "validity": anchor_validity(warnings, a.name, times, res, ERROR_THRESHOLD)}
         for r, c in zip(reasons, counts):
             log.warning("anchor %s: %d of %d rows invalid: %s", a.name, c, times.size, r)
     cols = ANCHOR_COLUMNS + MOMENT_COLUMNS
@@ -120,7 +123,7 @@ def run_post(case: Case, forces_csv: Path, outdir: Path, form: str = "exact",
             if moments and times.size > 1 else [])
     summary = {"cablefem": __version__, "status": "completed", "command": "post",
                "forces": str(forces_csv), "sign": sign, "case": case.to_dict(), "length": length,
-               "anchors": summary_anchors, "figures": figs,
+               "anchors": summary_anchors, "figures": figs, **warnings,
                "wall_time": {"total": time.perf_counter() - t0}}
     write_json(outdir / "summary.json", summary, comm)
     log.info("post-processed %d times x %d anchors into %s", times.size, len(hist.forces),

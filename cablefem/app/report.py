@@ -72,5 +72,62 @@ def _max_excitation(case: Case) -> float | None:
     return max(om) if om else None
 
 
+def _damping_ratio(case: Case):
+    """The modal damping ratio at omega (rad/s) of the case's damping (0 without)."""
+    d = case.damping
+    if d is None or getattr(d, "model", "none") == "none":
+        return lambda w: 0.0
+    return d.ratio_at
+
+
 def _g(x) -> str:
     return "n/a" if x is None else f"{x:.4g}"
+
+
+def anchor_validity(summary: dict, name: str, times: np.ndarray, mo: dict,
+                    threshold: float, fraction: float = 1 / 3) -> dict:
+    """The validity of clamped anchor ``name``'s moment rows ``mo`` (columns ``valid``,
+    ``error_estimate``, optionally ``invalid_reason``) over the output window (the last
+    ``fraction`` of the run, as :func:`steady_state_stats`; every row for fewer than two
+    times): the fraction of invalid rows and of rows whose error estimate is above
+    ``threshold``, the maximum and median estimate. Warns (:func:`warn`) naming the anchor,
+    the fraction and the reason when any row of the window is invalid or above the
+    threshold; loudly when every row of the window is invalid (docs/theory.md §5)."""
+    times = np.asarray(times, float)
+    sel = np.ones(times.size, bool)
+    if times.size > 1:
+        sel = times >= times[-1] - fraction * (times[-1] - times[0])
+    valid = np.asarray(mo["valid"], float)[sel] > 0
+    n = int(valid.size)
+    err = np.asarray(mo.get("error_estimate", np.full(times.size, np.nan)), float)[sel]
+    known = np.isfinite(err)
+    with np.errstate(invalid="ignore"):
+        above = known & (err > threshold)
+    out = {"window": [float(times[sel][0]), float(times[sel][-1])] if n else None,
+           "threshold": threshold,
+           "invalid_fraction": float(np.mean(~valid)) if n else None,
+           "above_threshold_fraction": float(np.mean(above)) if n else None,
+           "max": float(np.max(err[known])) if known.any() else None,
+           "median": float(np.median(err[known])) if known.any() else None}
+    if not n:
+        return out
+    key = f"anchors.{name}"
+    bad = ~valid
+    if bad.any():
+        reasons = np.asarray(mo.get("invalid_reason", np.full(times.size, "")), str)[sel]
+        why = ", ".join(f"{r or 'outside the method'}: {c}" for r, c in
+                        zip(*np.unique(reasons[bad], return_counts=True)))
+        head = ("EVERY row of the output window is invalid, no moment at this anchor can be "
+                "trusted" if bad.all() else f"{bad.sum()} of {n} rows of the output window "
+                f"({out['invalid_fraction']:.0%}) are invalid")
+        warn(summary, key, f"{head} ({why}) (valid = 0 in anchors.csv)")
+    if above.any():
+        warn(summary, key, f"{above.sum()} of {n} rows of the output window "
+             f"({out['above_threshold_fraction']:.0%}) have an estimated moment error above "
+             f"{threshold:.0%} (max {out['max']:.1%}): the terms this order of the outer "
+             "solution neglects (ell/l at this anchor angle, amplified near a resonance by "
+             f"the factor {summary.get('error_resonance_factor', 1.0):.3g}) are too large"
+             + (" (solver.outer_correction = 'hinge' reduces them)"
+                if summary.get("outer_correction") == "none" else "")
+             + "; see error_estimate in anchors.csv")
+    return out

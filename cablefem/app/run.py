@@ -19,9 +19,11 @@ from cablefem import __version__
 from cablefem.app.log import Progress, quiet_compiler
 from cablefem.app.output import RunOutput, rod_moment_columns
 from cablefem.app.report import (
+    _damping_ratio,
     _g,
     _max_excitation,
     _section_name,
+    anchor_validity,
     static_sag_ratio,
     steady_state_stats,
     warn,
@@ -42,8 +44,10 @@ from cablefem.io.series import (
 )
 from cablefem.modal import free_dofs, solve_modes
 from cablefem.moments import (
+    ERROR_THRESHOLD,
     MAX_ANCHOR_ANGLE,
     anchor_moments,
+    resonance_factor,
 )
 from cablefem.network import NetworkModel
 from cablefem.statics import solve_static
@@ -286,6 +290,10 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
                            None if resume is None else resume["checkpoint"].time, frames)
     except OutputError as err:
         raise RunError(f"{err}; run the case again") from err
+    if n_modes and omega and kind != "beam":  # the error estimate near a resonance
+        amp = resonance_factor(omega, modal.omegas, _damping_ratio(case))
+        emitter.moment_columns.set_resonance(amp, static.anchor_forces)
+        summary["error_resonance_factor"] = amp
     if resume is not None:  # after the emitter, which takes its reference from the statics
         model.scatter_nodal(resume["u"], model.u)
         model.scatter_nodal(resume["v"], model.v)
@@ -392,7 +400,8 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
             F_static = static.anchor_forces[model.anchors.index(a)]
             st = anchor_moments(F_static[None, :3], a.direction, a.section.EI, a.section.EA,
                                 a.section.mass, np.zeros((1, 3)),
-                                emitter.load_at(0.0, a.section.mass), model.length, None, form)
+                                emitter.load_at(0.0, a.section.mass), model.length, None, form,
+                                1 if getattr(model, "hinges", None) else 0)
             if kind == "beam":  # the rod's own; the composite with the beam's force beside
                 entry["static_moment_composite"] = float(st["moment"][0])
                 st = rod_moment_columns(st, F_static[None, 3:6], a.direction)
@@ -401,6 +410,7 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
             entry["static_moment_layer"] = float(st["moment_layer"][0])
             entry["static_delta"] = float(st["delta"][0])
             entry["layer_length"] = float(st["layer_length"][0])
+            entry["static_error_estimate"] = float(st["error_estimate"][0])
         if a.name in moments and len(times):
             mo = moments[a.name]
             entry["valid_fraction"] = float(np.mean(mo["valid"]))
@@ -418,6 +428,10 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
                      "virtual hinge's layer in its low-tension fallback (it stops following "
                      "the tension below a quarter of the static one): the first-order "
                      "correction is only partial there")
+            why = emitter.reasons.get(a.name, [])  # this process's rows (not a resumed run's)
+            why = ["(not recorded)"] * (len(times) - len(why)) + why
+            entry["validity"] = anchor_validity(summary, a.name, times,
+                                                {**mo, "invalid_reason": why}, ERROR_THRESHOLD)
             if len(times) > 1:
                 entry["steady_state_moment"] = steady_state_stats(times, mo["moment"])
         summary["anchors"][a.name] = entry

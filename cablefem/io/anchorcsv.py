@@ -29,15 +29,17 @@ from typing import Mapping, Sequence
 
 import numpy as np
 
-__all__ = ["ANCHOR_COLUMNS", "MOMENT_COLUMNS", "FORCE_COLUMNS", "INTEGER_COLUMNS",
-           "columns", "AnchorCSV", "format_rows", "read", "read_forces", "read_moments",
-           "AnchorHistory", "truncate"]
+__all__ = ["ANCHOR_COLUMNS", "MOMENT_COLUMNS", "OPTIONAL_MOMENT_COLUMNS", "FORCE_COLUMNS",
+           "INTEGER_COLUMNS", "columns", "AnchorCSV", "format_rows", "read", "read_forces",
+           "read_moments", "AnchorHistory", "truncate"]
 
 #: The anchor force (of the span on the anchor, into the span) and its magnitude.
 ANCHOR_COLUMNS = ["time", "anchor", "Nx", "Ny", "Nz", "tension"]
 #: The anchor moment and the boundary layer's quantities (clamped anchors; empty at others).
 MOMENT_COLUMNS = ["delta", "moment", "Mx", "My", "Mz", "psi0", "layer_length",
-                  "moment_layer", "valid"]
+                  "moment_layer", "valid", "error_estimate"]
+#: Moment columns that files of older versions lack: readers accept them absent (NaN).
+OPTIONAL_MOMENT_COLUMNS = ("error_estimate",)
 FORCE_COLUMNS = ["Nx", "Ny", "Nz"]
 #: Columns written as integers (all others but ``anchor`` are floats).
 INTEGER_COLUMNS = ("valid",)
@@ -54,14 +56,20 @@ def columns(clamped: bool) -> list[str]:
 class AnchorCSV:
     """``anchors.csv`` opened for writing by rank 0 (the other ranks' calls do nothing).
 
-    ``append=True`` continues an existing file (a resumed run, after :func:`truncate`);
-    otherwise the file is replaced and starts with the header."""
+    ``append=True`` continues an existing file (a resumed run, after :func:`truncate`) in
+    the columns of its header (a file of an older version without the optional columns
+    stays without them); otherwise the file is replaced and starts with the header."""
 
     def __init__(self, path: Path, columns: Sequence[str], comm=None, append: bool = False):
         self.columns = list(columns)
         self.fh = None
         if _rank(comm) == 0:
             resume = append and Path(path).is_file()
+            if resume:  # the file's own columns (an older version's file lacks optional ones)
+                with open(path, newline="") as fh:
+                    head = [h.strip() for h in next(csv.reader(fh), [])]
+                if head and set(head) <= set(self.columns):
+                    self.columns = head
             self.fh = open(path, "a" if resume else "w", newline="")
             if not resume:
                 self.fh.write(",".join(self.columns) + "\n")
@@ -131,7 +139,8 @@ def _text(s: str) -> str:
 def read(path: str | Path, cols: Sequence[str], optional: Sequence[str] = (),
          finite: Sequence[str] = (), empty_ok: bool = False
          ) -> dict[str, dict[str, np.ndarray]]:
-    """Read the columns ``cols`` (required) and those of ``optional`` the header has:
+    """Read the columns ``cols`` (required, but for :data:`OPTIONAL_MOMENT_COLUMNS`, NaN
+    when a file of an older version lacks them) and those of ``optional`` the header has:
     anchor -> column -> float array over that anchor's rows, anchors in the order of
     their first row; empty cells are NaN (the ``finite`` columns refuse them); ``"line"``
     holds each row's line in the file.
@@ -142,15 +151,20 @@ def read(path: str | Path, cols: Sequence[str], optional: Sequence[str] = (),
     path = Path(path)
     if not path.is_file():
         raise ValueError(f"{path}: no such file")
+    late = [c for c in cols if c in OPTIONAL_MOMENT_COLUMNS]  # absent in older files
+    cols = [c for c in cols if c not in late]
     try:
         with path.open(newline="") as fh:
-            out = _read(path, fh, list(cols), list(optional), set(finite))
+            out = _read(path, fh, list(cols), list(optional) + late, set(finite))
     except UnicodeDecodeError:
         raise ValueError(f"{path}: not a text file") from None
     except csv.Error as err:
         raise ValueError(f"{path}: not a CSV file ({err})") from None
     if not out and not empty_ok:
         raise ValueError(f"{path}: no data rows")
+    for d in out.values():
+        for c in late:
+            d.setdefault(c, np.full(d["time"].size, np.nan))
     return out
 
 
@@ -238,16 +252,20 @@ def read_forces(path: str | Path) -> AnchorHistory:
 
 def read_moments(path: str | Path) -> dict[str, dict[str, np.ndarray]]:
     """cablefem's ``anchors.csv`` for fatigue and comparisons: anchor -> ``time, tension,
-    moment, valid`` arrays (empty fields -> NaN; an empty ``valid`` -> 0, a missing one
-    -> 1 where the moment is finite) and, when the columns exist, ``moment_vector``
+    moment, valid, error_estimate`` arrays (empty fields -> NaN; an empty ``valid`` -> 0,
+    a missing one -> 1 where the moment is finite; ``error_estimate`` NaN in files of
+    older versions without it) and, when the columns exist, ``moment_vector``
     (n, 3) from ``Mx, My, Mz``. ValueError names the file, line and column of malformed
     input."""
-    data = read(path, ["tension", "moment"], optional=["valid", "Mx", "My", "Mz"])
+    data = read(path, ["tension", "moment"],
+                optional=["valid", "Mx", "My", "Mz", *OPTIONAL_MOMENT_COLUMNS])
     out = {}
     for name, d in data.items():
         e = {"time": d["time"], "tension": d["tension"], "moment": d["moment"]}
         e["valid"] = (np.nan_to_num(d["valid"]) if "valid" in d
                       else np.isfinite(d["moment"]).astype(float))
+        for c in OPTIONAL_MOMENT_COLUMNS:
+            e[c] = d[c] if c in d else np.full(d["time"].size, np.nan)
         if all(c in d for c in ("Mx", "My", "Mz")):
             e["moment_vector"] = np.column_stack([d["Mx"], d["My"], d["Mz"]])
         out[name] = e
