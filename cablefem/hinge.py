@@ -239,7 +239,8 @@ class VirtualHinges:
                 why = f"sigma_h = {sig:.3g} m <= 0 (anchor angle above ~120 deg)"
             elif sig > REGION_FRACTION * float(np.sum(hg.s)):
                 why = (f"sigma_h = {sig:.3g} m: the layer is too long for the cable (more "
-                       f"than {REGION_FRACTION:g} of half its length)")
+                       f"than {REGION_FRACTION:g} of the {float(np.sum(hg.s)):.3g} m it may "
+                       "be taken from: half the cable, or up to the next junction)")
             if why is not None:
                 raise HingeError(f"anchor {hg.anchor.name}: cannot place the virtual hinge: "
                                  f"{why}. Use solver.outer_correction = \"none\" (or "
@@ -260,7 +261,8 @@ class VirtualHinges:
                 need = int(np.searchsorted(np.cumsum(hg.s), sig / REGION_FRACTION)) + 1
                 if need > hg.s.size:
                     raise HingeError(f"anchor {hg.anchor.name}: sigma_h = {sig:.3g} m is more "
-                                     f"than {REGION_FRACTION:g} of half the cable")
+                                     f"than {REGION_FRACTION:g} of half the cable (or of "
+                                     "its chain up to the next junction)")
                 hg.n = max(hg.n, need)
             hg.p = hg.s[:hg.n] / float(np.sum(hg.s[:hg.n]))  # the same fraction of each
             r = np.zeros(hg.s.size)
