@@ -62,8 +62,10 @@ its layers itself. In a network (:class:`cablefem.network.NetworkModel`) a clamp
 must be the end node of one chain of elements: the region is taken from that chain, from the
 anchor through nodes on two elements, up to a junction, a free end or half-way to another
 anchor (:meth:`VirtualHinges._network`); the elements keep their pretension's stress-free
-length per mesh length as their base (``c0``). A hinge that cannot be placed in statics (slack anchor, anchor angle
-above ~120 deg, a layer longer than REGION_FRACTION of half the cable) raises
+length per mesh length as their base (``c0``).
+
+A hinge that cannot be placed in statics (slack anchor, anchor angle above ~120 deg, a layer
+longer than REGION_FRACTION of half the cable or of its chain to a junction) raises
 :class:`HingeError` (statics makes it an input error naming ``solver.outer_correction``).
 """
 
