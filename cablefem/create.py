@@ -129,8 +129,9 @@ def create_network(comm: MPI.Comm, mesh_file: str | os.PathLike, sections: dict[
                    anchors: list[Anchor], *, cables: list[CableSpec],
                    gravity: Gravity | None = None, loads=(), point_masses=(),
                    point_loads=(), damping: Damping | None = None, tension_only: bool = True,
-                   petsc_options: dict | None = None, petsc_options_prefix: str = "cable_",
-                   units: str = "SI", name: str = "<python>"):
+                   outer_correction: str = "none", petsc_options: dict | None = None,
+                   petsc_options_prefix: str = "cable_", units: str = "SI",
+                   name: str = "<python>"):
     """A cable network from a tagged gmsh file (:class:`cablefem.network.NetworkModel`; tag
     convention in ``meshes/README.md``).
 
@@ -148,16 +149,19 @@ def create_network(comm: MPI.Comm, mesh_file: str | os.PathLike, sections: dict[
     cables
         :class:`cablefem.description.CableSpec` (1D group of the mesh, section name,
         pretension N) for every cable group of the mesh.
-    gravity, loads, point_masses, point_loads, damping, tension_only, petsc_options,
-    petsc_options_prefix, units, name
+    gravity, loads, point_masses, point_loads, damping, tension_only, outer_correction,
+    petsc_options, petsc_options_prefix, units, name
         As for :func:`create_cable`; point masses and point loads name 0D groups in ``s``.
+        ``outer_correction = "hinge"``: a virtual hinge at every clamped anchor, which must
+        be the end node of one chain of elements (:mod:`cablefem.hinge`).
     """
     from cablefem.network import NetworkModel
 
     description = describe_network(
         mesh_file, sections, anchors, cables=cables, gravity=gravity, loads=loads,
         point_masses=point_masses, point_loads=point_loads, damping=damping,
-        tension_only=tension_only, petsc_options=petsc_options, units=units, source=name)
+        tension_only=tension_only, outer_correction=outer_correction,
+        petsc_options=petsc_options, units=units, source=name)
     return _named(NetworkModel, comm, description, petsc_options_prefix)
 
 

@@ -298,8 +298,8 @@ def describe_network(mesh_file: str | os.PathLike, sections: dict[str, Section],
                      anchors: list[Anchor], *, cables: list[CableSpec],
                      gravity: Gravity | None = None, loads=(), point_masses=(),
                      point_loads=(), damping: Damping | None = None, tension_only: bool = True,
-                     petsc_options: dict | None = None, units: str = "SI",
-                     source: str = "<python>") -> CableDescription:
+                     outer_correction: str = "none", petsc_options: dict | None = None,
+                     units: str = "SI", source: str = "<python>") -> CableDescription:
     """A checked description of a cable network (the arguments of
     :func:`cablefem.create_network`, which see); the mesh itself is read by the model."""
     problems: list[tuple[str, str]] = []
@@ -326,7 +326,7 @@ def describe_network(mesh_file: str | os.PathLike, sections: dict[str, Section],
     parts = _common(problems, gravity=Gravity() if gravity is None else gravity, elements=1,
                     grading=1.0, loads=loads, point_masses=point_masses,
                     point_loads=point_loads, damping=damping, tension_only=tension_only,
-                    outer_correction="none",
+                    outer_correction=outer_correction,
                     petsc_options={} if petsc_options is None else petsc_options,
                     network=True)
     anchor_list = _anchors(problems, anchors, network=True)

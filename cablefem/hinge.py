@@ -58,8 +58,14 @@ layer) the layer keeps its last law without the compliance (frozen). Those steps
 anchor's *fallback* steps: :meth:`VirtualHinges.fallback` flags them, and the run goes on.
 
 Only the string model has hinges (``solver.outer_correction = "hinge"``); the rod resolves
-its layers itself. A hinge that cannot be placed in statics (slack anchor, anchor angle
-above ~120 deg, a layer longer than REGION_FRACTION of half the cable) raises
+its layers itself. In a network (:class:`cablefem.network.NetworkModel`) a clamped anchor
+must be the end node of one chain of elements: the region is taken from that chain, from the
+anchor through nodes on two elements, up to a junction, a free end or half-way to another
+anchor (:meth:`VirtualHinges._network`); the elements keep their pretension's stress-free
+length per mesh length as their base (``c0``).
+
+A hinge that cannot be placed in statics (slack anchor, anchor angle above ~120 deg, a layer
+longer than REGION_FRACTION of half the cable or of its chain to a junction) raises
 :class:`HingeError` (statics makes it an input error naming ``solver.outer_correction``).
 """
 
@@ -108,6 +114,7 @@ class _Hinge:
         self.T_static = 0.0  # dynamics: the first element's static tension, N
         self.last = (np.nan, np.nan)  # dynamics: the law's (T, Delta), T < 0: no compliance
         self.fallback = False  # dynamics: the current law is a fallback (module docs)
+        self.c0 = np.ones(len(s))  # stress-free length per mesh length without the hinge
 
 
 class VirtualHinges:
@@ -115,6 +122,11 @@ class VirtualHinges:
 
     def __init__(self, model) -> None:
         self.model = model
+        self.items: list[_Hinge] = []
+        self.g_vec = np.asarray(model.g_vec, float)
+        if getattr(model, "is_network", False):
+            self._network()
+            return
         mesh = model.mesh
         geo = model.geometry
         x = mesh.geometry.x
@@ -130,7 +142,6 @@ class VirtualHinges:
         cell_of = np.full(n_el, -1, np.int64)
         cell_of[elem_of] = np.arange(n_cells)
         s_all = np.abs(np.diff(np.asarray(geo.stations, float)))
-        self.items: list[_Hinge] = []
         for i, anc in enumerate(model.anchors):
             if anc.kind != "clamped":
                 continue
@@ -140,17 +151,68 @@ class VirtualHinges:
                                  "the end of one cable")
             order = np.arange(n_el) if k0 == 0 else np.arange(n_el)[::-1]
             order = order[:max(1, n_el // 2)]  # a region never reaches past mid-cable
-            cells = cell_of[order]
-            nodes = None
-            if cells[0] >= 0:  # the first element's two nodes, the anchor's first
-                dofs = model.V.dofmap.cell_dofs(int(cells[0]))
-                at_anchor = np.linalg.norm(X[dofs] - anc.reference, axis=1)
-                a, b = dofs[np.argmin(at_anchor)], dofs[np.argmax(at_anchor)]
-                nodes = (a, b, X[b] - X[a])  # and the element in the reference geometry
-            hg = _Hinge(i, anc, s_all[order], cells, nodes)
-            hg.EA0 = float(anc.section.EA)
-            self.items.append(hg)
+            self._add(i, anc, s_all[order], cell_of[order], X)
         self.g_vec = np.asarray(model.g_vec, float)
+
+    def _add(self, i, anc, s, cells, X) -> None:
+        """A hinge at anchor ``i`` whose region may take the elements of stress-free lengths
+        ``s`` (from the anchor on) on the local ``cells`` (-1: not on this rank)."""
+        model = self.model
+        nodes = None
+        if cells[0] >= 0:  # the first element's two nodes, the anchor's first
+            dofs = model.V.dofmap.cell_dofs(int(cells[0]))
+            at_anchor = np.linalg.norm(X[dofs] - anc.reference, axis=1)
+            a, b = dofs[np.argmin(at_anchor)], dofs[np.argmax(at_anchor)]
+            nodes = (a, b, X[b] - X[a])  # and the element in the reference geometry
+        hg = _Hinge(i, anc, np.asarray(s, float), np.asarray(cells, np.int64), nodes)
+        hg.EA0 = float(anc.section.EA)
+        # stress-free length per mesh length without the hinge (1 on a single cable; a
+        # network's mesh is the pretensioned geometry)
+        c = hg.cells
+        hg.c0[c >= 0] = model.c.x.array[c[c >= 0]]
+        self.items.append(hg)
+
+    def _network(self) -> None:
+        """The hinges of a network (:class:`cablefem.network.NetworkModel`): a clamped
+        anchor is the end node of one chain of elements; its region may take the elements
+        of that chain from the anchor on through nodes of degree 2, up to a junction (degree
+        > 2) or a free end, or up to half the chain when it ends at another anchor."""
+        model = self.model
+        geo = model.geometry
+        X = model.V.tabulate_dof_coordinates()
+        cells_g = np.asarray(geo.cells, np.int64)
+        n_nodes = len(geo.points)
+        degree = np.bincount(cells_g.ravel(), minlength=n_nodes)
+        at_node: list[list[int]] = [[] for _ in range(n_nodes)]
+        for e, (a, b) in enumerate(cells_g):
+            at_node[a].append(e)
+            at_node[b].append(e)
+        anchored = {int(k) for k in geo.anchor_nodes.values()}
+        length = np.asarray(geo.cell_c, float) * np.linalg.norm(
+            geo.points[cells_g[:, 1]] - geo.points[cells_g[:, 0]], axis=1)
+        idx = np.asarray(model._cell_index, np.int64)  # network cell of each local cell
+        cell_of = np.full(len(cells_g), -1, np.int64)
+        cell_of[idx] = np.arange(idx.size)
+        for i, anc in enumerate(model.anchors):
+            if anc.kind != "clamped":
+                continue
+            k = int(geo.anchor_nodes[anc.name])
+            if degree[k] != 1:
+                raise HingeError(f"anchor {anc.name}: the virtual hinge needs the anchor at "
+                                 f"the end of one cable (its node {k} is on {degree[k]} "
+                                 "elements)")
+            chain, node, prev = [], k, -1
+            while True:
+                e = [c for c in at_node[node] if c != prev][0]
+                chain.append(e)
+                node = int(cells_g[e][cells_g[e] != node][0])
+                prev = e
+                if degree[node] != 2 or node in anchored:
+                    break
+            chain = np.asarray(chain, np.int64)
+            if node in anchored:  # the other anchor's layer takes the other half
+                chain = chain[:max(1, chain.size // 2)]
+            self._add(i, anc, length[chain], cell_of[chain], X)
 
     def __bool__(self) -> bool:
         return bool(self.items)
@@ -183,7 +245,8 @@ class VirtualHinges:
                 why = f"sigma_h = {sig:.3g} m <= 0 (anchor angle above ~120 deg)"
             elif sig > REGION_FRACTION * float(np.sum(hg.s)):
                 why = (f"sigma_h = {sig:.3g} m: the layer is too long for the cable (more "
-                       f"than {REGION_FRACTION:g} of half its length)")
+                       f"than {REGION_FRACTION:g} of the {float(np.sum(hg.s)):.3g} m it may "
+                       "be taken from: half the cable, or up to the next junction)")
             if why is not None:
                 raise HingeError(f"anchor {hg.anchor.name}: cannot place the virtual hinge: "
                                  f"{why}. Use solver.outer_correction = \"none\" (or "
@@ -204,7 +267,8 @@ class VirtualHinges:
                 need = int(np.searchsorted(np.cumsum(hg.s), sig / REGION_FRACTION)) + 1
                 if need > hg.s.size:
                     raise HingeError(f"anchor {hg.anchor.name}: sigma_h = {sig:.3g} m is more "
-                                     f"than {REGION_FRACTION:g} of half the cable")
+                                     f"than {REGION_FRACTION:g} of half the cable (or of "
+                                     "its chain up to the next junction)")
                 hg.n = max(hg.n, need)
             hg.p = hg.s[:hg.n] / float(np.sum(hg.s[:hg.n]))  # the same fraction of each
             r = np.zeros(hg.s.size)
@@ -213,7 +277,8 @@ class VirtualHinges:
             hg.anchor.offset = h * hg.anchor.direction
             touched = max(hg.n, hg.touched)  # cells changed before and now
             c = hg.cells[:touched]
-            self.model.c.x.array[c[c >= 0]] = (1.0 - r[:touched] / hg.s[:touched])[c >= 0]
+            self.model.c.x.array[c[c >= 0]] = (hg.c0[:touched]
+                                               * (1.0 - r[:touched] / hg.s[:touched]))[c >= 0]
             self.model.EA.x.array[c[c >= 0]] = hg.EA0
             hg.touched = touched
         self.model.invalidate_time()
@@ -306,7 +371,7 @@ class VirtualHinges:
         c = hg.cells[:hg.n]
         R = 1.0 - p * (sig - sig_T * T) / sl  # stress-free length per mesh length
         EA = R / ((1.0 - p * sig / sl) / hg.EA0 - p * sig_T / sl)
-        self.model.c.x.array[c[c >= 0]] = R[c >= 0]
+        self.model.c.x.array[c[c >= 0]] = (hg.c0[:hg.n] * R)[c >= 0]
         self.model.EA.x.array[c[c >= 0]] = EA[c >= 0]
         return True
 
