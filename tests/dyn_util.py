@@ -47,3 +47,27 @@ def free_vibration(n=20, amplitude=1e-3, t_end=3.0, dt=0.01, rho_inf=1.0, dampin
     stats = DynamicsStats()
     for t, forces in integrate(model, t_end, dt, rho_inf, 1, stats):
         yield t, model, forces
+
+
+def resume_round_trip(make_model, folder, t_end: float, dt: float, steps: int):
+    """The anchor forces at ``t_end`` of a run from statics that writes a checkpoint at
+    step ``steps // 2``, and of a run resumed from that ``checkpoint.npz`` in ``folder``:
+    ``(uninterrupted, resumed, checkpoint)`` (``make_model()`` builds a fresh model)."""
+    from cablefem.io.checkpoint import read_checkpoint, write_checkpoint
+
+    def run(start=None):
+        m = make_model()
+        solve_static(m)
+        m.u.x.array[:] = m.u_static.x.array
+        if start is not None:
+            m.scatter_nodal(start["u"], m.u)
+            m.scatter_nodal(start["v"], m.v)
+        out = [f.copy() for _, f in integrate(
+            m, t_end, dt, 0.9, steps, start=None if start is None else start["checkpoint"],
+            checkpoint_every=steps // 2 if start is None else 0,
+            on_checkpoint=lambda ck: write_checkpoint(m, folder, ck, "-", {}))]
+        return out[-1]
+
+    full = run()
+    ck = read_checkpoint(folder)
+    return full, run(ck), ck

@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from dyn_util import resume_round_trip
 from mpi4py import MPI
 from scipy.integrate import solve_ivp
 
@@ -364,26 +365,10 @@ def test_following_hinge_resumes_from_a_checkpoint_exactly(mpi_tmp_path):
     alone does not give them back: the tension measured in it depends on the law it was
     solved with). Case B resumed from checkpoint.npz at step 20 of 40 gives the
     uninterrupted anchor forces exactly (measured: 0; without the laws: 5 % off)."""
-    from cablefem.dynamics import integrate
-    from cablefem.io.checkpoint import read_checkpoint, write_checkpoint
-
-    def run(start=None):
-        m = CableModel(MPI.COMM_WORLD, _hinged("paper_spatial.toml"))
-        solve_static(m)
-        m.u.x.array[:] = m.u_static.x.array
-        if start is not None:
-            m.scatter_nodal(start["u"], m.u)
-            m.scatter_nodal(start["v"], m.v)
-        out = [f.copy() for _, f in integrate(
-            m, 0.2, 0.005, 0.9, 40, start=None if start is None else start["checkpoint"],
-            checkpoint_every=20 if start is None else 0,
-            on_checkpoint=lambda ck: write_checkpoint(m, mpi_tmp_path, ck, "-", {}))]
-        return out[-1]
-
-    full = run()
-    ck = read_checkpoint(mpi_tmp_path)
+    full, resumed, ck = resume_round_trip(
+        lambda: CableModel(MPI.COMM_WORLD, _hinged("paper_spatial.toml")), mpi_tmp_path, 0.2,
+        0.005, 40)
     assert ck["checkpoint"].layers.shape == (2, 2)
-    resumed = run(ck)
     # the same equations from the same state and laws: round-off of the 2.5 N force
     np.testing.assert_allclose(resumed, full, rtol=0, atol=1e-12 * np.abs(full).max())
 

@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from dyn_util import resume_round_trip
 from mpi4py import MPI
 from test_network import write_mesh  # noqa: E402  (tests/ is on the path)
 
@@ -146,26 +147,9 @@ def test_fan_with_hinges_is_partition_independent_and_first_order():
 def test_network_hinges_resume_from_a_checkpoint_exactly(mpi_tmp_path):
     """The fan resumed from its checkpoint at step 10 of 20 gives the uninterrupted anchor
     forces (the layers' laws are in the checkpoint): round-off of the 2.5e6 N forces."""
-    from cablefem.dynamics import integrate
-    from cablefem.io.checkpoint import read_checkpoint, write_checkpoint
-
-    def run(start=None):
-        m = NetworkModel(MPI.COMM_WORLD, _fan("hinge"))
-        solve_static(m)
-        m.u.x.array[:] = m.u_static.x.array
-        if start is not None:
-            m.scatter_nodal(start["u"], m.u)
-            m.scatter_nodal(start["v"], m.v)
-        out = [f.copy() for _, f in integrate(
-            m, 0.1, 0.005, 0.9, 20, start=None if start is None else start["checkpoint"],
-            checkpoint_every=10 if start is None else 0,
-            on_checkpoint=lambda ck: write_checkpoint(m, mpi_tmp_path, ck, "-", {}))]
-        return out[-1]
-
-    full = run()
-    ck = read_checkpoint(mpi_tmp_path)
+    full, resumed, ck = resume_round_trip(
+        lambda: NetworkModel(MPI.COMM_WORLD, _fan("hinge")), mpi_tmp_path, 0.1, 0.005, 20)
     assert ck["checkpoint"].layers.shape == (12, 2)
-    resumed = run(ck)
     np.testing.assert_allclose(resumed, full, rtol=0, atol=1e-12 * np.abs(full).max())
 
 
