@@ -431,8 +431,6 @@ def test_fallback_is_flagged_in_the_summary_and_resumes_exactly(mpi_tmp_path):
     the first fallback phase, 0.075-0.185 s) keeps the fallback law (its tension stored
     negative) and the resumed run gives the uninterrupted anchor forces exactly."""
     from cablefem.app.run import run_case
-    from cablefem.dynamics import integrate
-    from cablefem.io.checkpoint import read_checkpoint, write_checkpoint
 
     case = _slackening()
     case = dataclasses.replace(case, dynamics=dataclasses.replace(case.dynamics, t_end=0.2))
@@ -444,22 +442,8 @@ def test_fallback_is_flagged_in_the_summary_and_resumes_exactly(mpi_tmp_path):
         assert 0.3 < frac < 0.7, frac
     assert any("low-tension fallback" in w["message"] for w in res.summary["warnings"])
 
-    def run(start=None):
-        m = CableModel(MPI.COMM_WORLD, case)
-        solve_static(m)
-        m.u.x.array[:] = m.u_static.x.array
-        if start is not None:
-            m.scatter_nodal(start["u"], m.u)
-            m.scatter_nodal(start["v"], m.v)
-        out = [f.copy() for _, f in integrate(
-            m, 0.2, 0.005, 0.9, 40, start=None if start is None else start["checkpoint"],
-            checkpoint_every=20 if start is None else 0,
-            on_checkpoint=lambda ck: write_checkpoint(m, mpi_tmp_path, ck, "-", {}))]
-        return out[-1]
-
-    full = run()
-    ck = read_checkpoint(mpi_tmp_path)
+    full, resumed, ck = resume_round_trip(lambda: CableModel(MPI.COMM_WORLD, case),
+                                          mpi_tmp_path, 0.2, 0.005, 40)
     assert np.all(ck["checkpoint"].layers[:, 0] < 0)  # both layers in the fallback at t = 0.1
-    resumed = run(ck)
     # the same equations from the same state and laws: round-off of the forces (~25 N)
     np.testing.assert_allclose(resumed, full, rtol=0, atol=1e-12 * np.abs(full).max())
