@@ -77,7 +77,7 @@ class RunOutput:
         #: per clamped anchor: why each row of this process is invalid ("" when valid)
         self.reasons: dict[str, list[str]] = {}
         #: per clamped anchor with a virtual hinge: the rows whose layer was in its
-        #: low-tension fallback (cablefem.hinge; this process's rows, not a resumed run's)
+        #: fallback outside the followed tension range (cablefem.hinge; this process's rows, not a resumed run's)
         self.fallback: dict[str, list[bool]] = {}
         self._names = [a.name for a in model.anchors]
         self._index = {name: j for j, name in enumerate(self._names)}
