@@ -343,7 +343,6 @@ class CableModel:
             fem.VectorFunctionSpace(self.mesh, ("DG", 0), dim=3), name="turn_dir")
         g = forms.stretch_vector(self.u, self.t0)
         law.cos = ufl.dot(self.turn_dir, g) / ufl.sqrt(ufl.dot(g, g))
-        self.cos_turn_expr = fem.Expression(law.cos, self.W.element.interpolation_points())
         self.law = law
 
     def _item_nodes(self, item) -> list[int]:

@@ -32,30 +32,40 @@ the frequencies (the span turns about H, not about A).
 In dynamics the node stays where statics put it (it moves with the anchor), and so does the
 region: H moves only at second order in a change of Delta, and a prescribed node that jumps
 with the tension feeds velocity jumps into generalised-alpha (tried: the run blew up). The
-layer itself follows the tension T and angle Delta of the first element
-(:meth:`VirtualHinges.follow`, after every step): sigma is set so that the string from the
-fixed node lies, along the string, on the rod's far-field line at the current T and Delta,
-``h cos(Delta) - lambda_inf sigma = D_t(T, Delta)`` (plus the static state's small mismatch
-between element tension and anchor force, kept constant). The Delta part is first order in
-the motion: as the span swings, the layer gives length, ``d sigma ~ -ell Delta dDelta / 2``,
-which softens the geometric stiffening of a vibrating cable. The T part, ``sigma_T = d
-sigma/dT`` (the layer's axial compliance, from D_t ~ T^-1/2), is tiny but cannot be lagged:
-the first element is stiff (EA/L), and EA/L times that compliance is ~2.4 in case B, so a
-sigma updated from the last step's tension blew up within 15 steps. It goes into the
-region's law instead, linearised about the current tension, as a compliance in series
-(each element of stress-free length s gets EA' and a stress-free length R, exact at that
-tension, each element its share p = s/K of the layer; the layer's mass is K - sum R), so
-that each step solves the layer's response to
-its own tension implicitly.
+layer itself follows the tension T and the angle Delta through the region's constitutive
+law (:meth:`VirtualHinges.start_dynamics`, :func:`cablefem.forms.layer_law_tension`): sigma
+is the stress-free length for which the string from the fixed node lies, along the string,
+on the rod's far-field line at T and Delta, ``h cos(Delta) - lambda_inf sigma = D_t(T,
+Delta)`` (plus the static state's small mismatch between element tension and anchor force,
+kept constant), and each region cell removes its share p of
 
-Low tension (the fallback). The layer length grows as T^-1/2 and the series compliance as
-T^-3/2: near a slack phase neither can be followed. Below ``FLOOR`` times the static
-tension of the first element the layer stops following the tension: its law is the one at
-the floor tension (at the current angle), without the compliance. At the floor the two laws
-agree, so nothing jumps. Where the far field does not exist or sigma leaves (0,
-MAX_FRACTION K] (anchor angles near 120 deg and beyond, or a region too short for the
-layer) the layer keeps its last law without the compliance (frozen). Those steps are the
-anchor's *fallback* steps: :meth:`VirtualHinges.fallback` flags them, and the run goes on.
+    sigma(T, C) = sigma_h + sigma_T (T - T0) + sigma_C (C - C0),   C = cos Delta,
+
+linearised about the cell's own static tension T0 and cosine C0. T and C are the cell's own
+(C from its current tangent, in the residual), so the law is implicit: Newton solves the
+layer's response to its own tension and angle within each step, and its Jacobian is derived
+like every other term's. Written for the cell's stretch lambda this is linear, ``lambda = rho
++ ka T`` with ``rho = a - b (C - C0)``; ``ka`` is the elastic compliance plus the layer's
+(sigma_T < 0: the layer gets shorter as the tension grows, sigma ~ T^-1/2), so the region is
+softer than the element, a compliance in series. The law is fixed for the whole run: nothing
+is updated between steps, so a restart gets it back from the static state, and nothing jumps.
+
+The two parts matter in different places. sigma_T is tiny, but the first element is stiff
+(EA/L), and EA/L times that compliance is ~2.4 in case B: a sigma updated from the last
+step's tension blew up within 15 steps. sigma_C is first order in the motion at a sagging
+cable's clamps (Delta ~ 0.4 rad): a sigma updated after each step from the last angle there
+fed energy into the motion (a 10 %-sag cable blew up within 3 s), and one re-linearised about
+the first element's tension at every step kicked the other region cells (their tensions
+differ by the region's weight). Round a small Delta sigma_C (C - C0) is second order, as it
+should be.
+
+Out of range (the fallback). The linear law holds from ``FLOOR`` to ``CEILING`` times T0;
+outside, the cell keeps the law at the nearer end with the element's own elastic slope
+(``T = max(min(T_a, T_f), T_c)``, continuous, with kinks), and the change of C is clipped to
+``DCOS``. Rows whose first element's tension is outside that range are the anchor's
+*fallback* rows: :meth:`VirtualHinges.fallback` flags them (from the anchor force), the
+summary counts them, and the run goes on. In the region the mass is the element's less the layer's static sigma_h (the
+layer's weight and inertia go to the anchor force), fixed during the run.
 
 Only the string model has hinges (``solver.outer_correction = "hinge"``); the rod resolves
 its layers itself. In a network (:class:`cablefem.network.NetworkModel`) a clamped anchor
@@ -78,13 +88,11 @@ from scipy.spatial import cKDTree
 from cablefem.asymptotics import far_field_offsets, layer, virtual_hinge
 from cablefem.errors import HingeError
 
-__all__ = ["VirtualHinges", "HingeError", "MAX_FRACTION", "REGION_FRACTION", "FLOOR"]
+__all__ = ["VirtualHinges", "HingeError", "REGION_FRACTION", "FLOOR", "CEILING"]
 
-#: Largest fraction of the region's stress-free length the layer may take (dynamics).
-MAX_FRACTION = 0.5
 #: In statics the region is chosen so that sigma_h is at most this fraction of it: room for
-#: the layer to grow to twice its length (sigma ~ T^-1/2: a quarter of the tension, FLOOR)
-#: in dynamics before MAX_FRACTION is reached.
+#: the layer to grow in dynamics (to 11/8 sigma_h at the FLOOR tension, plus the angle's
+#: term) and to be spread over a few elements on a fine mesh.
 REGION_FRACTION = 0.25
 #: Statics keeps its region while sigma_h stays below GROW x REGION_FRACTION of it (a
 #: region that changed with every iteration would make the fixed point hop).
@@ -95,7 +103,7 @@ FLOOR = 0.25
 #: linear law removes sigma_h/2 there, the far field 0.71 sigma_h; at 3 T0 it would be 0).
 CEILING = 2.0
 #: Largest change of cos(Delta) the law follows.
-DCOS = float(__import__("os").environ.get("HACK_DCOS", "0.25"))
+DCOS = 0.25
 #: Step in cos(Delta) of the derivative d sigma / d cos(Delta).
 HCOS = 1e-5
 
@@ -115,12 +123,10 @@ class _Hinge:
         self.touched = 0  # elements whose coefficients the hinge has changed
         self.h = 0.0  # the node is at A + h c
         self.sigma = 0.0  # the layer's stress-free length (taken from the region)
-        self.shift = 0.0  # dynamics: sigma - sigma_far at the static state, m
         self.mass_length = 0.0  # the layer's mass per m (statics' sigma_h, fixed in dynamics)
         self.EA0 = 0.0  # the elements' own EA
         self.T_static = 0.0  # dynamics: the first element's static tension, N
-        self.last = (np.nan, np.nan, 1.0)  # dynamics: the law's (T, Delta, turn) (follow)
-        self.fallback = False  # dynamics: the current law is a fallback (module docs)
+        self.sig_T = self.sig_C = 0.0  # dynamics: the first element's law (layer_sigma)
         self.c0 = np.ones(len(s))  # stress-free length per mesh length without the hinge
 
 
@@ -327,10 +333,14 @@ class VirtualHinges:
         if self._scratch is None:
             from dolfinx import fem
 
-            self._scratch = (fem.Function(m.W), fem.Function(m.W))
-        T, C = self._scratch
+            from cablefem.jit import quiet_compiler
+
+            with quiet_compiler():
+                cos = fem.Expression(m.law.cos, m.W.element.interpolation_points())
+            self._scratch = (fem.Function(m.W), fem.Function(m.W), cos)
+        T, C, cos = self._scratch
         T.interpolate(m.tension_expr)
-        C.interpolate(m.cos_turn_expr)
+        C.interpolate(cos)
         if keep is not None:
             m.u.x.array[:] = keep
         return T.x.array, C.x.array
@@ -386,10 +396,8 @@ class VirtualHinges:
         m = self.model
         T, delta = self._measure(u_static)
         Tc, Cc = self._cell_values(u_static)
-        for hg, t_k, d_k in zip(self.items, T, delta):
+        for hg, t_k in zip(self.items, T):
             hg.T_static = float(t_k)
-            hg.last = (float(t_k), float(d_k), 0.0)
-            hg.fallback = False
             k, c = self._local(hg)
             T0, C0 = Tc[c], Cc[c]
             if np.any(T0 <= 0.0):
@@ -411,16 +419,6 @@ class VirtualHinges:
             if hg.cells[0] >= 0:
                 hg.sig_T, hg.sig_C = float(sig_T[0]), float(sig_C[0])
 
-    def follow(self, u: np.ndarray, t: float) -> None:
-        """Dynamics, after a step: flag each layer whose first element's tension in ``u``
-        is outside ``[FLOOR, CEILING]`` times its static tension (the law no longer follows
-        the tension there: module docs); collective."""
-        T, delta = self._measure(u)
-        for hg, t_k, d_k in zip(self.items, T, delta):
-            out = not (FLOOR * hg.T_static <= t_k <= CEILING * hg.T_static)
-            hg.last = (float(t_k), float(d_k), float(out))
-            hg.fallback = out
-
     def layer_sigma(self, T: float, delta: float, hg: _Hinge) -> float:
         """The stress-free length the law removes from the first element's region at its
         tension T and angle Delta, sigma_h + sigma_T (T - T0) + sigma_C (cos Delta - C0) with
@@ -434,22 +432,17 @@ class VirtualHinges:
         return hg.sigma + hg.sig_T * (np.clip(T, FLOOR * T0, CEILING * T0) - T0) \
             + hg.sig_C * dC
 
-    def state(self) -> np.ndarray:
-        """(n_hinges, 3): the first element's tension and angle at the last step and
-        whether its layer was outside the law's range (1.0) then. The law itself is fixed
-        from the static state: a restart gets it back from there."""
-        return np.array([hg.last for hg in self.items], float).reshape(-1, 3)
-
-    def set_state(self, state: np.ndarray, t: float) -> None:
-        """The flags of :meth:`state`'s rows."""
-        for hg, row in zip(self.items, np.asarray(state, float).reshape(len(self.items), -1)):
-            hg.last = tuple(float(v) for v in row[:3])
-            hg.fallback = bool(row[2] > 0.0) if row.size > 2 else bool(row[0] < 0.0)
-
-    def fallback(self) -> dict[str, bool]:
-        """Per anchor: True while its layer is in the fallback (module docs), i.e. for the
-        step just solved when read before :meth:`follow`."""
-        return {hg.anchor.name: bool(hg.fallback) for hg in self.items}
+    def fallback(self, forces: np.ndarray) -> dict[str, bool]:
+        """Per anchor: True when the anchor's tension in ``forces`` (n_anchors, >= 3: the
+        forces at the real anchors) is outside FLOOR to CEILING times its first element's
+        static tension: the layer's law no longer follows the tension there (module
+        docs). (The anchor force and the first element's tension differ by the layer's
+        weight, about 1e-3 of them: nothing next to the range's factors 4 and 2.)"""
+        out = {}
+        for hg in self.items:
+            T = float(np.linalg.norm(np.asarray(forces[hg.index][:3], float)))
+            out[hg.anchor.name] = not (FLOOR * hg.T_static <= T <= CEILING * hg.T_static)
+        return out
 
     def report(self) -> dict[str, dict]:
         """Per anchor: the hinge distance h along the clamp direction, the stress-free

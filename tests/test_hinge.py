@@ -387,9 +387,6 @@ def test_following_hinge_resumes_from_a_checkpoint_exactly(mpi_tmp_path):
         lambda: CableModel(MPI.COMM_WORLD, _hinged("paper_spatial.toml")), mpi_tmp_path, 0.2,
         0.005, 40)
     # per hinge: the first element's T, Delta, mode and per region element T, cos, sigma
-    # per hinge the first element's tension and angle and the fallback flag (the law itself
-    # is fixed from the static state)
-    assert ck["checkpoint"].layers.shape == (2, 3)
     # the same equations from the same state and laws: round-off of the 2.5 N force
     np.testing.assert_allclose(resumed, full, rtol=0, atol=1e-12 * np.abs(full).max())
 
@@ -438,18 +435,19 @@ def test_hinge_falls_back_at_low_tension_and_the_run_goes_on():
     h = m.hinges.items[0]
     rows = []
     for t, F in integrate(m, 1.5, 0.005, 0.5, 1):
-        rows.append((t, np.linalg.norm(F[0, :3]), m.hinges.fallback()["p"], h.last[0],
-                     m.hinges.layer_sigma(h.last[0], h.last[1], h)))
+        T1, d1 = m.hinges._measure(m.u.x.array)  # the first element's
+        rows.append((t, np.linalg.norm(F[0, :3]), m.hinges.fallback(F)["p"],
+                     m.hinges.layer_sigma(T1[0], d1[0], h)))
     r = np.array(rows, float)
-    assert r[-1, 0] == pytest.approx(1.5) and np.all(np.isfinite(r[:, :4]))
+    assert r[-1, 0] == pytest.approx(1.5) and np.all(np.isfinite(r[:, :3]))
     assert r[:, 1].min() < 0.1 * r[0, 1]  # the tension did drop below the floor (25 % of T)
     assert 0.05 < r[:, 2].mean() < 0.6  # flagged rows, not all
     T0 = h.T_static
-    outside = (r[1:, 3] < 0.25 * T0) | (r[1:, 3] > 2.0 * T0)
-    np.testing.assert_array_equal(r[1:, 2] == 1, outside)  # the flag is the law's range
+    outside = (r[:, 1] < 0.25 * T0) | (r[:, 1] > 2.0 * T0)
+    np.testing.assert_array_equal(r[:, 2] == 1, outside)  # the flag is the law's range
     assert r[:, 1].max() < 100.0
     if h.cells[0] >= 0:
-        assert np.all((r[:, 4] > 0.45 * h.sigma) & (r[:, 4] < 1.45 * h.sigma))
+        assert np.all((r[:, 3] > 0.45 * h.sigma) & (r[:, 3] < 1.45 * h.sigma))
 
 
 def test_fallback_is_flagged_in_the_summary_and_resumes_exactly(mpi_tmp_path):
@@ -472,6 +470,37 @@ def test_fallback_is_flagged_in_the_summary_and_resumes_exactly(mpi_tmp_path):
 
     full, resumed, ck = resume_round_trip(lambda: CableModel(MPI.COMM_WORLD, case),
                                           mpi_tmp_path, 0.2, 0.005, 40)
-    assert np.all(ck["checkpoint"].layers[:, 2] == 1)  # both layers in the fallback at t = 0.1
     # the same equations from the same state and laws: round-off of the forces (~25 N)
     np.testing.assert_allclose(resumed, full, rtol=0, atol=1e-12 * np.abs(full).max())
+
+
+def test_sagging_cable_with_horizontal_clamps_runs_by_default():
+    """A 10 %-sag cable clamped horizontally (anchor angles 0.44 rad, eps = 0.03), anchor q
+    moving 0.01 out of plane at 2.5 rad/s, below the first frequency 3.5: the first 3.5 s by
+    default. Before, the layer followed the angle one step late, which fed energy into the
+    motion: the tension swung from 1.17 down to 0.04 and Newton cycled at t = 2.78 s (run
+    stopped). Now it runs on, and the anchor tension stays within 1 % of the static one
+    (a swing of the cable's plane by about 0.1 rad changes it by less; measured +0.05 %, as
+    the leading order's +0.05 %), 2 ranks as serial to Newton's tolerance."""
+    from cablefem.dynamics import integrate
+
+    data = tomllib.loads((DEMOS / "paper_inplane.toml").read_text())
+    data["section"]["EI"] = 0.03**2
+    data["anchors"][1]["position"] = [0.974, 0.0, 0.0]
+    data["anchors"][1]["motion"] = {"type": "harmonic", "amplitude": [0.0, 0.01, 0.0],
+                                    "omega": 2.5}
+    data["damping"] = {"model": "rayleigh", "ratio": 0.01, "frequencies": [3.5, 7.0]}
+    hist = {}
+    for comm in (MPI.COMM_WORLD, MPI.COMM_SELF):
+        m = CableModel(comm, parse_case(data, DEMOS))
+        assert m.hinges  # the default
+        solve_static(m)
+        m.u.x.array[:] = m.u_static.x.array
+        hist[comm.size] = np.array([(t, *F[0, :3]) for t, F in integrate(m, 3.5, 0.005, 0.9,
+                                                                           10)])
+    h = hist[MPI.COMM_WORLD.size]
+    assert h[-1, 0] == pytest.approx(3.5)
+    T = np.linalg.norm(h[:, 1:], axis=1)
+    assert np.all(np.abs(T / T[0] - 1) < 0.01)
+    # 700 steps of Newton at 1e-9 of the force scale: 1e-7
+    np.testing.assert_allclose(h, hist[1], rtol=0, atol=1e-7 * np.abs(hist[1]).max())

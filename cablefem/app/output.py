@@ -202,10 +202,10 @@ class RunOutput:
     def add(self, t: float, forces: np.ndarray) -> None:
         """Record the anchor forces at ``t`` (written in batches)."""
         self.times.append(t)
-        if getattr(self.model, "hinges", None):  # the law the row's step was solved with
-            for name, flag in self.model.hinges.fallback().items():
-                self.fallback.setdefault(name, []).append(flag)
         F = np.array(forces, float)  # a copy: the rows below are views of it
+        if getattr(self.model, "hinges", None):  # rows outside the layer law's range
+            for name, flag in self.model.hinges.fallback(F).items():
+                self.fallback.setdefault(name, []).append(flag)
         for name, N in zip(self._names, F):
             self.forces[name].append(N[:3])
             if name in self.rod:
