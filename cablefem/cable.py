@@ -339,8 +339,9 @@ class CableModel:
         law.ka.x.array[:] = self.c.x.array / self.EA.x.array
         law.kb.x.array[:] = law.ka.x.array
         law.dcos = DCOS
-        self.turn_dir = fem.Function(
-            fem.VectorFunctionSpace(self.mesh, ("DG", 0), dim=3), name="turn_dir")
+        with quiet_compiler():  # the element is JIT-compiled on first use
+            space = fem.VectorFunctionSpace(self.mesh, ("DG", 0), dim=3)
+        self.turn_dir = fem.Function(space, name="turn_dir")
         g = forms.stretch_vector(self.u, self.t0)
         law.cos = ufl.dot(self.turn_dir, g) / ufl.sqrt(ufl.dot(g, g))
         self.law = law

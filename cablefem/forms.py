@@ -29,7 +29,8 @@ import ufl
 from ufl.algorithms import estimate_total_polynomial_degree, expand_derivatives
 
 __all__ = ["CableForms", "reference_tangent", "ds_", "stretch_vector", "stretch", "axial_strain",
-           "tension", "layer_law_tension", "internal_force", "internal_work", "inertia_work", "load_work",
+           "tension", "layer_law_tension",
+           "internal_force", "internal_work", "inertia_work", "load_work",
            "strain_rate", "axial_damping_work", "strain_energy_density",
            "turning_cosine", "span_bending_energy", "span_bending_work", "end_moment_work"]
 

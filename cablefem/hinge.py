@@ -64,8 +64,9 @@ outside, the cell keeps the law at the nearer end with the element's own elastic
 (``T = max(min(T_a, T_f), T_c)``, continuous, with kinks), and the change of C is clipped to
 ``DCOS``. Rows whose first element's tension is outside that range are the anchor's
 *fallback* rows: :meth:`VirtualHinges.fallback` flags them (from the anchor force), the
-summary counts them, and the run goes on. In the region the mass is the element's less the layer's static sigma_h (the
-layer's weight and inertia go to the anchor force), fixed during the run.
+summary counts them, and the run goes on. In the region the mass is the element's less the
+layer's static sigma_h (the layer's weight and inertia go to the anchor force), fixed during
+the run.
 
 Only the string model has hinges (``solver.outer_correction = "hinge"``); the rod resolves
 its layers itself. In a network (:class:`cablefem.network.NetworkModel`) a clamped anchor
@@ -441,7 +442,9 @@ class VirtualHinges:
         out = {}
         for hg in self.items:
             T = float(np.linalg.norm(np.asarray(forces[hg.index][:3], float)))
-            out[hg.anchor.name] = not (FLOOR * hg.T_static <= T <= CEILING * hg.T_static)
+            started = hg.T_static > 0.0  # before start_dynamics: the statics' own law
+            out[hg.anchor.name] = started and not (FLOOR * hg.T_static <= T
+                                                   <= CEILING * hg.T_static)
         return out
 
     def report(self) -> dict[str, dict]:

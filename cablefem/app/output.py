@@ -76,8 +76,8 @@ class RunOutput:
             a.name: {k: [] for k in MOMENT_COLUMNS} for a in self.clamped}
         #: per clamped anchor: why each row of this process is invalid ("" when valid)
         self.reasons: dict[str, list[str]] = {}
-        #: per clamped anchor with a virtual hinge: the rows whose layer was in its
-        #: fallback outside the followed tension range (cablefem.hinge; this process's rows, not a resumed run's)
+        #: per clamped anchor with a virtual hinge: the rows outside the tension range the
+        #: layer's law follows (cablefem.hinge; this process's rows, not a resumed run's)
         self.fallback: dict[str, list[bool]] = {}
         self._names = [a.name for a in model.anchors]
         self._index = {name: j for j, name in enumerate(self._names)}
