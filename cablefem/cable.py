@@ -136,6 +136,9 @@ class CableModel:
 
         m = self.mesh
         self._coefficients()
+        self.law = None  # virtual hinges: the layer law's cell fields (_hinge_fields)
+        if self.has_hinges():
+            self._hinge_fields()
         self.gravity = fem.Constant(m, np.asarray(self.g_vec, dtype=PETSc.ScalarType))
         self.load_factor = fem.Constant(m, PETSc.ScalarType(1.0))
         self.shift_v = fem.Constant(m, PETSc.ScalarType(0.0))
@@ -317,6 +320,32 @@ class CableModel:
             self.EA = fem.Constant(self.mesh, PETSc.ScalarType(sec.EA))
             self.c = fem.Constant(self.mesh, PETSc.ScalarType(1.0))
 
+    def _hinge_fields(self) -> None:
+        """The cell fields of the virtual hinges' layer law (:mod:`cablefem.hinge`,
+        :func:`cablefem.forms.layer_law_tension`) in :attr:`law`, set to the elastic law
+        of every cell; ``cos``: the cosine of the anchor angle in each cell of a hinge's
+        region (``turn_dir``: the clamp direction, signed by the cell's orientation; zero
+        elsewhere)."""
+        from types import SimpleNamespace
+
+        from cablefem.hinge import DCOS
+
+        law = SimpleNamespace()
+        for name in ("a", "b", "ka", "kb", "tf", "tc", "cos_ref"):
+            setattr(law, name, fem.Function(self.W, name=f"law_{name}"))
+            setattr(self, f"law_{name}" if name != "cos_ref" else "cos_ref",
+                    getattr(law, name))
+        law.a.x.array[:] = self.c.x.array
+        law.ka.x.array[:] = self.c.x.array / self.EA.x.array
+        law.kb.x.array[:] = law.ka.x.array
+        law.dcos = DCOS
+        with quiet_compiler():  # the element is JIT-compiled on first use
+            space = fem.VectorFunctionSpace(self.mesh, ("DG", 0), dim=3)
+        self.turn_dir = fem.Function(space, name="turn_dir")
+        g = forms.stretch_vector(self.u, self.t0)
+        law.cos = ufl.dot(self.turn_dir, g) / ufl.sqrt(ufl.dot(g, g))
+        self.law = law
+
     def _item_nodes(self, item) -> list[int]:
         """Nodes of a point mass or point load (a single cable: the node at ``item.s``)."""
         return [self.geometry.node_at(item.s)]
@@ -329,16 +358,21 @@ class CableModel:
         """Build the model's terms of the residual in :attr:`forms` (a
         :class:`cablefem.forms.CableForms`; users add theirs with ``model.forms.add``)."""
         u, v, a, du, t0, cc = self.u, self.v, self.a, self.du, self.t0, self.c
+        T = T2 = None
+        if self.law is not None:  # virtual hinges: their regions' law
+            T = forms.layer_law_tension(u, t0, self.law, self.tension_only)
+            T2 = forms.layer_law_tension(u, t0, self.law, False)
         self._set_forms(
-            F_int=forms.internal_work(u, du, t0, self.EA, self.tension_only, c=cc),
+            F_int=forms.internal_work(u, du, t0, self.EA, self.tension_only, c=cc, T=T),
             F_weight=forms.load_work(self.m * self.gravity, du, c=cc),
             F_inertia=forms.inertia_work(self.m, a, du, c=cc),
             du_t=du, a_t=a, dx=ufl.dx,
             # the same with compression allowed: statics uses it to get off a guess on
             # which every element is slack (zero tangent stiffness under tension only)
-            bilateral=forms.internal_work(u, du, t0, self.EA, False, c=cc))
+            bilateral=forms.internal_work(u, du, t0, self.EA, False, c=cc, T=T2))
         self.forms.outputs = {
-            "tension": forms.tension(u, t0, self.EA, self.tension_only, cc),
+            "tension": T if T is not None else forms.tension(u, t0, self.EA,
+                                                              self.tension_only, cc),
             "strain": forms.axial_strain(u, t0, cc)}
         strain = forms.strain_energy_density(u, t0, self.EA, self.tension_only, cc) * ufl.dx
         if self.case.solver.span_bending:
@@ -360,7 +394,7 @@ class CableModel:
         if clamped:
             ds = ufl.Measure("ds", domain=self.mesh, subdomain_data=self._vertex_tags(
                 {anc.node: tag for tag, anc in clamped}))
-            T = forms.tension(self.u, self.t0, self.EA, self.tension_only, self.c)
+            T = self.forms.outputs["tension"]
             q = -(self.m * self.gravity + sum((f for f, _ in self.loads), 0.0 * self.gravity))
             work = sum(forms.end_moment_work(
                 self.u, self.du, self.t0, self.EI, T, q,

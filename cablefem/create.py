@@ -34,7 +34,7 @@ def create_cable(comm: MPI.Comm, anchors: list[Anchor], section: Section, *,
                  sag_ratio: float | None = None, polyline: Any = None, elements: int = 30,
                  grading: float = 1.0, gravity: Gravity | None = None, loads=(),
                  point_masses=(), point_loads=(), damping: Damping | None = None,
-                 tension_only: bool = True, outer_correction: str = "none",
+                 tension_only: bool = True, outer_correction: str = "hinge",
                  span_bending: bool = False, petsc_options: dict | None = None,
                  petsc_options_prefix: str = "cable_", units: str = "SI",
                  name: str = "<python>"):
@@ -66,7 +66,8 @@ def create_cable(comm: MPI.Comm, anchors: list[Anchor], section: Section, *,
     tension_only
         No compression (``T = EA max(strain, 0)``).
     outer_correction
-        'none' or 'hinge' (the first-order outer correction, :mod:`cablefem.hinge`).
+        'hinge' (default: the first-order outer correction, :mod:`cablefem.hinge`) or
+        'none' (the paper's leading order, for comparison).
     span_bending
         The span's own bending stiffness EI in the string (``docs/theory.md`` §6.1; the
         clamps' rotation stays with the boundary layer).
@@ -129,7 +130,7 @@ def create_network(comm: MPI.Comm, mesh_file: str | os.PathLike, sections: dict[
                    anchors: list[Anchor], *, cables: list[CableSpec],
                    gravity: Gravity | None = None, loads=(), point_masses=(),
                    point_loads=(), damping: Damping | None = None, tension_only: bool = True,
-                   outer_correction: str = "none", petsc_options: dict | None = None,
+                   outer_correction: str = "hinge", petsc_options: dict | None = None,
                    petsc_options_prefix: str = "cable_", units: str = "SI",
                    name: str = "<python>"):
     """A cable network from a tagged gmsh file (:class:`cablefem.network.NetworkModel`; tag
@@ -152,8 +153,8 @@ def create_network(comm: MPI.Comm, mesh_file: str | os.PathLike, sections: dict[
     gravity, loads, point_masses, point_loads, damping, tension_only, outer_correction,
     petsc_options, petsc_options_prefix, units, name
         As for :func:`create_cable`; point masses and point loads name 0D groups in ``s``.
-        ``outer_correction = "hinge"``: a virtual hinge at every clamped anchor, which must
-        be the end node of one chain of elements (:mod:`cablefem.hinge`).
+        ``outer_correction = "hinge"`` (default): a virtual hinge at every clamped anchor,
+        which must be the end node of one chain of elements (:mod:`cablefem.hinge`).
     """
     from cablefem.network import NetworkModel
 

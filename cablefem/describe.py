@@ -231,7 +231,7 @@ def describe_cable(anchors: list[Anchor], section: Section, *, length: float | N
                    polyline: Any = None, elements: int = 30, grading: float = 1.0,
                    gravity: Gravity | None = None, loads=(), point_masses=(), point_loads=(),
                    damping: Damping | None = None, tension_only: bool = True,
-                   outer_correction: str = "none", span_bending: bool = False,
+                   outer_correction: str = "hinge", span_bending: bool = False,
                    petsc_options: dict | None = None, beam: BeamSpec | None = None,
                    units: str = "SI", source: str = "<python>") -> CableDescription:
     """A checked description of a single cable (the arguments of
@@ -298,7 +298,7 @@ def describe_network(mesh_file: str | os.PathLike, sections: dict[str, Section],
                      anchors: list[Anchor], *, cables: list[CableSpec],
                      gravity: Gravity | None = None, loads=(), point_masses=(),
                      point_loads=(), damping: Damping | None = None, tension_only: bool = True,
-                     outer_correction: str = "none", petsc_options: dict | None = None,
+                     outer_correction: str = "hinge", petsc_options: dict | None = None,
                      units: str = "SI", source: str = "<python>") -> CableDescription:
     """A checked description of a cable network (the arguments of
     :func:`cablefem.create_network`, which see); the mesh itself is read by the model."""

@@ -139,7 +139,7 @@ class SolverSpec:
 
     tension_only: bool = True
     petsc_options: dict = field(default_factory=dict)
-    outer_correction: str = "none"
+    outer_correction: str = "hinge"
     span_bending: bool = False  #: the span's own EI in the string (docs/theory.md §6.1)
 
 

@@ -63,7 +63,8 @@ class Checkpoint:
     step: int
     level: int = 0
     calm: int = 0
-    #: virtual hinges: (n_hinges, 2) tension and angle of each layer's law (cablefem.hinge)
+    #: unused (virtual hinges once kept their layers' laws here; their law is now set from
+    #: the static state, cablefem.hinge); kept so that older checkpoint files read
     layers: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
     #: this rank's ``model.u.x.array`` and ``model.v.x.array`` at the checkpoint, when
     #: :meth:`DynamicProblem.checkpoint` took it (a checkpoint read from a file has None:
@@ -236,11 +237,13 @@ class DynamicProblem:
         self.reactions = AnchorReactions(model)
         self.hinges = getattr(model, "hinges", None)
         self.time, self.step_number, self.level, self.calm = 0.0, 0, 0, 0
-        self._follow_pending = False
         #: the state at the start is an output of the first run() (not after a restore)
         self._initial_output = start is None
-        if self.hinges:  # the layers follow the tension and angle from the static state on
-            self.hinges.start_dynamics(model.u_static.x.array)
+        if self.hinges:  # the layers' law, from the static state (also on a restart)
+            try:
+                self.hinges.start_dynamics(model.u_static.x.array)
+            except HingeError as err:
+                raise DynamicsError(str(err), 0.0) from err
         if start is not None:
             self.restore(start)
             return
@@ -268,7 +271,6 @@ class DynamicProblem:
             m.v.x.array[:] = ck.v
         self.time, self.step_number = float(ck.time), int(ck.step)
         self.level, self.calm = int(ck.level), int(ck.calm)
-        self._follow_pending = False
         self._initial_output = False  # the checkpoint's time was an output already
         m.set_time(self.time)
         U = m.u.vector.copy()
@@ -280,19 +282,16 @@ class DynamicProblem:
         self.ts.restartStep()
         U.destroy()
         V.destroy()
-        if self.hinges:  # the laws the checkpointed state was being solved with
-            self.hinges.set_state(ck.layers, self.time)
 
     def checkpoint(self) -> Checkpoint:
         """What :meth:`restore` needs to repeat the run from here, bit for bit (a
         :class:`Checkpoint` holding this rank's state). The integrator re-estimates its
         acceleration from ``(u, v)`` at the next step, as a restored one does."""
-        self._follow()
         self.ts.restartStep()  # the next step re-estimates A from (u, v), as a resumed run
         self._state_to_model()
         m = self.model
         return Checkpoint(self.time, self.step_number, self.level, self.calm,
-                          self.hinges.state() if self.hinges else np.zeros((0, 2)),
+                          np.zeros((0, 2)),
                           m.u.x.array.copy(), m.v.x.array.copy())
 
     def _state_to_model(self) -> tuple[PETSc.Vec, PETSc.Vec]:
@@ -308,27 +307,12 @@ class DynamicProblem:
         self.model.set_time(self.time)
         return self.reactions.compute(self.time)
 
-    def _follow(self) -> None:
-        """The hinges follow the step just taken (after its output: the forces of a step
-        are those of its own layers)."""
-        if not self._follow_pending:
-            return
-        self._follow_pending = False
-        U2, V2 = self.ts.getSolution2()
-        copy_in(U2, self.model.u)
-        try:
-            self.hinges.follow(self.model.u.x.array, self.time)
-        except HingeError as err:
-            copy_in(V2, self.model.v)
-            raise DynamicsError(str(err), self.time) from err
-
     # ------------------------------------------------------------------ stepping
     def step(self, t_end: float | None = None) -> float:
         """Advance one step of the nominal grid (to ``(k + 1) dt``, or to ``t_end`` when
         that comes first) and return the new time. A step whose Newton solve fails is cut
         as the module docs say; :class:`DynamicsError` when it cannot continue (the last
         converged state then in ``model.u``, ``model.v``)."""
-        self._follow()
         ts, dt, history, stats = self.ts, self.dt, self.history, self.stats
         t = self.time
         eps_t = 1e-9 * dt
@@ -387,7 +371,6 @@ class DynamicProblem:
         if not (np.all(np.isfinite(U2.array_r)) and np.all(np.isfinite(V2.array_r))):
             raise DynamicsError(f"non-finite state at t = {t:.6g} s; the last finite output "
                                 "is kept", t)
-        self._follow_pending = bool(self.hinges)
         return t
 
     def run(self, t_end: float, output_every: int = 1, checkpoint_every: int = 0,
@@ -420,7 +403,6 @@ class DynamicProblem:
                     stats.output_times.append(t)
                     stats.wall_time = time.perf_counter() - self._wall0
                     yield t, forces
-                self._follow()
                 if checkpoint_every and self.step_number % checkpoint_every == 0 and not last:
                     ck = self.checkpoint()
                     if on_checkpoint is not None:

@@ -29,7 +29,8 @@ import ufl
 from ufl.algorithms import estimate_total_polynomial_degree, expand_derivatives
 
 __all__ = ["CableForms", "reference_tangent", "ds_", "stretch_vector", "stretch", "axial_strain",
-           "tension", "internal_force", "internal_work", "inertia_work", "load_work",
+           "tension", "layer_law_tension",
+           "internal_force", "internal_work", "inertia_work", "load_work",
            "strain_rate", "axial_damping_work", "strain_energy_density",
            "turning_cosine", "span_bending_energy", "span_bending_work", "end_moment_work"]
 
@@ -69,16 +70,39 @@ def tension(u, t0, EA, tension_only: bool = True, c=1.0):
     return EA * v3
 
 
-def internal_force(u, t0, EA, tension_only: bool = True, c=1.0):
-    """Internal force vector ``N = T ∂s r / λ``."""
+def layer_law_tension(u, t0, law, tension_only: bool = True):
+    """Tension under the virtual hinges' layer law (:mod:`cablefem.hinge`), a piecewise
+    linear law in the stretch ``λ`` whose cell coefficients are in ``law`` (an object with
+    the attributes ``a, b, ka, kb, tf, tc, cos, cos_ref, dcos``). Following the layer,
+    ``λ = ρ + ka T`` with ``ρ = a − b clip(cos − cos_ref, ±dcos)``; below the floor
+    tension ``tf`` and above the ceiling ``tc`` the elastic slope ``kb`` (< ``ka``) through
+    the same point at ``tf`` and ``tc``: ``T = max(min(T_a, T_f), T_c)``. With ``b = tf =
+    tc = 0`` and ``ka = kb = c/EA``, ``a = c``, it is the elastic law ``EA (λ/c − 1)``."""
+    lam = stretch(u, t0)
+    dc = ufl.max_value(ufl.min_value(law.cos - law.cos_ref, law.dcos), -law.dcos)
+    rho = law.a - law.b * dc
+    T_a = (lam - rho) / law.ka
+    T_f = (lam - rho - (law.ka - law.kb) * law.tf) / law.kb
+    T_c = (lam - rho - (law.ka - law.kb) * law.tc) / law.kb
+    T = ufl.max_value(ufl.min_value(T_a, T_f), T_c)
+    if tension_only:
+        return ufl.max_value(T, 0.0)
+    return T
+
+
+def internal_force(u, t0, EA, tension_only: bool = True, c=1.0, T=None):
+    """Internal force vector ``N = T ∂s r / λ`` (``T``: a tension to use instead of
+    :func:`tension`'s)."""
     g = stretch_vector(u, t0)
-    return tension(u, t0, EA, tension_only, c) * g / ufl.sqrt(ufl.dot(g, g))
+    if T is None:
+        T = tension(u, t0, EA, tension_only, c)
+    return T * g / ufl.sqrt(ufl.dot(g, g))
 
 
-def internal_work(u, du, t0, EA, tension_only: bool = True, dx=ufl.dx, c=1.0):
+def internal_work(u, du, t0, EA, tension_only: bool = True, dx=ufl.dx, c=1.0, T=None):
     """Internal virtual work ``∫ N · ∂s δu ds`` (``∂s`` along the mesh: the stress-free
     measure ``c ds`` and derivative ``∂s / c`` cancel)."""
-    return ufl.inner(internal_force(u, t0, EA, tension_only, c), ds_(du, t0)) * dx
+    return ufl.inner(internal_force(u, t0, EA, tension_only, c, T), ds_(du, t0)) * dx
 
 
 def inertia_work(m, a, du, dx=ufl.dx, c=1.0):

@@ -257,62 +257,80 @@ def _static_hinged(name: str, comm=MPI.COMM_WORLD):
 
 
 def test_following_layer_is_the_static_layer_at_the_static_state():
-    """At the static state the layer follows to itself: sigma stays sigma_h, and the first
-    element's new law (EA', c' = R/L: the layer's compliance in series) gives the same
-    tension at the same length; the stress-free length is conserved (c' L + removed = s1)."""
+    """At the static state the layer's law (module docs of cablefem.hinge) gives the static
+    tension at the static length: nothing moves when dynamics starts; the region's mass is
+    its stress-free length less the layer's (c s + sigma_h = s); the law is softer than the
+    element (the layer's compliance in series) and continuous at the floor and ceiling."""
     m = _static_hinged("paper_spatial.toml")
     hg = m.hinges
     T0, d0 = hg._measure(m.u_static.x.array)
-    sig0 = [h.sigma for h in hg.items]
-    hg.follow(m.u_static.x.array, 0.0)
+    for h, t_k in zip(hg.items, T0):
+        assert h.T_static == pytest.approx(t_k, rel=1e-12)
+        if h.cells[0] < 0:
+            continue
+        c = int(h.cells[0])
+        assert h.n == 1  # one element on this mesh
+        assert m.c.x.array[c] * h.s[0] + h.mass_length == pytest.approx(h.s[0], rel=1e-14)
+        ka, kb = m.law_ka.x.array[c], m.law_kb.x.array[c]
+        assert ka > kb > 0.0  # a compliance in series: softer
+        # the three branches of forms.layer_law_tension meet at the floor and the ceiling
+        a, tf, tc = m.law_a.x.array[c], m.law_tf.x.array[c], m.law_tc.x.array[c]
+        for T in (tf, tc):
+            lam = a + ka * T
+            assert (lam - a - (ka - kb) * T) / kb == pytest.approx(T, rel=1e-12)
+    # the static tension again: identities up to round-off of O(1) quantities
     T1, d1 = hg._measure(m.u_static.x.array)
-    # identities up to round-off of O(1) quantities (the finite-difference sigma_T does not
-    # enter: the law is exact at the tension it is linearised about)
     np.testing.assert_allclose(T1, T0, rtol=1e-10)
     np.testing.assert_allclose(d1, d0, rtol=0, atol=1e-14)
-    np.testing.assert_allclose([h.sigma for h in hg.items], sig0, rtol=1e-12)
-    for h in hg.items:
-        if h.cells[0] >= 0:
-            # the region's stress-free length is conserved: c s + removed = s (one element
-            # on this mesh)
-            assert h.n == 1
-            c_new = m.c.x.array[h.cells[0]] * h.s[0]
-            assert c_new + h.removed == pytest.approx(h.s[0], rel=1e-14)
-            assert m.EA.x.array[h.cells[0]] < h.EA0  # a compliance in series: softer
 
 
-def test_following_layer_matches_the_rod_far_field_along_the_string():
-    """Move the second node (tension and angle change): sigma is such that the string from
-    the fixed node at A + h c lies on the rod's far-field line at the new tension and angle
-    along the string: sigma = (h cos(Delta) - D_t(T, Delta))/lambda + (the static state's
-    mismatch between element and anchor force, which is kept), D_t from far_field_offsets."""
+def test_following_layer_matches_the_rod_far_field_to_second_order():
+    """Move the first element's far node (the angle and the tension change, by eps and 2
+    eps): the element's stretch satisfies the rod's far-field condition, ``lambda = c0 (1 -
+    sigma/s) (1 + T/EA)`` with sigma(T, Delta) = sigma_far(T, Delta) + (the static state's
+    mismatch between element and anchor force), up to a residual of second order (the law
+    is linear about the static state): doubling the change multiplies the residual by 4
+    (3.5-4.5 allows the third-order terms), and it is small against the law's first-order
+    terms (measured 5 %: the cross term of T^-1/2 and Delta^2 in D_t; 10 % allowed)."""
     m = _static_hinged("paper_spatial.toml")
     hg = m.hinges
-    u = m.u_static.x.array.copy()
-    T0, d0 = hg._measure(u)
+    u0 = m.u_static.x.array.copy()
+    T0, d0 = hg._measure(u0)
 
     def far(h, d, T):  # the string's stress-free length to the rod's far-field line
         sec = h.anchor.section
         return (h.h * np.cos(d) - far_field_offsets(d, T, sec.EI, sec.EA)[0]) / (1 + T / sec.EA)
 
-    ref = [h.sigma - far(h, d, T) for h, d, T in zip(hg.items, d0, T0)]
-    x = u.reshape(-1, 3)
-    for h in hg.items:  # push the element's far node in the bending plane and along it
-        if h.nodes is not None:
+    shift = [h.sigma - far(h, d, T) for h, d, T in zip(hg.items, d0, T0)]
+    res, first = [], []
+    for scale in (0.5, 1.0):
+        u = u0.copy()
+        x = u.reshape(-1, 3)
+        for h in hg.items:  # push the element's far node in the bending plane and along it
+            if h.nodes is not None:
+                a, b, E = h.nodes
+                e = E + x[b] - x[a]
+                le = np.linalg.norm(e)
+                perp = h.anchor.direction - np.dot(h.anchor.direction, e) / le**2 * e
+                # 0.01 rad less angle, a strain of 2e-5 more (T/EA = 2.5e-4: T up ~20 %)
+                x[b] += scale * (0.01 * le * perp / np.linalg.norm(perp) + 2e-5 * e)
+        T, d = hg._measure(u)
+        assert np.all(np.abs(d - d0) > 4e-3 * scale) and np.all(T / T0 - 1 > 0.1 * scale)
+        r, f = [], []
+        for h, dk, Tk, sh, d_s, T_s in zip(hg.items, d, T, shift, d0, T0):
+            if h.nodes is None:
+                continue
             a, b, E = h.nodes
-            e = E + x[b] - x[a]
-            le = np.linalg.norm(e)
-            perp = h.anchor.direction - np.dot(h.anchor.direction, e) / le**2 * e
-            # 0.01 rad more angle, a strain of 5e-5 more (T/EA = 2.5e-4: T up by ~20 %)
-            x[b] += 0.01 * le * perp / np.linalg.norm(perp) + 5e-5 * e
-    T, d = hg._measure(u)
-    assert np.all(np.abs(d - d0) > 1e-3) and np.all(np.abs(T / T0 - 1) > 1e-2)
-    hg.follow(u, 0.0)
-    for h, dk, Tk, r, d_s, T_s in zip(hg.items, d, T, ref, d0, T0):
-        # an identity of the formula: round-off of lengths ~ h ~ 6e-3 m; the layer moved by
-        # much more than that
-        assert h.sigma - far(h, dk, Tk) == pytest.approx(r, abs=1e-16)
-        assert abs(far(h, dk, Tk) - far(h, d_s, T_s)) > 1e-6
+            lam = np.linalg.norm(E + x[b] - x[a]) / np.linalg.norm(E)
+            sig = far(h, dk, Tk) + sh
+            r.append(abs(lam - h.c0[0] * (1 - sig / h.s[0]) * (1 + Tk / h.EA0)))
+            f.append(h.c0[0] * (abs(h.sig_T * (Tk - T_s))
+                                + abs(h.sig_C * (np.cos(dk) - np.cos(d_s)))) / h.s[0])
+        res.append(np.array(r))
+        first.append(np.array(f))
+    assert np.all(res[0] < 0.1 * first[0])
+    ratio = res[1] / res[0]
+    assert np.all((3.5 < ratio) & (ratio < 4.5)), ratio
 
 
 def test_following_hinge_dynamics_is_stable_and_partition_independent():
@@ -368,7 +386,7 @@ def test_following_hinge_resumes_from_a_checkpoint_exactly(mpi_tmp_path):
     full, resumed, ck = resume_round_trip(
         lambda: CableModel(MPI.COMM_WORLD, _hinged("paper_spatial.toml")), mpi_tmp_path, 0.2,
         0.005, 40)
-    assert ck["checkpoint"].layers.shape == (2, 2)
+    # per hinge: the first element's T, Delta, mode and per region element T, cos, sigma
     # the same equations from the same state and laws: round-off of the 2.5 N force
     np.testing.assert_allclose(resumed, full, rtol=0, atol=1e-12 * np.abs(full).max())
 
@@ -394,42 +412,49 @@ def _slackening():
     data["anchors"][1]["motion"] = {"type": "harmonic", "amplitude": [-3e-3, 0, 0],
                                     "omega": 6.0, "ramp": 0.0}
     data["damping"] = {"alpha": 1.0, "beta": 0.0}
+    # snap loads: with rho_inf = 0.9 the leading-order string itself blows up on 40 or 60
+    # elements (peak anchor force 1.6e4 against 79); with 0.5 every mesh from 20 to 60
+    # elements, with or without hinges, peaks at 79.0-79.4
+    data["dynamics"]["rho_inf"] = 0.5
     return parse_case(data, DEMOS)
 
 
 def test_hinge_falls_back_at_low_tension_and_the_run_goes_on():
     """The slackening case A (_slackening), 1.5 s. Before the fallback the layer's law broke
-    at t = 1.145 s (sigma NaN, the first element in compression). Now: the run completes,
-    the rows below the floor tension are flagged (measured 24 %), and the forces stay within
-    the quasi-static envelope (the largest stretch (1.4e-3 + 3e-3) EA = 79 N; 100 allows
-    the dynamics' overshoot)."""
+    at t = 1.145 s (sigma NaN, the first element in compression). Now: the run completes;
+    the rows whose first element is outside a quarter to twice its static tension are
+    flagged, the others not; the forces stay within the quasi-static envelope (the largest
+    stretch (1.4e-3 + 3e-3) EA = 79 N; 100 allows the dynamics' overshoot); and the layer's
+    length stays within what the law gives between the floor and the ceiling (sigma_h/2 to
+    11/8 sigma_h for sigma ~ T^-1/2, 0.45-1.45 with the angle's term)."""
     from cablefem.dynamics import integrate
 
     m = CableModel(MPI.COMM_WORLD, _slackening())
     solve_static(m)
     m.u.x.array[:] = m.u_static.x.array
-    sig0 = m.hinges.items[0].sigma
+    h = m.hinges.items[0]
     rows = []
-    for t, F in integrate(m, 1.5, 0.005, 0.9, 1):
-        rows.append((t, np.linalg.norm(F[0, :3]), m.hinges.fallback()["p"],
-                     m.hinges.items[0].sigma))
+    for t, F in integrate(m, 1.5, 0.005, 0.5, 1):
+        T1, d1 = m.hinges._measure(m.u.x.array)  # the first element's
+        rows.append((t, np.linalg.norm(F[0, :3]), m.hinges.fallback(F)["p"],
+                     m.hinges.layer_sigma(T1[0], d1[0], h)))
     r = np.array(rows, float)
-    assert r[-1, 0] == pytest.approx(1.5) and np.all(np.isfinite(r))
+    assert r[-1, 0] == pytest.approx(1.5) and np.all(np.isfinite(r[:, :3]))
     assert r[:, 1].min() < 0.1 * r[0, 1]  # the tension did drop below the floor (25 % of T)
     assert 0.05 < r[:, 2].mean() < 0.6  # flagged rows, not all
-    # flagged where the tension is low (the flag is the law the row's step was solved with,
-    # set from the step before: at the edges it lags one step)
-    assert np.median(r[r[:, 2] == 1, 1]) < 0.25 * r[0, 1]
+    T0 = h.T_static
+    outside = (r[:, 1] < 0.25 * T0) | (r[:, 1] > 2.0 * T0)
+    np.testing.assert_array_equal(r[:, 2] == 1, outside)  # the flag is the law's range
     assert r[:, 1].max() < 100.0
-    # the layer at most twice its static length (the floor: T/4, sigma ~ T^-1/2)
-    assert np.all((r[:, 3] > 0.5 * sig0) & (r[:, 3] < 2.0 * sig0))
+    if h.cells[0] >= 0:
+        assert np.all((r[:, 3] > 0.45 * h.sigma) & (r[:, 3] < 1.45 * h.sigma))
 
 
 def test_fallback_is_flagged_in_the_summary_and_resumes_exactly(mpi_tmp_path):
     """The slackening case A over 0.2 s (40 steps): run_case's summary gives the fallback's
     fraction of rows per anchor with a warning; a checkpoint at step 20 (t = 0.1 s, inside
-    the first fallback phase, 0.075-0.185 s) keeps the fallback law (its tension stored
-    negative) and the resumed run gives the uninterrupted anchor forces exactly."""
+    the first fallback phase, 0.075-0.185 s) keeps the fallback flag and the resumed run
+    gives the uninterrupted anchor forces exactly."""
     from cablefem.app.run import run_case
 
     case = _slackening()
@@ -440,10 +465,42 @@ def test_fallback_is_flagged_in_the_summary_and_resumes_exactly(mpi_tmp_path):
         # rows 16..37 of 41 (t = 0.08 ... 0.185 s; the flag is the law the step was solved
         # with): ~0.5; the bounds allow the phase to shift by a few steps
         assert 0.3 < frac < 0.7, frac
-    assert any("low-tension fallback" in w["message"] for w in res.summary["warnings"])
+    assert any("outside the tension range it follows" in w["message"]
+               for w in res.summary["warnings"])
 
     full, resumed, ck = resume_round_trip(lambda: CableModel(MPI.COMM_WORLD, case),
                                           mpi_tmp_path, 0.2, 0.005, 40)
-    assert np.all(ck["checkpoint"].layers[:, 0] < 0)  # both layers in the fallback at t = 0.1
     # the same equations from the same state and laws: round-off of the forces (~25 N)
     np.testing.assert_allclose(resumed, full, rtol=0, atol=1e-12 * np.abs(full).max())
+
+
+def test_sagging_cable_with_horizontal_clamps_runs_by_default():
+    """A 10 %-sag cable clamped horizontally (anchor angles 0.44 rad, eps = 0.03), anchor q
+    moving 0.01 out of plane at 2.5 rad/s, below the first frequency 3.5: the first 3.5 s by
+    default. Before, the layer followed the angle one step late, which fed energy into the
+    motion: the tension swung from 1.17 down to 0.04 and Newton cycled at t = 2.78 s (run
+    stopped). Now it runs on, and the anchor tension stays within 1 % of the static one
+    (a swing of the cable's plane by about 0.1 rad changes it by less; measured +0.05 %, as
+    the leading order's +0.05 %), 2 ranks as serial to Newton's tolerance."""
+    from cablefem.dynamics import integrate
+
+    data = tomllib.loads((DEMOS / "paper_inplane.toml").read_text())
+    data["section"]["EI"] = 0.03**2
+    data["anchors"][1]["position"] = [0.974, 0.0, 0.0]
+    data["anchors"][1]["motion"] = {"type": "harmonic", "amplitude": [0.0, 0.01, 0.0],
+                                    "omega": 2.5}
+    data["damping"] = {"model": "rayleigh", "ratio": 0.01, "frequencies": [3.5, 7.0]}
+    hist = {}
+    for comm in (MPI.COMM_WORLD, MPI.COMM_SELF):
+        m = CableModel(comm, parse_case(data, DEMOS))
+        assert m.hinges  # the default
+        solve_static(m)
+        m.u.x.array[:] = m.u_static.x.array
+        hist[comm.size] = np.array([(t, *F[0, :3]) for t, F in integrate(m, 3.5, 0.005, 0.9,
+                                                                           10)])
+    h = hist[MPI.COMM_WORLD.size]
+    assert h[-1, 0] == pytest.approx(3.5)
+    T = np.linalg.norm(h[:, 1:], axis=1)
+    assert np.all(np.abs(T / T[0] - 1) < 0.01)
+    # 700 steps of Newton at 1e-9 of the force scale: 1e-7
+    np.testing.assert_allclose(h, hist[1], rtol=0, atol=1e-7 * np.abs(hist[1]).max())

@@ -146,10 +146,10 @@ def test_fan_with_hinges_is_partition_independent_and_first_order():
 
 def test_network_hinges_resume_from_a_checkpoint_exactly(mpi_tmp_path):
     """The fan resumed from its checkpoint at step 10 of 20 gives the uninterrupted anchor
-    forces (the layers' laws are in the checkpoint): round-off of the 2.5e6 N forces."""
+    forces (the layers' laws are set again from the static state): round-off of the 2.5e6 N
+    forces."""
     full, resumed, ck = resume_round_trip(
         lambda: NetworkModel(MPI.COMM_WORLD, _fan("hinge")), mpi_tmp_path, 0.1, 0.005, 20)
-    assert ck["checkpoint"].layers.shape == (12, 2)
     np.testing.assert_allclose(resumed, full, rtol=0, atol=1e-12 * np.abs(full).max())
 
 

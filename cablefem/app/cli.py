@@ -78,9 +78,9 @@ def _parser() -> argparse.ArgumentParser:
                      help="beam: scale the mesh density ([beam] layer_elements and "
                           "span_elements), > 0; default 1")
     run.add_argument("--outer-correction", choices=["none", "hinge"], default=None,
-                     help="string: override solver.outer_correction ('hinge': the string "
-                          "pinned at a virtual hinge near each clamp, first order in the "
-                          "layer length)")
+                     help="string: override solver.outer_correction ('hinge', the default: "
+                          "the string pinned at a virtual hinge near each clamp, first order "
+                          "in the layer length; 'none': the paper's leading order)")
     run.add_argument("--moment-form", choices=["exact", "explicit"], default="exact",
                      help="anchor moment from the exact first integral (default) or the "
                           "paper's explicit form")

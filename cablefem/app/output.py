@@ -76,8 +76,8 @@ class RunOutput:
             a.name: {k: [] for k in MOMENT_COLUMNS} for a in self.clamped}
         #: per clamped anchor: why each row of this process is invalid ("" when valid)
         self.reasons: dict[str, list[str]] = {}
-        #: per clamped anchor with a virtual hinge: the rows whose layer was in its
-        #: low-tension fallback (cablefem.hinge; this process's rows, not a resumed run's)
+        #: per clamped anchor with a virtual hinge: the rows outside the tension range the
+        #: layer's law follows (cablefem.hinge; this process's rows, not a resumed run's)
         self.fallback: dict[str, list[bool]] = {}
         self._names = [a.name for a in model.anchors]
         self._index = {name: j for j, name in enumerate(self._names)}
@@ -202,10 +202,10 @@ class RunOutput:
     def add(self, t: float, forces: np.ndarray) -> None:
         """Record the anchor forces at ``t`` (written in batches)."""
         self.times.append(t)
-        if getattr(self.model, "hinges", None):  # the law the row's step was solved with
-            for name, flag in self.model.hinges.fallback().items():
-                self.fallback.setdefault(name, []).append(flag)
         F = np.array(forces, float)  # a copy: the rows below are views of it
+        if getattr(self.model, "hinges", None):  # rows outside the layer law's range
+            for name, flag in self.model.hinges.fallback(F).items():
+                self.fallback.setdefault(name, []).append(flag)
         for name, N in zip(self._names, F):
             self.forces[name].append(N[:3])
             if name in self.rod:

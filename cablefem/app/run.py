@@ -425,9 +425,9 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
             if fb and any(fb):
                 entry["outer_fallback_fraction"] = float(np.mean(fb))
                 warn(summary, f"anchors.{a.name}", f"{sum(fb)} of {len(fb)} rows with the "
-                     "virtual hinge's layer in its low-tension fallback (it stops following "
-                     "the tension below a quarter of the static one): the first-order "
-                     "correction is only partial there")
+                     "virtual hinge's layer outside the tension range it follows (a "
+                     "quarter to twice the static tension; there it keeps the law at the "
+                     "nearer end): the first-order correction is only partial there")
             why = emitter.reasons.get(a.name, [])  # this process's rows (not a resumed run's)
             why = ["(not recorded)"] * (len(times) - len(why)) + why
             entry["validity"] = anchor_validity(summary, a.name, times,

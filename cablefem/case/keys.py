@@ -206,9 +206,10 @@ CASE_KEYS: dict[str, KeyDoc | TableDoc] = {
     "solver": TableDoc("table", None, "", "Solver settings.", {
         "tension_only": KeyDoc("boolean", True, "", "No compression: T = EA max(v3, 0)."),
         "outer_correction": KeyDoc(
-            "string", "none", "", "'none' the string pinned at the clamped anchors (leading "
-            "order) | 'hinge' the first-order correction: pinned at a virtual hinge about "
-            "one layer length along each clamp (cablefem.hinge); the rod ignores it."),
+            "string", "hinge", "", "'hinge' (default) the first-order correction: the "
+            "string pinned at a virtual hinge about one layer length along each clamp "
+            "(cablefem.hinge) | 'none' pinned at the clamped anchors (the paper's leading "
+            "order, for comparison); the rod ignores it."),
         "span_bending": KeyDoc(
             "boolean", False, "", "String: the span's own bending stiffness EI (a bending "
             "energy on the turning angle between neighbouring elements; the clamps' "
