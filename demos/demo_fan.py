@@ -30,6 +30,7 @@
 
 # %%
 import argparse
+import copy
 import json
 import os
 from pathlib import Path
@@ -60,6 +61,14 @@ t_end = 4.0 if os.environ.get("CI") else case.dynamics.t_end  # s
 # %%
 result = run_case(case, args.output, comm, t_end=t_end)
 s = result.summary
+# The closed forms checked below are the paper's leading order: they are checked on a
+# statics-and-modes run of the leading order (`outer_correction = "none"`). The run above is
+# the default, with the first-order outer correction, which moves these numbers by about
+# 2h/l (docs/hinge.md; its accuracy against the rod: docs/verification.md).
+lo_case = copy.deepcopy(case)
+lo_case.solver.outer_correction = "none"
+s_lo = run_case(lo_case, args.output / "leading_order", comm, dynamics=False, figures=False,
+                progress=False).summary
 
 # %% [markdown]
 # ## The stays from the mesh: stress-free length, chord, weight
@@ -103,10 +112,10 @@ for cab in case.network.cables:
 #    mode (none, to first order); measured $-1\times10^{-5}$, tolerance $2\times10^{-4}$.
 
 # %%
-N_sum = np.sum([np.asarray(f) for f in s["static"]["anchor_forces"].values()], axis=0)
+N_sum = np.sum([np.asarray(f) for f in s_lo["static"]["anchor_forces"].values()], axis=0)
 err_eq = float(np.linalg.norm(N_sum - weight) / np.linalg.norm(weight))
 ok_eq = err_eq < 1e-8
-w_fe = min(m["omega"] for m in s["modes"])
+w_fe = min(m["omega"] for m in s_lo["modes"])
 group, l0, T_mean, w_string = min(stays, key=lambda x: x[3])
 ok_w = abs(w_fe / w_string - 1) < 2e-4
 out = [

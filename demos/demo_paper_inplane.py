@@ -30,6 +30,7 @@
 
 # %%
 import argparse
+import copy
 import json
 import os
 from pathlib import Path
@@ -59,6 +60,14 @@ t_end = 6.0 if os.environ.get("CI") else case.dynamics.t_end  # dimensionless ti
 # %%
 result = run_case(case, args.output, comm, t_end=t_end)
 s = result.summary
+# The closed forms checked below are the paper's leading order: they are checked on a
+# statics-and-modes run of the leading order (`outer_correction = "none"`). The run above is
+# the default, with the first-order outer correction, which moves these numbers by about
+# 2h/l (docs/hinge.md; its accuracy against the rod: docs/verification.md).
+lo_case = copy.deepcopy(case)
+lo_case.solver.outer_correction = "none"
+s_lo = run_case(lo_case, args.output / "leading_order", comm, dynamics=False, figures=False,
+                progress=False).summary
 
 # %% [markdown]
 # ## Checks
@@ -74,19 +83,19 @@ s = result.summary
 # 3. Symmetry: $M_p = M_q$ at rest.
 
 # %%
-w1 = next(m["omega"] for m in s["modes"]
+w1 = next(m["omega"] for m in s_lo["modes"]
           if m["plane"] == "in-plane" and m["symmetry"] == "symmetric")
 omega_case = 16.407
 ok_freq = abs(w1 / omega_case - 1) < 2e-3
 ref = closed_form_anchor_moments(case)["p"]["moment"]
-Mp, Mq = s["anchors"]["p"]["static_moment"], s["anchors"]["q"]["static_moment"]
+Mp, Mq = s_lo["anchors"]["p"]["static_moment"], s_lo["anchors"]["q"]["static_moment"]
 ok_static = abs(Mp / ref - 1) < 3e-5 and abs(Mp / Mq - 1) < 1e-10
 ss = s["anchors"]["p"].get("steady_state_moment", {})
 lines = [
     f"first in-plane symmetric frequency: {w1:.5f} (case file {omega_case}): "
     f"{'OK' if ok_freq else 'FAILED'}",
     f"static anchor moment M_p = {Mp:.6e}, M_q = {Mq:.6e}, closed form {ref:.6e} "
-    f"(layer alone {s['anchors']['p']['static_moment_layer']:.6e}): "
+    f"(layer alone {s_lo['anchors']['p']['static_moment_layer']:.6e}): "
     f"{'OK' if ok_static else 'FAILED'}",
     f"anchor angle {s['anchors']['p']['static_delta']:.5f} rad, layer length "
     f"{s['anchors']['p']['layer_length']:.5f}, sag ratio {s['static']['sag_ratio']:.6f}",

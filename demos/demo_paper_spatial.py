@@ -20,6 +20,7 @@
 
 # %%
 import argparse
+import copy
 import json
 import os
 from pathlib import Path
@@ -44,6 +45,14 @@ t_end = 6.0 if os.environ.get("CI") else case.dynamics.t_end
 # %%
 result = run_case(case, args.output, comm, t_end=t_end)
 s = result.summary
+# The closed forms checked below are the paper's leading order: they are checked on a
+# statics-and-modes run of the leading order (`outer_correction = "none"`). The run above is
+# the default, with the first-order outer correction, which moves these numbers by about
+# 2h/l (docs/hinge.md; its accuracy against the rod: docs/verification.md).
+lo_case = copy.deepcopy(case)
+lo_case.solver.outer_correction = "none"
+s_lo = run_case(lo_case, args.output / "leading_order", comm, dynamics=False, figures=False,
+                progress=False).summary
 
 # %% [markdown]
 # ## Checks
@@ -58,11 +67,11 @@ s = result.summary
 # 3. In the steady state the bending plane turns: $\psi_0$ spans more than 5 degrees.
 
 # %%
-w2 = next(m["omega"] for m in s["modes"]
+w2 = next(m["omega"] for m in s_lo["modes"]
           if m["plane"] == "in-plane" and m["symmetry"] == "antisymmetric")
 ok_freq = abs(w2 / 9.9815 - 1) < 0.015
 ref = closed_form_anchor_moments(case)["p"]["moment"]
-Mp = s["anchors"]["p"]["static_moment"]
+Mp = s_lo["anchors"]["p"]["static_moment"]
 ok_static = abs(Mp / ref - 1) < 1e-3
 mo = result.moments["p"]
 tail = result.times >= result.times[-1] - (result.times[-1] - result.times[0]) / 3

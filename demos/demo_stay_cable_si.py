@@ -29,6 +29,7 @@
 
 # %%
 import argparse
+import copy
 import json
 import os
 from pathlib import Path
@@ -59,6 +60,14 @@ t_end = 3.2 if os.environ.get("CI") else case.dynamics.t_end  # s
 # %%
 result = run_case(case, args.output, comm, t_end=t_end)
 s = result.summary
+# The closed forms checked below are the paper's leading order: they are checked on a
+# statics-and-modes run of the leading order (`outer_correction = "none"`). The run above is
+# the default, with the first-order outer correction, which moves these numbers by about
+# 2h/l (docs/hinge.md; its accuracy against the rod: docs/verification.md).
+lo_case = copy.deepcopy(case)
+lo_case.solver.outer_correction = "none"
+s_lo = run_case(lo_case, args.output / "leading_order", comm, dynamics=False, figures=False,
+                progress=False).summary
 
 # %% [markdown]
 # ## Checks against the closed forms
@@ -80,18 +89,18 @@ w = sec.mass * case.gravity.g  # N/m
 cat = catenary_between(p.position, q.position, case.geometry.length, w, sec.EA,
                        case.gravity.direction)
 T_cat = float(np.linalg.norm(cat.force_at_p()))  # N
-T_fe = s["anchors"]["p"]["static_tension"]
+T_fe = s_lo["anchors"]["p"]["static_tension"]
 ok_T = abs(T_fe / T_cat - 1) < 1e-4
 
 ref = closed_form_anchor_moments(case)["p"]["moment"]  # N m
-Mp = s["anchors"]["p"]["static_moment"]
+Mp = s_lo["anchors"]["p"]["static_moment"]
 ok_M = abs(Mp / ref - 1) < 3e-5
 
 H = cat.cat.H  # N
 span = float(np.linalg.norm(np.subtract(q.position, p.position)))  # m
 lam2 = irvine_lambda2(span, H, sec.mass, case.gravity.g, sec.EA, cat.cat.sag())
 w1_irvine = irvine_symmetric_frequency(lam2) * np.sqrt(H / sec.mass) / span  # rad/s
-w1 = next(m["omega"] for m in s["modes"]
+w1 = next(m["omega"] for m in s_lo["modes"]
           if m["plane"] == "in-plane" and m["symmetry"] == "symmetric")
 ok_w = abs(w1 / w1_irvine - 1) < 2e-3
 
