@@ -92,11 +92,14 @@ Mp, Mq = s_lo["anchors"]["p"]["static_moment"], s_lo["anchors"]["q"]["static_mom
 ok_static = abs(Mp / ref - 1) < 3e-5 and abs(Mp / Mq - 1) < 1e-10
 ss = s["anchors"]["p"].get("steady_state_moment", {})
 lines = [
-    f"first in-plane symmetric frequency: {w1:.5f} (case file {omega_case}): "
+    f"leading order: first in-plane symmetric frequency: {w1:.5f} (case file {omega_case}): "
     f"{'OK' if ok_freq else 'FAILED'}",
-    f"static anchor moment M_p = {Mp:.6e}, M_q = {Mq:.6e}, closed form {ref:.6e} "
+    f"leading order: static anchor moment M_p = {Mp:.6e}, M_q = {Mq:.6e}, closed form "
+    f"{ref:.6e} "
     f"(layer alone {s_lo['anchors']['p']['static_moment_layer']:.6e}): "
     f"{'OK' if ok_static else 'FAILED'}",
+    f"by default (first-order correction): static anchor moment "
+    f"{s['anchors']['p']['static_moment']:.6e}",
     f"anchor angle {s['anchors']['p']['static_delta']:.5f} rad, layer length "
     f"{s['anchors']['p']['layer_length']:.5f}, sag ratio {s['static']['sag_ratio']:.6f}",
     f"steady state (t >= {ss.get('window', [0])[0]:.3g}): peak M_p = {ss.get('peak', 0):.4e}, "
