@@ -15,8 +15,10 @@ first frequency, the wall times, and whether the string's run warned.
 The matrix: the paper's cases A (parametric, in-plane) and B (the bending plane turns); an
 inclined SI stay cable with clamps along the chord and a moving deck anchor; horizontal clamps
 on a 10 %-sag cable (anchor angles of about 20-25 degrees) at eps = 0.005, 0.03 and 0.08,
-the far anchor moving out of plane; a clamped-pinned cable. A clamp in a network is not in
-the matrix: the rod takes single cables only.
+the far anchor moving out of plane; a clamped-pinned cable; the stay cable as a network of two
+cable families in line (the network's clamps, hinges included; the rod takes single cables,
+so its reference is the single cable of the same stress-free length, and ``cablefem compare``
+matches the network's anchor ``p:0`` with the cable's ``p``).
 
     python benchmarks/bench_validation.py [--cases A,B,...] [--outer-correction hinge]
         [--t-end-scale 1.0] [--json out.json] [--keep DIR]
@@ -116,6 +118,53 @@ def _stay() -> dict:
     }
 
 
+def _stay_network() -> dict:
+    """The stay cable as a network of two cable families in line (24 + 36 elements on the
+    chord, pretension 3.2e6 N): the network's code path at its clamps (hinges included),
+    checked against the rod of the single cable it reduces to (same stress-free length)."""
+    d = _stay()
+    d["title"] = "Inclined SI stay cable as a two-member network, moving deck anchor"
+    d.pop("geometry"), d.pop("mesh")
+    sec = d.pop("section")
+    d["sections"] = [{"name": "stay", **sec}]
+    d["cables"] = [{"group": g, "section": "stay", "pretension": NET_PRETENSION}
+                   for g in ("lower", "upper")]
+    d["network"] = {"mesh": "net.msh"}
+    for a in d["anchors"]:
+        a.pop("position")
+    return d
+
+
+#: the network case's pretension (N) and elements per member
+NET_PRETENSION, NET_ELEMENTS = 3.2e6, (24, 36)
+
+
+def _network_files(data: dict, folder: Path) -> dict:
+    """Write the network case's mesh (a straight chord from p to q, two cable families) and
+    return the single-cable case of the same stress-free length for the rod."""
+    import meshio
+    import numpy as np
+
+    p, q = np.array([0.0, 0.0, 0.0]), np.array([130.0, 0.0, 75.0])
+    n = sum(NET_ELEMENTS)
+    pts = p + np.linspace(0.0, 1.0, n + 1)[:, None] * (q - p)
+    cells = np.column_stack([np.arange(n), np.arange(1, n + 1)])
+    tags = np.array([1] * NET_ELEMENTS[0] + [2] * NET_ELEMENTS[1])
+    field = {"lower": np.array([1, 1]), "upper": np.array([2, 1]),
+             "p": np.array([101, 0]), "q": np.array([102, 0])}
+    vtags = np.array([101, 102])
+    mesh = meshio.Mesh(pts, [("line", cells), ("vertex", np.array([[0], [n]]))],
+                       cell_data={"gmsh:physical": [tags, vtags],
+                                  "gmsh:geometrical": [tags, vtags]}, field_data=field)
+    meshio.write(folder / "net.msh", mesh, file_format="gmsh22", binary=False)
+    sec = data["sections"][0]
+    rod = _stay()
+    rod["geometry"] = {"length": float(np.linalg.norm(q - p)) / (1.0 + NET_PRETENSION
+                                                                 / sec["EA"])}
+    rod["dynamics"] = data["dynamics"]
+    return rod
+
+
 def _clamped_pinned() -> dict:
     d = _demo("paper_inplane.toml")
     d["title"] = "Case A with anchor q pinned"
@@ -133,6 +182,7 @@ CASES = {
     "sag03": ("10 % sag, horizontal clamps, eps 0.03", lambda: _sagging(0.03)),
     "sag08": ("10 % sag, horizontal clamps, eps 0.08", lambda: _sagging(0.08)),
     "clamped_pinned": ("case A, q pinned", _clamped_pinned),
+    "network": ("the stay cable as a two-member network (its clamps)", _stay_network),
 }
 
 
@@ -191,15 +241,23 @@ def run_case(key: str, work: Path, correction: str | None, t_scale: float) -> di
     half["dynamics"]["fields_every"] = 2 * data["dynamics"].get("fields_every", 50)
     half_file = folder / "case_half_dt.toml"
     half_file.write_text(to_toml(half))
+    rod_file, rod_half_file = case_file, half_file
+    if "network" in data:  # the rod takes the single cable the network reduces to
+        rod = _network_files(data, folder)
+        rod_half = json.loads(json.dumps(rod))
+        rod_half["dynamics"] = half["dynamics"]
+        rod_file, rod_half_file = folder / "rod_case.toml", folder / "rod_case_half_dt.toml"
+        rod_file.write_text(to_toml(rod))
+        rod_half_file.write_text(to_toml(rod_half))
     routes = correction.split(",") if correction else [None]
     runs = {f"string_{r or 'default'}": _run(case_file, folder / f"string_{r or 'default'}",
                                              *(["--outer-correction", r] if r else []))
             for r in routes}
     runs.update({
-            "rod": _run(case_file, folder / "rod", "--model", "beam"),
-            "rod_refined": _run(case_file, folder / "rod_refined", "--model", "beam",
+            "rod": _run(rod_file, folder / "rod", "--model", "beam"),
+            "rod_refined": _run(rod_file, folder / "rod_refined", "--model", "beam",
                                 "--refine", "2"),
-            "rod_half_dt": _run(half_file, folder / "rod_half_dt", "--model", "beam")})
+            "rod_half_dt": _run(rod_half_file, folder / "rod_half_dt", "--model", "beam")})
     strings = [k for k in runs if k.startswith("string_")]
     entry = {"title": title, "runs": {k: {kk: v[kk] for kk in ("exit", "wall_s")}
                                       for k, v in runs.items()},

@@ -328,3 +328,20 @@ def test_first_row_warning(mpi_tmp_path, spoil):
             assert w["message"] in handler.messages
     assert "did not start clean" in (b / "compare.md").read_text()
     assert f"warning: {len(names)} first output row" in format_table(res)
+
+
+def test_network_anchor_matches_the_single_cable(mpi_tmp_path):
+    """A network names the only vertex of anchor group p ``p:0``: compared with a single
+    cable (anchors p and q), p:0 is p; b = 1.1 a sample by sample, so the relative
+    differences are 0.1 to round-off. A group with two vertices keeps its indices (and the
+    anchors then differ: exit 2 as for any other pair of cases)."""
+    a = write_run(mpi_tmp_path / "cable", model="beam", scale=1.0, t_end=3.0)
+    b = write_run(mpi_tmp_path / "net", model=None, scale=1.1, t_end=3.0,
+                  anchors=(("p:0", "clamped"), ("q:0", "pinned")))
+    res = compare_runs(a, b)
+    assert list(res["anchors"]) == ["p"] and res["skipped_anchors"] == []
+    assert res["anchors"]["p"]["steady_rms"]["rel_diff"] == pytest.approx(0.1, abs=1e-12)
+    c = write_run(mpi_tmp_path / "net2", model=None, scale=1.0, t_end=1.0,
+                  anchors=(("p:0", "clamped"), ("p:1", "clamped"), ("q:0", "pinned")))
+    with pytest.raises(ValueError, match="different anchors"):
+        compare_runs(a, c)
