@@ -1,10 +1,18 @@
 """Modal analysis about the static state with SLEPc.
 
-Generalised symmetric eigenproblem ``K0 φ = ω² M φ`` with ``K0`` the tangent stiffness at
+Generalised eigenproblem ``K0 φ = ω² M φ`` with ``K0`` the tangent stiffness at
 static equilibrium (elastic plus geometric stiffness) and ``M`` the consistent mass (plus
 point masses). Anchor rows: ``K0`` has 1 on the diagonal and ``M`` 0, which sends the
 constrained directions to infinite eigenvalues; shift-and-invert about 0 returns the lowest
 finite ones. PETSc/SLEPc options prefix ``<model prefix>modal_``.
+
+With virtual hinges (the first-order correction at clamps, ``hinge.py``) the stiffness is
+that of the layers' law the dynamics solves, set from the static state
+(:meth:`~cablefem.hinge.VirtualHinges.start_dynamics`), not the statics' elastic law: its
+tangent depends on the anchor angle and is not symmetric (about 1e-3 of ``‖K0‖``), so the
+problem is a generalised non-Hermitian one; its eigenvalues are real to round-off (a
+complex pair would be flagged), and symmetrising ``K0`` instead would move the in-plane
+frequencies by percents.
 
 Every mode is classified: *in-plane* or *out-of-plane* (the plane of the chord and gravity,
 by the share of the mode's nodal amplitude normal to it) and, for a level cable with a
@@ -108,9 +116,9 @@ class ModalProblem:
     """The ``n`` lowest natural modes about the model's current state ``model.u``
     (normally the static equilibrium) as an object that owns its SLEPc eigensolver.
 
-    Assembles ``K0`` and ``M`` and creates the EPS (``.eps``: generalised Hermitian, shift
-    and invert about 0) under the options prefix ``petsc_options_prefix`` (default
-    ``<model prefix>modal_``: ``-cable_modal_eps_tol``, ``-cable_modal_st_type``,
+    Assembles ``K0`` and ``M`` and creates the EPS (``.eps``: generalised Hermitian, or
+    non-Hermitian with hinges; shift and invert about 0) under the options prefix
+    ``petsc_options_prefix`` (default ``<model prefix>modal_``: ``-cable_modal_eps_tol``, ``-cable_modal_st_type``,
     ``-cable_modal_st_pc_type``, ...); option priority as :class:`cablefem.statics.
     StaticProblem`'s (defaults < case file's ``modal_`` keys < ``petsc_options`` < options
     database). :meth:`solve` solves and classifies; :meth:`destroy` (or the end of a
@@ -126,6 +134,9 @@ class ModalProblem:
         self.n = n
         self.prefix = (model.prefix + "modal_" if petsc_options_prefix is None
                        else petsc_options_prefix)
+        hinges = getattr(model, "hinges", None)
+        if hinges:  # linearise what the dynamics solves: the layers' law (module docs)
+            hinges.start_dynamics(model.u.x.array)
         self.K = fpetsc.assemble_matrix(model.j_static, model.bcs, diagonal=1.0)
         self.K.assemble()
         self.M = fpetsc.assemble_matrix(model.m_form, model.bcs, diagonal=0.0)
@@ -135,7 +146,8 @@ class ModalProblem:
         eps = SLEPc.EPS().create(model.comm)
         eps.setOptionsPrefix(self.prefix)
         eps.setOperators(self.K, self.M)
-        eps.setProblemType(SLEPc.EPS.ProblemType.GHEP)
+        eps.setProblemType(SLEPc.EPS.ProblemType.GNHEP if hinges else
+                           SLEPc.EPS.ProblemType.GHEP)
         eps.setWhichEigenpairs(SLEPc.EPS.Which.TARGET_MAGNITUDE)
         eps.setDimensions(n, max(2 * n + 1, n + 15))
         user = {**case_options(model, "modal"), **(petsc_options or {})}
@@ -154,7 +166,12 @@ class ModalProblem:
         vals, shapes = [], []
         vr = K.createVecRight()
         for i in range(nconv):
-            lam = eps.getEigenpair(i, vr).real
+            lam = eps.getEigenpair(i, vr)
+            if abs(lam.imag) > 1e-8 * abs(lam):
+                log.warning("modal: eigenvalue %d is complex (%.6g%+.6gj): the stiffness "
+                            "is not that of a conservative system", i + 1, lam.real,
+                            lam.imag)
+            lam = lam.real
             f = fem.Function(model.V, name=f"mode_{i + 1}")
             vr.copy(f.vector)
             f.x.scatter_forward()
