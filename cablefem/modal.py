@@ -118,7 +118,8 @@ class ModalProblem:
 
     Assembles ``K0`` and ``M`` and creates the EPS (``.eps``: generalised Hermitian, or
     non-Hermitian with hinges; shift and invert about 0) under the options prefix
-    ``petsc_options_prefix`` (default ``<model prefix>modal_``: ``-cable_modal_eps_tol``, ``-cable_modal_st_type``,
+    ``petsc_options_prefix`` (default ``<model prefix>modal_``: ``-cable_modal_eps_tol``,
+    ``-cable_modal_st_type``,
     ``-cable_modal_st_pc_type``, ...); option priority as :class:`cablefem.statics.
     StaticProblem`'s (defaults < case file's ``modal_`` keys < ``petsc_options`` < options
     database). :meth:`solve` solves and classifies; :meth:`destroy` (or the end of a
