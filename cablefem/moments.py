@@ -31,7 +31,7 @@ from cablefem.io.anchorcsv import ANCHOR_COLUMNS, MOMENT_COLUMNS, OPTIONAL_MOMEN
 
 __all__ = ["ANCHOR_COLUMNS", "MOMENT_COLUMNS", "OPTIONAL_MOMENT_COLUMNS", "MAX_ANCHOR_ANGLE",
            "ERROR_THRESHOLD", "anchor_moments", "error_estimate",
-           "resonance_factor"]
+           "resonance", "resonance_factor"]
 
 #: Estimated relative error of the anchor moment above which a run warns (docs/theory.md
 #: §5): 2 %, the accuracy at which the leading order stops being better than the inputs
@@ -43,29 +43,38 @@ HINGED_ENDS = 2
 
 
 def resonance_factor(omega: float | None, omegas, damping_ratio) -> float:
+    """The factor of :func:`resonance` alone."""
+    return resonance(omega, omegas, damping_ratio)[0]
+
+
+def resonance(omega: float | None, omegas, damping_ratio) -> tuple[float, float | None]:
     """How much a relative error of the natural frequencies grows in the response to a
     harmonic excitation at ``omega`` (rad/s) (docs/theory.md §5):
     ``1 / sqrt(d**2 + zeta**2)`` with ``d = |omega / (k omega_n) - 1|`` the smallest relative
     detuning from a primary (k = 1) or parametric (k = 2) resonance of the modes
     ``omegas`` and ``zeta`` the damping ratio there (``damping_ratio(omega_n)``); at least
-    1 (far from resonance the response follows the load quasi-statically)."""
+    1 (far from resonance the response follows the load quasi-statically). Returns the
+    factor and the circular frequency of the mode that gives it (None at factor 1)."""
     if not omega or omegas is None or len(omegas) == 0:
-        return 1.0
-    best = 1.0
+        return 1.0, None
+    best, mode = 1.0, None
     for w in np.asarray(omegas, float):
         if not w > 0:
             continue
         z = max(float(damping_ratio(w)), 0.0)
         for k in (1, 2):
             d = abs(omega / (k * w) - 1.0)
-            best = max(best, 1.0 / max(np.hypot(d, z), 1e-12))
-    return best
+            f = 1.0 / max(np.hypot(d, z), 1e-12)
+            if f > best:
+                best, mode = f, float(w)
+    return best, mode
 
 
 def error_estimate(delta: np.ndarray, tension: np.ndarray, EI: float, EA: float,
                    length: float | None, period_ratio: np.ndarray | None = None,
                    outer_order: int = 0, amplification: float = 1.0,
-                   moment: np.ndarray | None = None, static_moment: float | None = None
+                   moment: np.ndarray | None = None, static_moment: float | None = None,
+                   mass: float | None = None, resonant_omega: float | None = None
                    ) -> np.ndarray:
     """Estimated relative error of the anchor moment (docs/theory.md §5), per row.
 
@@ -84,7 +93,11 @@ def error_estimate(delta: np.ndarray, tension: np.ndarray, EI: float, EA: float,
     which the response amplifies by ``amplification`` (:func:`resonance_factor`): with the
     row's ``moment`` and the ``static_moment``, the outer term becomes
     ``e_outer (M_s + amplification |M - M_s|) / max(M, M_s)`` (relative to the static
-    moment where the moment passes through small values). The estimate is at most 1: an
+    moment where the moment passes through small values). With ``resonant_omega`` (the
+    resonant mode's circular frequency, when the outer problem has no span bending) and the
+    ``mass`` per length, that mode's own frequency error from the span's bending,
+    ``EI m omega_n^2 / (2 T^2)`` (a taut beam's first correction), is amplified likewise and
+    added to the dynamic part. The estimate is at most 1: an
     error of the size of the moment itself (a history whose phase is not determined).
     """
     h, _ = asymptotics.virtual_hinge(delta, tension, EI, EA)
@@ -95,7 +108,11 @@ def error_estimate(delta: np.ndarray, tension: np.ndarray, EI: float, EA: float,
         if amplification > 1 and moment is not None and static_moment is not None:
             M = np.asarray(moment, float)
             Ms = abs(static_moment)
-            e = e * (Ms + amplification * np.abs(M - static_moment)) / np.maximum(M, Ms)
+            dyn = amplification * np.abs(M - static_moment) / np.maximum(M, Ms)
+            e = e * (Ms / np.maximum(M, Ms) + dyn)
+            if resonant_omega and mass:
+                T = np.asarray(tension, float)
+                e = e + EI * mass * resonant_omega**2 / (2.0 * T * T) * dyn
         if period_ratio is not None:
             e = e + np.nan_to_num(np.asarray(period_ratio, float) ** 2, nan=0.0)
     return np.minimum(e, 1.0)
@@ -112,7 +129,8 @@ def anchor_moments(forces: np.ndarray, direction: np.ndarray, EI: float, EA: flo
                    mass: float, accel: np.ndarray, load: np.ndarray, length: float,
                    omega: float | None = None, form: str = "exact",
                    outer_order: int = 0, amplification: float = 1.0,
-                   static_moment: float | None = None) -> dict[str, np.ndarray]:
+                   static_moment: float | None = None,
+                   resonant_omega: float | None = None) -> dict[str, np.ndarray]:
     """Anchor moment columns for one clamped anchor over ``n`` times.
 
     Rows with ``delta`` above :data:`MAX_ANCHOR_ANGLE` are invalid; ``invalid_reason``
@@ -128,7 +146,9 @@ def anchor_moments(forces: np.ndarray, direction: np.ndarray, EI: float, EA: flo
     omega : highest excitation circular frequency (rad/s) for the quasi-static check.
     outer_order : 0 for the leading-order outer solution, 1 with the virtual hinge: the
         order of ``error_estimate`` (:func:`error_estimate`); ``amplification`` and
-        ``static_moment`` (N m) its resonance factor and the static moment it applies to.
+        ``static_moment`` (N m) its resonance factor and the static moment it applies to;
+        ``resonant_omega`` the resonant mode's circular frequency (its span-bending
+        frequency error is amplified too; None when the outer problem bends).
     """
     N = np.atleast_2d(np.asarray(forces, float))
     qs = (mass, omega) if omega else None
@@ -151,7 +171,8 @@ def anchor_moments(forces: np.ndarray, direction: np.ndarray, EI: float, EA: flo
             "moment_layer": lay.moment, "valid": valid.astype(int),
             "error_estimate": error_estimate(lay.delta, lay.tension, EI, EA, length,
                                              lay.period_ratio, outer_order, amplification,
-                                             np.linalg.norm(M, axis=1), static_moment),
+                                             np.linalg.norm(M, axis=1), static_moment,
+                                             mass, resonant_omega),
             "invalid_reason": reason, "tension": lay.tension, "normal": lay.normal,
             "slack": lay.slack}
 
@@ -241,6 +262,7 @@ class AnchorMoments:
         #: resonance factor of the error estimate and static moment per anchor
         #: (:meth:`set_resonance`)
         self.amplification, self.static_moments = 1.0, {}
+        self.resonant_omega = None
         self._by_name = {a.name: a for a in self.anchors}
 
     @classmethod
@@ -254,15 +276,19 @@ class AnchorMoments:
         order = 1 if getattr(model, "hinges", None) else 0
         return cls(clamped, model.g_vec, model.length, loads, omega, form, order)
 
-    def set_resonance(self, amplification: float, static_forces) -> None:
+    def set_resonance(self, amplification: float, static_forces,
+                      resonant_omega: float | None = None) -> None:
         """Let the error estimate of the dynamic part of the moments grow by
-        ``amplification`` (:func:`resonance_factor`) about the static moments of the
-        anchor forces ``static_forces`` (n_anchors, 3+) in the model's anchor order."""
-        self.amplification = 1.0
+        ``amplification`` (:func:`resonance`) about the static moments of the anchor
+        forces ``static_forces`` (n_anchors, 3+) in the model's anchor order;
+        ``resonant_omega``: the resonant mode's circular frequency, whose span-bending
+        frequency error is amplified too (None when the outer problem has span bending)."""
+        self.amplification, self.resonant_omega = 1.0, None
         F = np.asarray(static_forces, float)
         self.static_moments = {a.name: float(self.anchor(a.name, [0.0], F[a.index, None, :3])[
             "moment"][0]) for a in self.anchors}
         self.amplification = float(amplification)
+        self.resonant_omega = resonant_omega
 
     @property
     def names(self) -> list[str]:
@@ -285,7 +311,7 @@ class AnchorMoments:
         return anchor_moments(np.asarray(forces, float)[:, :3], a.direction, a.EI, a.EA,
                               a.mass, a.acceleration(times), load, self.length, self.omega,
                               self.form, self.outer_order, self.amplification,
-                              self.static_moments.get(name))
+                              self.static_moments.get(name), self.resonant_omega)
 
     def compute(self, times: np.ndarray, forces) -> dict[str, dict[str, np.ndarray]]:
         """Columns of every clamped anchor: ``{name: {column: (n,) array}}``. ``forces``:

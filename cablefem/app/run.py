@@ -48,7 +48,7 @@ from cablefem.moments import (
     ERROR_THRESHOLD,
     MAX_ANCHOR_ANGLE,
     anchor_moments,
-    resonance_factor,
+    resonance,
 )
 from cablefem.network import NetworkModel
 from cablefem.statics import solve_static
@@ -307,8 +307,10 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
     except OutputError as err:
         raise RunError(f"{err}; run the case again") from err
     if n_modes and omega and kind != "beam":  # the error estimate near a resonance
-        amp = resonance_factor(omega, modal.omegas, _damping_ratio(case))
-        emitter.moment_columns.set_resonance(amp, static.anchor_forces)
+        amp, w_r = resonance(omega, modal.omegas, _damping_ratio(case))
+        bends = case.solver.span_bending  # the outer problem has the span's bending
+        emitter.moment_columns.set_resonance(amp, static.anchor_forces,
+                                             None if bends else w_r)
         summary["error_resonance_factor"] = amp
     if resume is not None:  # after the emitter, which takes its reference from the statics
         model.scatter_nodal(resume["u"], model.u)
