@@ -24,6 +24,7 @@ from ufl.algorithms import expand_derivatives
 
 from cablefem import catenary, forms
 from cablefem.anchor import AnchorBC
+from cablefem.dampers import damper_stations, damper_work
 from cablefem.description import CableDescription
 from cablefem.errors import CaseError
 from cablefem.geometry import create_line_mesh, graded_stations, polyline_cable, straight_cable
@@ -227,8 +228,13 @@ class CableModel:
                 raise CaseError([(f"geometry.{geo.kind}", str(err))], case.source) from None
         bad = [(f"point masses/loads s={s:g}", f"must satisfy 0 < s < l = {length:g} m")
                for s in extra if not 0.0 < s < length]
+        try:
+            self.damper_s = damper_stations(case, length)
+        except ValueError as err:
+            bad += err.args[0]
         if bad:
             raise CaseError(bad, case.source)
+        extra += self.damper_s
         if geo.kind == "polyline":
             g = polyline_cable(poly, case.mesh.elements, case.mesh.grading, names, tuple(extra))
         else:
@@ -298,8 +304,9 @@ class CableModel:
 
     def _point_tags(self) -> None:
         """Vertex tags for point masses and point loads (one tag per loaded node)."""
+        self.damper_nodes = [self.geometry.node_at(s) for s in getattr(self, "damper_s", ())]
         nodes = sorted({k for item in list(self.case.point_masses) + list(self.case.point_loads)
-                        for k in self._item_nodes(item)})
+                        for k in self._item_nodes(item)} | set(self.damper_nodes))
         self._node_tag = {k: i + 1 for i, k in enumerate(nodes)}
         self.dS = ufl.Measure("dS", domain=self.mesh,
                               subdomain_data=self._vertex_tags(self._node_tag))
@@ -409,7 +416,8 @@ class CableModel:
         return forms.axial_damping_work(self.u, self.v, self.du, self.t0, self.EA,
                                          self.beta, c=self.c)
 
-    def _set_forms(self, F_int, F_weight, F_inertia, du_t, a_t, dx, bilateral=None) -> None:
+    def _set_forms(self, F_int, F_weight, F_inertia, du_t, a_t, dx, bilateral=None,
+                   u_t=None, v_t=None, us_t=None) -> None:
         """What the string and the rod share: the extra loads (ramped by statics through
         ``load_factor``), point masses and damping; creates :attr:`forms` with the model's
         terms.
@@ -417,7 +425,9 @@ class CableModel:
         ``F_int``, ``F_weight``, ``F_inertia``: the model's internal work, own weight and
         distributed inertia; ``du_t``, ``a_t``: the translational parts of the test function
         and the acceleration; ``dx``: the cell measure of distributed loads; ``bilateral``:
-        the internal work with compression allowed (default ``F_int``)."""
+        the internal work with compression allowed (default ``F_int``); ``u_t``, ``v_t``,
+        ``us_t``: the translational parts of displacement, velocity and static displacement
+        (default: the fields themselves, a string's)."""
         u, v, a, dw = self.u, self.v, self.a, self.dw
         case, cc = self.case, self.c
         extra = [forms.load_work(q, du_t, dx=dx, c=cc) for q, _ in self.loads]
@@ -457,6 +467,11 @@ class CableModel:
         self.forms = forms.CableForms(u, v, a, self.du, dw, self.shift_v, self.shift_a,
                                       self.W.element.interpolation_points())
         self.forms.set_model_terms(F_int, F_ext, F_inertia, F_damp, bilateral)
+        if case.dampers:  # dynamic terms on the motion from the static state
+            parts = (u, v, self.u_static) if u_t is None else (u_t, v_t, us_t)
+            self.forms.add("dampers", damper_work(
+                self.mesh, case.dampers, [self._node_tag[k] for k in self.damper_nodes],
+                *parts, du_t, self.t0, self.dS), kind="dynamic")
 
     def compile(self) -> None:
         """Derive every residual, Jacobian and mass form from the terms of :attr:`forms`

@@ -37,7 +37,7 @@ def create_cable(comm: MPI.Comm, anchors: list[Anchor], section: Section, *,
                  tension_only: bool = True, outer_correction: str = "hinge",
                  span_bending: bool = False, petsc_options: dict | None = None,
                  petsc_options_prefix: str = "cable_", units: str = "SI",
-                 name: str = "<python>"):
+                 name: str = "<python>", dampers=()):
     """The extensible string of one cable between two anchors
     (:class:`cablefem.cable.CableModel`), ready for :func:`cablefem.statics.solve_static`.
 
@@ -63,6 +63,10 @@ def create_cable(comm: MPI.Comm, anchors: list[Anchor], section: Section, *,
         :class:`~cablefem.description.PointLoad` (N at s m).
     damping
         :class:`cablefem.description.Damping` (default none).
+    dampers
+        :class:`cablefem.description.Damper` (external dashpots with springs, from the
+        ground to the cable; they act on the motion from the static state,
+        ``docs/dampers.md``).
     tension_only
         No compression (``T = EA max(strain, 0)``).
     outer_correction
@@ -92,7 +96,8 @@ def create_cable(comm: MPI.Comm, anchors: list[Anchor], section: Section, *,
         sag_ratio=sag_ratio, polyline=polyline, elements=elements, grading=grading,
         gravity=gravity, loads=loads, point_masses=point_masses, point_loads=point_loads,
         damping=damping, tension_only=tension_only, outer_correction=outer_correction,
-        span_bending=span_bending, petsc_options=petsc_options, units=units, source=name)
+        span_bending=span_bending, petsc_options=petsc_options, units=units, source=name,
+        dampers=dampers)
     return _named(CableModel, comm, description, petsc_options_prefix)
 
 

@@ -27,6 +27,7 @@ from cablefem.description import (
     BeamSpec,
     CableDescription,
     CableSpec,
+    Damper,
     Damping,
     DistributedLoad,
     Geometry,
@@ -233,7 +234,8 @@ def describe_cable(anchors: list[Anchor], section: Section, *, length: float | N
                    damping: Damping | None = None, tension_only: bool = True,
                    outer_correction: str = "hinge", span_bending: bool = False,
                    petsc_options: dict | None = None, beam: BeamSpec | None = None,
-                   units: str = "SI", source: str = "<python>") -> CableDescription:
+                   units: str = "SI", source: str = "<python>", dampers=()
+                   ) -> CableDescription:
     """A checked description of a single cable (the arguments of
     :func:`cablefem.create_cable`, which see).
 
@@ -288,10 +290,37 @@ def describe_cable(anchors: list[Anchor], section: Section, *, length: float | N
                                                        "(m), the stress-free length"))
     if beam is not None and not isinstance(beam, BeamSpec):
         problems.append(("beam", f"expected a BeamSpec, got {show(beam)}"))
+    damper_list = _dampers(problems, dampers, anchor_list)
     if problems:
         raise CaseError(problems, source)
     return CableDescription(section=section, anchors=anchor_list, geometry=geometry,
-                            beam=beam or BeamSpec(), source=source, units=units, **parts)
+                            beam=beam or BeamSpec(), source=source, units=units,
+                            dampers=damper_list, **parts)
+
+
+def _dampers(problems: list, dampers, anchors: list) -> list[Damper]:
+    """Check ``dampers`` (a sequence of :class:`Damper`) against the anchors' names."""
+    if not is_sequence(dampers) and not isinstance(dampers, tuple):
+        problems.append(("dampers", f"expected a list of Damper, got {show(dampers)}"))
+        return []
+    names = [getattr(a, "name", None) for a in anchors]
+    out = []
+    for i, d in enumerate(dampers):
+        key = f"dampers[{i}]"
+        if not isinstance(d, Damper):
+            problems.append((key, f"expected a Damper, got {show(d)}"))
+            continue
+        if d.anchor not in names:
+            problems.append((f"{key}.anchor", f"must name an anchor ({', '.join(map(str, names))}"
+                             f"), got {show(d.anchor)}"))
+        for name, unit, bounds in (("distance", "m", {"gt": 0}),
+                                   ("coefficient", "N s/m", {"ge": 0}),
+                                   ("stiffness", "N/m", {"ge": 0})):
+            _check(problems, f"{key}.{name}", number_problem(getattr(d, name), unit, **bounds))
+        direction = (None if d.direction is None else
+                     _vector(problems, f"{key}.direction", d.direction, unit_vector=True))
+        out.append(Damper(d.anchor, d.distance, d.coefficient, d.stiffness, direction))
+    return out
 
 
 def describe_network(mesh_file: str | os.PathLike, sections: dict[str, Section],

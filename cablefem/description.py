@@ -23,7 +23,7 @@ from cablefem.anchor import Anchor
 from cablefem.motion import TimeFunction
 from cablefem.properties import Section
 
-__all__ = ["Gravity", "Geometry", "MeshSpec", "DistributedLoad", "PointMass", "PointLoad",
+__all__ = ["Gravity", "Geometry", "MeshSpec", "DistributedLoad", "PointMass", "PointLoad", "Damper",
            "Damping", "SolverSpec", "BeamSpec", "CableSpec", "NetworkSpec", "CableDescription",
            "rayleigh_coefficients", "stress_free_length", "GEOMETRY_KINDS", "GEOMETRY_BOUNDS",
            "BEAM_BOUNDS", "DAMPING_MODELS", "OUTER_CORRECTIONS", "MAX_ELEMENTS"]
@@ -105,6 +105,22 @@ class PointLoad:
     s: float
     value: np.ndarray
     time: TimeFunction = field(default_factory=TimeFunction.constant)
+
+
+@dataclass
+class Damper:
+    """An external damper (``docs/dampers.md``): a viscous dashpot of ``coefficient`` c
+    (N s/m), with a spring of ``stiffness`` k (N/m) in parallel, from the ground to the
+    cable point at stress-free ``distance`` (m) from anchor ``anchor``. It acts along the
+    unit ``direction`` or, when that is None, in the plane normal to the cable at the point.
+    Installed on the cable at rest: it acts in dynamics (and the modal analysis) on the
+    motion from the static state, and does not change the statics."""
+
+    anchor: str
+    distance: float
+    coefficient: float
+    stiffness: float = 0.0
+    direction: np.ndarray | None = None
 
 
 @dataclass
@@ -190,6 +206,7 @@ class CableDescription:
     loads: list[DistributedLoad] = field(default_factory=list)
     point_masses: list[PointMass] = field(default_factory=list)
     point_loads: list[PointLoad] = field(default_factory=list)
+    dampers: list[Damper] = field(default_factory=list)
     damping: Damping = field(default_factory=Damping)
     solver: SolverSpec = field(default_factory=SolverSpec)
     beam: BeamSpec = field(default_factory=BeamSpec)

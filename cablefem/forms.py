@@ -205,6 +205,8 @@ MODEL_TERMS = ("internal", "external", "inertia", "damping")
 #: the compiled objects, as :meth:`CableForms.compile` names them
 COMPILED = ("f_static", "j_static", "f_static_bilateral", "j_static_bilateral", "f_dynamic",
             "j_dynamic", "m_form", "tension_expr", "strain_expr", "energy_forms")
+#: compiled on first use (the modal analysis' stiffness and damping of the motion)
+ON_DEMAND = ("k_dynamic", "c_form")
 
 
 def _depends_on(form, w, trial) -> bool:
@@ -381,6 +383,21 @@ class CableForms:
         return J
 
     @property
+    def K_dynamic(self):
+        """``∂F_dynamic/∂u``: with ``v = a = 0`` the stiffness of the motion about a state
+        at rest (the static tangent plus the dynamic terms' stiffness, e.g. dampers'
+        springs); the modal analysis' ``K``."""
+        return ufl.derivative(self.F_dynamic, self.u, self.trial)
+
+    @property
+    def C_form(self):
+        """``∂F_dynamic/∂v``: the damping matrix (Rayleigh, dampers, any dynamic term in
+        ``v``); None when ``F_dynamic`` does not depend on ``v``."""
+        if not _depends_on(self.F_dynamic, self.v, self.trial):
+            return None
+        return ufl.derivative(self.F_dynamic, self.v, self.trial)
+
+    @property
     def M_form(self):
         """The mass form ``∂F_dynamic/∂a``: the inertia and the dynamic terms in ``a``."""
         M = self.inertia
@@ -421,11 +438,21 @@ class CableForms:
 
     def __getattr__(self, name: str):
         # the compiled objects (f_static, j_dynamic, tension_expr, ...): compiled again
-        # first when a term changed since
-        if name.startswith("_") or not (name in COMPILED or name.endswith("_expr")):
+        # first when a term changed since; the modal analysis' k_dynamic and c_form on
+        # their first use (None: no damping)
+        if name.startswith("_") or not (name in COMPILED or name in ON_DEMAND
+                                        or name.endswith("_expr")):
             raise AttributeError(name)
         if self.stale:
             self.compile()
+        if name in ON_DEMAND and name not in self._compiled:
+            from dolfinx import fem
+
+            from cablefem.jit import quiet_compiler
+
+            form = self.K_dynamic if name == "k_dynamic" else self.C_form
+            with quiet_compiler():
+                self._compiled[name] = None if form is None else fem.form(form)
         try:
             return self._compiled[name]
         except KeyError:

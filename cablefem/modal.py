@@ -38,6 +38,13 @@ __all__ = ["ModalProblem", "ModalResult", "solve_modes", "classify_mode", "free_
 
 log = logging.getLogger(__name__)
 
+#: smallest modal assurance criterion (mass-weighted correlation) with which an undamped
+#: mode takes a complex mode's damping ratio
+MIN_MAC = 0.1
+#: relative distance of |lambda| from a mode's frequency within which a mode that no complex
+#: mode resembles takes the nearest one left
+NEAR_OMEGA = 0.05
+
 
 @dataclass
 class ModalResult:
@@ -45,6 +52,11 @@ class ModalResult:
     shapes: list[fem.Function]  #: mode shapes (max nodal amplitude 1)
     labels: list[dict]  #: classification of each mode
     wall_time: float
+    #: damping ratio of each mode from the damped system's complex modes (0 without
+    #: damping; NaN for a mode with no complex partner)
+    damping_ratios: np.ndarray | None = None
+    #: |lambda| of each mode's complex eigenvalue (None without damping)
+    damped_omegas: np.ndarray | None = None
 
 
 def classify_mode(stations: np.ndarray, shape: np.ndarray, chord: np.ndarray,
@@ -138,16 +150,32 @@ class ModalProblem:
         hinges = getattr(model, "hinges", None)
         if hinges:  # linearise what the dynamics solves: the layers' law (module docs)
             hinges.start_dynamics(model.u.x.array)
-        self.K = fpetsc.assemble_matrix(model.j_static, model.bcs, diagonal=1.0)
-        self.K.assemble()
-        self.M = fpetsc.assemble_matrix(model.m_form, model.bcs, diagonal=0.0)
-        self.M.assemble()
+        forms = model.forms
+        dynamic_terms = any(kind == "dynamic" for _, kind in forms.user.values())
+        # the motion about a state at rest: v = a = 0 while assembling
+        saved = [f.x.array.copy() for f in (model.v, model.a)]
+        for f in (model.v, model.a):
+            f.x.array[:] = 0.0
+        try:
+            # K: the static tangent, plus the dynamic terms' stiffness (dampers' springs)
+            self.K = fpetsc.assemble_matrix(forms.k_dynamic if dynamic_terms else
+                                            model.j_static, model.bcs, diagonal=1.0)
+            self.K.assemble()
+            self.M = fpetsc.assemble_matrix(model.m_form, model.bcs, diagonal=0.0)
+            self.M.assemble()
+            self.C = None  # the damping matrix, when the dynamic residual has one
+            if forms.c_form is not None:
+                self.C = fpetsc.assemble_matrix(forms.c_form, model.bcs, diagonal=0.0)
+                self.C.assemble()
+        finally:
+            for f, x in zip((model.v, model.a), saved):
+                f.x.array[:] = x
         defaults = {"st_type": "sinvert", "eps_target": 0.0, "eps_tol": 1e-12,
                     **{"st_" + k: v for k, v in lu_options(model.comm.size).items()}}
         eps = SLEPc.EPS().create(model.comm)
         eps.setOptionsPrefix(self.prefix)
         eps.setOperators(self.K, self.M)
-        eps.setProblemType(SLEPc.EPS.ProblemType.GNHEP if hinges else
+        eps.setProblemType(SLEPc.EPS.ProblemType.GNHEP if hinges or dynamic_terms else
                            SLEPc.EPS.ProblemType.GHEP)
         eps.setWhichEigenpairs(SLEPc.EPS.Which.TARGET_MAGNITUDE)
         eps.setDimensions(n, max(2 * n + 1, n + 15))
@@ -179,7 +207,84 @@ class ModalProblem:
             vals.append(lam)
             shapes.append(f)
         vr.destroy()
-        return self._result(vals, shapes, t0)
+        res = self._result(vals, shapes, t0)
+        res.damping_ratios = np.zeros(len(res.omegas))
+        if self.C is not None:
+            res.damping_ratios, res.damped_omegas = self._damped(res)
+        return res
+
+    def _damped(self, res: ModalResult) -> tuple[np.ndarray, np.ndarray]:
+        """Damping ratio and ``|λ|`` of each mode of ``res`` from the quadratic eigenproblem
+        ``(λ² M + λ C + K) φ = 0`` (SLEPc PEP, shift and invert about 0, options prefix
+        ``<prefix>pep_``): each undamped mode takes the complex mode (``Im λ > 0``) whose
+        shape is closest to it in the mass norm (MAC), or else the one left whose ``|λ|``
+        is within 5 % of its frequency; ``ζ = −Re λ/|λ|``. A mode with no complex partner
+        (overdamped) gets NaN and a warning."""
+        model, n = self.model, len(res.omegas)
+        pep = SLEPc.PEP().create(model.comm)
+        pep.setOptionsPrefix(self.prefix + "pep_")
+        pep.setOperators([self.K, self.C, self.M])
+        pep.setProblemType(SLEPc.PEP.ProblemType.GENERAL)
+        nev = 2 * n + 4  # conjugate pairs, and room for real (overdamped) roots
+        pep.setDimensions(nev, max(2 * nev, nev + 30))
+        pep.setTarget(0.0)
+        pep.setWhichEigenpairs(SLEPc.PEP.Which.TARGET_MAGNITUDE)
+        defaults = {"st_type": "sinvert", "pep_tol": 1e-12,
+                    **{"st_" + k: v for k, v in lu_options(model.comm.size).items()}}
+        with default_options(self.prefix + "pep_", defaults, {}):
+            pep.setFromOptions()
+        pep.solve()
+        vr, vi = self.K.createVecRight(), self.K.createVecRight()
+        Mv = self.K.createVecRight()
+        cands = []
+        for i in range(pep.getConverged()):
+            lam = complex(pep.getEigenpair(i, vr, vi))
+            if lam.imag <= 1e-10 * abs(lam):
+                continue  # the conjugate, or a real (overdamped) root
+            shape = []
+            for x in (vr, vi):
+                self.M.mult(x, Mv)
+                shape.append((Mv.copy(), x.dot(Mv)))
+            cands.append((lam, shape))
+        zeta, wabs = np.full(n, np.nan), np.full(n, np.nan)
+        # MAC of every (mode, complex mode) pair; the pairs taken greedily from the most
+        # alike: a degenerate pair of undamped modes (two planes) comes out of the EPS as
+        # any two combinations of the damped system's two modes, which this still pairs
+        mac = np.zeros((n, len(cands)))
+        for k, phi in enumerate(res.shapes):
+            pMp = phi.vector.dot(self._mass_action(phi.vector, Mv))
+            for j, (_, shape) in enumerate(cands):
+                den = pMp * sum(xMx for _, xMx in shape)
+                mac[k, j] = (sum(phi.vector.dot(Mx) ** 2 for Mx, _ in shape) / den
+                             if den > 0 else 0.0)
+        free = set(range(len(cands)))
+        while mac.size and mac.max() > MIN_MAC:
+            k, j = np.unravel_index(np.argmax(mac), mac.shape)
+            lam = cands[j][0]
+            zeta[k], wabs[k] = -lam.real / abs(lam), abs(lam)
+            mac[k, :] = 0.0
+            mac[:, j] = 0.0
+            free.discard(j)
+        # a multiple eigenvalue may come with eigenvectors that repeat one direction of
+        # its space (seen on 2 ranks): the mode left takes the nearest free |lambda|
+        for k in np.nonzero(np.isnan(zeta))[0]:
+            near = sorted(free, key=lambda j: abs(abs(cands[j][0]) - res.omegas[k]))
+            if near and abs(abs(cands[near[0]][0]) / res.omegas[k] - 1) < NEAR_OMEGA:
+                lam = cands[near[0]][0]
+                zeta[k], wabs[k] = -lam.real / abs(lam), abs(lam)
+                free.discard(near[0])
+        for k in np.nonzero(np.isnan(zeta))[0]:
+            log.warning("modal: mode %d has no complex mode of the damped system like it "
+                        "(overdamped?): no damping ratio", k + 1)
+        for obj in [vr, vi, Mv, pep] + [Mx for _, shape in cands for Mx, _ in shape]:
+            obj.destroy()
+        for k in range(n):
+            log.info("mode %d: damping ratio %.6g (|lambda| = %.6g)", k + 1, zeta[k], wabs[k])
+        return zeta, wabs
+
+    def _mass_action(self, x, out):
+        self.M.mult(x, out)
+        return out
 
     def _result(self, vals: list, shapes: list, t0: float) -> ModalResult:
         model, n = self.model, self.n
@@ -222,8 +327,9 @@ class ModalProblem:
 
     def destroy(self) -> None:
         """Free the EPS and the matrices."""
-        for obj in (self.eps, self.K, self.M):
-            obj.destroy()
+        for obj in (self.eps, self.K, self.M, self.C):
+            if obj is not None:
+                obj.destroy()
 
     def __enter__(self):
         return self

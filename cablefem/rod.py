@@ -261,7 +261,8 @@ class BeamModel(CableModel):
                 ends[end] = math.sqrt(sec.EI / (T * (1.0 + T / sec.EA))) if T > 0 else length
                 ends[end] = min(ends[end], length)
         self.layer_lengths = ends
-        extra = [pm.s for pm in case.point_masses] + [pl.s for pl in case.point_loads]
+        extra = ([pm.s for pm in case.point_masses] + [pl.s for pl in case.point_loads]
+                 + list(self.damper_s))
         # refine scales the whole size function h(s) by 1/refine (a uniform refinement)
         stations = beam_stations(length, ends, spec.layer_elements * self.refine,
                                  1.0 + (spec.growth - 1.0) / self.refine,
@@ -371,7 +372,8 @@ class BeamModel(CableModel):
         # constant loads on P1 fields: one point integrates them exactly
         self._set_forms(F_int=F_int,
                         F_weight=cc * self.m * ufl.inner(self.gravity, duu) * dxr,
-                        F_inertia=F_inertia, du_t=duu, a_t=au, dx=dxr)
+                        F_inertia=F_inertia, du_t=duu, a_t=au, dx=dxr, u_t=split(u)[0],
+                        v_t=split(self.v)[0], us_t=split(self.u_static)[0])
         # output fields (DG0 at the element midpoint, where the strains are sampled)
         self.forms.dx = dxr  # user terms too: FFCx 0.5 cannot mix cell rules (forms.add)
         self.forms.outputs = {"tension": self.EA * G[2], "strain": G[2]}

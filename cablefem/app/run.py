@@ -268,6 +268,12 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
         write_modes(model, modal, outdir / "modes.xdmf")
         summary["modes"] = [{"omega": w, "frequency_hz": w / (2 * np.pi), **lab}
                             for w, lab in zip(modal.omegas, modal.labels)]
+        for entry, z in zip(summary["modes"], modal.damping_ratios):
+            if np.isfinite(z):  # from the damped system's complex modes (modal.py)
+                entry["damping_ratio"] = float(z)
+            else:  # no complex mode like it: absent, and said why
+                entry["damping_ratio_missing"] = "no complex mode of the damped system " \
+                    "matches this mode (overdamped?)"
         summary["wall_time"]["modal"] = modal.wall_time
         # the static state again: the modal solve does not change model.u, but be explicit
         model.u.x.array[:] = model.u_static.x.array

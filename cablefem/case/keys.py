@@ -138,6 +138,21 @@ CASE_KEYS: dict[str, KeyDoc | TableDoc] = {
         "value": KeyDoc("3-vector", REQUIRED, "N", "Force."),
         "time": _TIME_DOC,
     }),
+    "dampers": TableDoc("array of tables", None, "", "External dampers from the ground to a "
+                        "point of the cable, installed on the cable at rest: they act on the "
+                        "motion from the static state (dynamics, modal analysis), not in "
+                        "statics (docs/dampers.md). Single cables only.", {
+        "anchor": KeyDoc("string", REQUIRED, "", "Name of the anchor the distance is "
+                         "measured from."),
+        "distance": KeyDoc("number", REQUIRED, "m", "Stress-free arc length from that "
+                           "anchor, 0 < distance < l."),
+        "coefficient": KeyDoc("number", REQUIRED, "N s/m", "Dashpot coefficient c, >= 0."),
+        "stiffness": KeyDoc("number", 0.0, "N/m", "Spring k in parallel with the dashpot, "
+                            ">= 0."),
+        "direction": KeyDoc("3-vector", None, "-", "Line of action, non-zero, normalised; "
+                            "default: the plane normal to the cable at the point (the "
+                            "dashpot force -c (v - (v.t) t), t the cable's current tangent)."),
+    }),
     "damping": TableDoc("table", None, "", "Damping; default none. Give alpha/beta, or ratio "
                         "(or ratios) with frequencies, not both.", {
         "model": KeyDoc("string", "rayleigh", "", "'rayleigh' alpha M v + beta K_t(u) v, K_t "

@@ -36,7 +36,7 @@ from cablefem.case.schema import (
     rayleigh_coefficients,
 )
 from cablefem.describe import anchor_problems, zero_segments
-from cablefem.description import BEAM_BOUNDS, GEOMETRY_BOUNDS, GEOMETRY_KINDS, NAME
+from cablefem.description import BEAM_BOUNDS, GEOMETRY_BOUNDS, GEOMETRY_KINDS, NAME, Damper
 from cablefem.errors import CaseError
 from cablefem.motion import (
     EllipseMotion,
@@ -254,6 +254,25 @@ def _check_anchors(anchors: list[Anchor], readers: list[_Reader], geometry: Geom
                                 positions_given=tuple(r.has("position") for r in readers))
 
 
+def _parse_dampers(readers: list[_Reader], anchors: list, length: float | None
+                   ) -> list[Damper]:
+    """``[[dampers]]``: the anchor must be one of the case's, the distance inside the cable
+    (against l when the case gives it directly; else when the model is built)."""
+    names = [a.name for a in anchors if a is not None]
+    out = []
+    for r in readers:
+        name = r.string("anchor")
+        if name is not None and names and name not in names:
+            r.add("anchor", f"must name an anchor of the case ({', '.join(names)}), got "
+                  f"{name!r}")
+        dist = r.number("distance", gt=0)
+        if dist is not None and length is not None and dist >= length:
+            r.add("distance", f"must be < l = {length:g} (m), the stress-free length")
+        out.append(Damper(name, dist, r.number("coefficient", ge=0),
+                          r.number("stiffness", ge=0), r.vector("direction", unit_vector=True)))
+    return out
+
+
 def _check_positions_on_cable(items: list, readers: list[_Reader], length: float | None) -> None:
     """``s < l`` for point masses and loads, when the case gives l directly."""
     for item, r in zip(items, readers):
@@ -335,6 +354,7 @@ def parse_case(data: dict, base_dir: str | os.PathLike = Path("."),
     _check_positions_on_cable(masses, mass_rs, length)
     _check_positions_on_cable(point_loads, pload_rs, length)
 
+    dampers = _parse_dampers(top.tables("dampers"), anchors, length)
     damping = _parse_damping(top.table("damping"))
     dynamics = _parse_dynamics(top.table("dynamics"))
     modal = ModalSpec(table("modal").integer("modes"))
@@ -359,8 +379,9 @@ def parse_case(data: dict, base_dir: str | os.PathLike = Path("."),
         raise RuntimeError("cablefem internal error: a case value failed without a message")
     return _finish(Case(title=title, section=section, gravity=gravity, geometry=geometry,
                         mesh=mesh, anchors=anchors, loads=loads, point_masses=masses,
-                        point_loads=point_loads, damping=damping, dynamics=dynamics,
-                        modal=modal, solver=solver, source=source, fatigue=fatigue,
+                        point_loads=point_loads, dampers=dampers, damping=damping,
+                        dynamics=dynamics, modal=modal, solver=solver, source=source,
+                        fatigue=fatigue,
                         beam=beam, units=units or "SI"))
 
 

@@ -1,0 +1,75 @@
+"""External dampers on a single cable (``[[dampers]]``, ``docs/dampers.md``).
+
+A damper is a viscous dashpot of coefficient ``c`` with a spring ``k`` in parallel, from the
+ground to the cable node at a stress-free distance from one anchor. It is installed on the
+cable at rest, so it acts on the motion from the static state::
+
+    f = -c P v - k P (u - u_static)
+
+with ``P = d d^T`` for a given direction ``d``, or, by default, the projector on the plane
+normal to the cable at the node, ``P = I - (e+ e+^T + e- e-^T)/2`` with ``e±`` the current
+unit tangents of the two elements that meet there (the cable turns at a damper; the mean
+keeps the projector independent of the elements' orientation). It enters the dynamic
+residual as ``+(c P v + k P (u - u_static)) . du`` at the node: a dynamic term of
+:class:`cablefem.forms.CableForms`, whose Jacobians (in ``u`` through ``P``, and in ``v``)
+UFL derives. Statics does not see it.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import ufl
+from dolfinx import fem
+from petsc4py import PETSc
+
+from cablefem import forms
+
+__all__ = ["damper_stations", "damper_work"]
+
+
+def damper_stations(description, length: float) -> list[float]:
+    """Stress-free arc length from the first anchor of every damper of a single cable of
+    stress-free ``length``; raises ValueError (key, message) pairs for a damper outside."""
+    names = [a.name for a in description.anchors]
+    out, problems = [], []
+    for i, d in enumerate(description.dampers):
+        s = d.distance if names.index(d.anchor) == 0 else length - d.distance
+        if not 0.0 < s < length:
+            problems.append((f"dampers[{i}].distance", f"must be < l = {length:g} m, the "
+                             "stress-free length"))
+        out.append(float(s))
+    if problems:
+        raise ValueError(problems)
+    return out
+
+
+def _projector(d, u_t, t0):
+    """``d d^T`` for a direction, else the mean normal-plane projector at an interior
+    vertex (restrictions of the two cells)."""
+    if d is not None:
+        return ufl.outer(d, d)
+    e = []
+    for side in ("+", "-"):
+        g = forms.stretch_vector(u_t, t0)(side)
+        e.append(g / ufl.sqrt(ufl.dot(g, g)))
+    return ufl.Identity(3) - 0.5 * (ufl.outer(e[0], e[0]) + ufl.outer(e[1], e[1]))
+
+
+def damper_work(mesh, dampers, tags, u_t, v_t, us_t, du_t, t0, dS):
+    """The dampers' virtual work at their vertices (``dS(tag)``, one tag per damper in
+    ``tags``): ``sum (c P v + k P (u - u_s)) . du``; None without dampers. ``u_t``, ``v_t``,
+    ``us_t``, ``du_t``: the translational parts of displacement, velocity, static
+    displacement and test function."""
+    work = None
+    for d, tag in zip(dampers, tags):
+        direction = (None if d.direction is None else
+                     fem.Constant(mesh, np.asarray(d.direction, dtype=PETSc.ScalarType)))
+        P = _projector(direction, u_t, t0)
+        c = fem.Constant(mesh, PETSc.ScalarType(d.coefficient))
+        f = c * ufl.dot(P, v_t("+"))
+        if d.stiffness > 0:
+            k = fem.Constant(mesh, PETSc.ScalarType(d.stiffness))
+            f = f + k * ufl.dot(P, u_t("+") - us_t("+"))
+        term = ufl.inner(f, du_t("+")) * dS(tag)
+        work = term if work is None else work + term
+    return work
