@@ -111,21 +111,26 @@ def virtual_rotation_map(q: np.ndarray) -> np.ndarray:
 
 
 def beam_stations(length: float, ends: dict[int, float], per_layer: float, growth: float,
-                  h_max: float, extra: tuple[float, ...] = ()) -> np.ndarray:
-    """Stress-free stations graded towards clamped ends.
+                  h_max: float, extra: tuple[float, ...] = (),
+                  kinks: dict[float, float] | None = None) -> np.ndarray:
+    """Stress-free stations graded towards clamped ends and interior kinks.
 
     ``ends`` maps an end (0: ``s = 0``, 1: ``s = l``) to its layer length ``ℓ``. The element
     size is ``h(s) = min(h_max, min_a [ℓ_a/per_layer + (growth − 1) σ_a(s)])``, ``σ_a`` the
     distance from end ``a``: a geometric progression of ratio ``growth`` away from each clamp
-    up to ``h_max``. Nodes follow ``∫ ds/h`` in equal steps; ``extra`` stations (point masses
-    and loads) are inserted as nodes.
+    up to ``h_max``; ``kinks`` maps interior stations (where a point force kinks the cable)
+    to their layer lengths, graded alike on both sides. Nodes follow ``∫ ds/h`` in equal
+    steps; ``extra`` stations (point masses, loads, dampers) are inserted as nodes.
     """
     h_max = min(h_max, length)
-    # fine sampling, geometric near the ends, to integrate 1/h accurately
-    h0 = min([ell / per_layer for ell in ends.values()] + [h_max])
+    kinks = {float(k): float(v) for k, v in (kinks or {}).items() if 0.0 < k < length}
+    # fine sampling, geometric near the ends and kinks, to integrate 1/h accurately
+    h0 = min([ell / per_layer for ell in list(ends.values()) + list(kinks.values())]
+             + [h_max])
     n_geo = 400
     g = np.geomspace(1e-3 * h0, length, n_geo)
-    s = np.unique(np.concatenate([[0.0], g, length - g, np.linspace(0, length, 2001)]))
+    s = np.unique(np.concatenate([[0.0], g, length - g, np.linspace(0, length, 2001)]
+                                 + [np.concatenate([k - g, k + g]) for k in kinks]))
     s = s[(s >= 0) & (s <= length)]
 
     def h(x):
@@ -133,6 +138,8 @@ def beam_stations(length: float, ends: dict[int, float], per_layer: float, growt
         for end, ell in ends.items():
             sig = x if end == 0 else length - x
             out = np.minimum(out, ell / per_layer + (growth - 1.0) * sig)
+        for k, ell in kinks.items():
+            out = np.minimum(out, ell / per_layer + (growth - 1.0) * np.abs(x - k))
         return out
 
     inv = 1.0 / h(s)
@@ -263,10 +270,17 @@ class BeamModel(CableModel):
         self.layer_lengths = ends
         extra = ([pm.s for pm in case.point_masses] + [pl.s for pl in case.point_loads]
                  + list(self.damper_s))
+        # the kinks' layers (a point force turns the cable there), at the catenary's tension
+        kinks = {}
+        for s in extra:
+            T = float(shape.tension(np.array([s]))[0])
+            if T > 0:
+                kinks[s] = math.sqrt(sec.EI / (T * (1.0 + T / sec.EA)))
         # refine scales the whole size function h(s) by 1/refine (a uniform refinement)
         stations = beam_stations(length, ends, spec.layer_elements * self.refine,
                                  1.0 + (spec.growth - 1.0) / self.refine,
-                                 length / (spec.span_elements * self.refine), tuple(extra))
+                                 length / (spec.span_elements * self.refine), tuple(extra),
+                                 kinks)
         names = (case.anchors[0].name, case.anchors[1].name)
         geo = straight_cable(p, (q - p) / np.linalg.norm(q - p), stations, names)
         return geo, shape.position(geo.stations)

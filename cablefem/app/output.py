@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from cablefem import asymptotics
+from cablefem.app.kinkout import KinkOutput
 from cablefem.cable import CableModel
 from cablefem.io import anchorcsv
 from cablefem.io.anchorcsv import FORCE_COLUMNS, AnchorCSV
@@ -85,6 +86,7 @@ class RunOutput:
             anchorcsv.truncate(model.comm, outdir / "anchors.csv", resume_after)
             self._load_history(outdir / "anchors.csv")
         frames = frames or {}
+        self.kinkout = KinkOutput(model, outdir, omega, resume_after)  # kinks.csv
         self.string = StringWriter(model, outdir, resume_after, frames.get("string"))
         self.csv = AnchorCSV(outdir / "anchors.csv", anchorcsv.columns(bool(self.clamped)),
                              model.comm, append=resume_after is not None)
@@ -210,6 +212,7 @@ class RunOutput:
             self.forces[name].append(N[:3])
             if name in self.rod:
                 self.rod[name].append(N[3:6])
+        self.kinkout.add(t)
         self._pending += 1
         if self._pending >= self.FLUSH_ROWS:
             self.flush()
@@ -217,6 +220,7 @@ class RunOutput:
     def flush(self) -> None:
         """Compute the moment columns of the pending rows (vectorised per anchor) and
         write them to anchors.csv as one block."""
+        self.kinkout.flush()
         n = self._pending
         if n == 0:
             return
@@ -297,6 +301,7 @@ class RunOutput:
         try:
             self.flush()
         finally:
+            self.kinkout.close()
             self.string.close()
             self.csv.close()
             if self.moments is not None:

@@ -469,6 +469,14 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
             if len(times) > 1:
                 entry["steady_state_moment"] = steady_state_stats(times, mo["moment"])
         summary["anchors"][a.name] = entry
+    if emitter.kinkout.kinks:
+        summary["kinks"] = emitter.kinkout.summary()
+        for name, entry in summary["kinks"].items():
+            frac = entry.get("valid_fraction", 1.0)
+            if frac < 1.0 or not entry["static_valid"]:
+                warn(summary, f"kinks.{name}", f"{100 * (1 - frac):.3g} % of the rows are "
+                     "invalid (the layer at this kink is slack, not quasi-static, or overlaps "
+                     "a neighbouring kink or anchor): see valid in kinks.csv")
     if summary["status"] == "running":
         summary["status"] = "completed"
     if figures and len(times) > 1 and moments:

@@ -43,7 +43,7 @@ OPTIONAL_MOMENT_COLUMNS = ("error_estimate",)
 FORCE_COLUMNS = ["Nx", "Ny", "Nz"]
 #: Columns written as integers (all others but ``anchor`` are floats).
 INTEGER_COLUMNS = ("valid",)
-_TEXT = "anchor"
+_TEXT = ("anchor", "kink")  # the text columns (anchors.csv, kinks.csv)
 
 
 def columns(clamped: bool) -> list[str]:
@@ -113,7 +113,7 @@ def format_rows(cols: Sequence[str], table: Mapping[str, Sequence]) -> str:
         v = table.get(c)
         if v is None:
             cells.append([""] * n)
-        elif c == _TEXT:
+        elif c in _TEXT:
             cells.append([_text(str(s)) for s in v])
         else:
             cells.append(_numbers(np.asarray(v, float).ravel(), c in INTEGER_COLUMNS))

@@ -1,0 +1,117 @@
+"""``kinks.csv`` and the kinks' summary: the moment at every interior kink of a run
+(:mod:`cablefem.kinks`), one row per kink and output time, beside ``anchors.csv``."""
+
+from __future__ import annotations
+
+import csv
+from pathlib import Path
+
+import numpy as np
+
+from cablefem.app.report import steady_state_stats
+from cablefem.io import anchorcsv
+from cablefem.io.anchorcsv import AnchorCSV
+from cablefem.kinks import KINK_COLUMNS, KinkMoments, rod_kink_moments
+
+__all__ = ["KinkOutput"]
+
+
+class KinkOutput:
+    """Records the kinks' columns at each output time (collective: :meth:`add` reads the
+    model's state) and writes them to ``kinks.csv`` in blocks; :meth:`summary` gives the
+    per-kink entries of ``summary.json``. Nothing is written for a model without kinks."""
+
+    FLUSH_ROWS = 256
+
+    def __init__(self, model, outdir: Path, omega: float | None,
+                 resume_after: float | None = None):
+        self.model = model
+        self.moments = KinkMoments(model, omega)
+        self.kinks = self.moments.kinks
+        self.beam = model.is_beam
+        self.rows: dict[str, dict[str, list]] = {k.name: {c: [] for c in KINK_COLUMNS[3:]}
+                                                 for k in self.kinks}
+        self.times: list[float] = []
+        self.static = self._columns() if self.kinks else None  # model.u: the static state
+        self.csv = None
+        self._pending = []
+        if not self.kinks:
+            return
+        path = outdir / "kinks.csv"
+        if resume_after is not None:
+            anchorcsv.truncate(model.comm, path, resume_after)
+            self._load(path)
+        self.csv = AnchorCSV(path, KINK_COLUMNS, model.comm, append=resume_after is not None)
+
+    def _columns(self) -> dict[str, np.ndarray]:
+        cols = self.moments.measure()
+        if self.beam:  # the rod resolves the kink: its own moment at the node
+            cols = {k: np.full(len(self.kinks), np.nan) for k in cols}
+            cols["moment"] = rod_kink_moments(self.model, self.kinks)
+            cols["valid"] = np.ones(len(self.kinks), dtype=int)
+        return cols
+
+    def _load(self, path: Path) -> None:
+        """The rows written before a restart (every rank reads them: small)."""
+        comm = self.model.comm
+        data = None
+        if comm.rank == 0 and path.is_file():
+            with open(path, newline="") as fh:
+                data = list(csv.DictReader(fh))
+        data = comm.bcast(data, root=0) or []
+        for row in data:
+            name = row["kink"]
+            if name not in self.rows:
+                continue
+            if name == self.kinks[0].name:
+                self.times.append(float(row["time"]))
+            for c in KINK_COLUMNS[3:]:
+                self.rows[name][c].append(float(row[c]) if row[c] else np.nan)
+
+    def add(self, t: float) -> None:
+        if not self.kinks:
+            return
+        cols = self._columns()
+        self.times.append(t)
+        for i, k in enumerate(self.kinks):
+            for c in KINK_COLUMNS[3:]:
+                self.rows[k.name][c].append(float(cols[c][i]))
+        self._pending.append((t, cols))
+        if len(self._pending) >= self.FLUSH_ROWS:
+            self.flush()
+
+    def flush(self) -> None:
+        if not self._pending or self.csv is None:
+            return
+        n = len(self.kinks)
+        table = {"time": [t for t, _ in self._pending for _ in range(n)],
+                 "kink": [k.name for _ in self._pending for k in self.kinks],
+                 "s": [k.s for _ in self._pending for k in self.kinks]}
+        for c in KINK_COLUMNS[3:]:
+            table[c] = np.concatenate([cols[c] for _, cols in self._pending])
+        self.csv.write(table)
+        self._pending = []
+
+    def close(self) -> None:
+        self.flush()
+        if self.csv is not None:
+            self.csv.close()
+
+    def summary(self) -> dict:
+        """Per kink: its station, the static moment, tension, angle and layer length, the
+        fraction of valid rows and the steady-state peak and RMS of the moment."""
+        out = {}
+        times = np.array(self.times)
+        for i, k in enumerate(self.kinks):
+            rows = {c: np.array(v, float) for c, v in self.rows[k.name].items()}
+            entry = {"s": k.s, "static_valid": bool(self.static["valid"][i])}
+            for key, col in (("static_moment", "moment"), ("static_tension", "tension"),
+                             ("static_delta", "delta"), ("layer_length", "layer_length")):
+                if np.isfinite(self.static[col][i]):  # the rod has a moment only
+                    entry[key] = float(self.static[col][i])
+            if times.size:
+                entry["valid_fraction"] = float(np.mean(rows["valid"] == 1))
+            if times.size > 1:
+                entry["steady_state_moment"] = steady_state_stats(times, rows["moment"])
+            out[k.name] = entry
+        return out

@@ -1,0 +1,169 @@
+"""Bending moments at interior kinks (``docs/kinks.md``).
+
+Wherever a concentrated force acts on the span of a single cable (a point load, a point
+mass's weight and inertia, a damper) the string's tangent turns across the node, from
+``e-`` (the element before) to ``e+`` (the element after), by the kink angle ``Δ_k``. A
+cable with bending stiffness rounds that corner over a boundary layer on each side: with
+the same tension ``T`` on both sides its tangent at the node is the bisector
+``b = (e- + e+)/|e- + e+|``, and each side is the clamped layer of the anchors
+(:func:`cablefem.asymptotics.layer`) with the clamp along ``b`` and the angle ``Δ_k/2``::
+
+    M_k = 2 sqrt(EI T) sin(Δ_k/4) sqrt(1 + (T/EA) cos²(Δ_k/4))
+
+about the axis ``b × e+`` (the kink's normal), decaying away from the node over
+``ℓ = sqrt(EI/(T (1 + T/EA)))``. For a small angle, ``Δ_k = P/T`` for a transverse force
+``P`` and ``M_k = P ℓ/2``: the tensioned beam's moment under a point load. ``T`` is the mean
+of the two elements' tensions (they differ by a tangential force component).
+
+Each row is ``valid`` when the layer fits: the slack and quasi-static checks of the
+anchors, and the nearest other kink or anchor at least :data:`MIN_SPACING` layer lengths
+away (the layers would overlap).
+
+The rod (``cablefem.rod``) resolves the kink: its moment at the node is extrapolated from
+its element moments on each side (quadratic, from the three elements nearest the node;
+the rod's mesh is graded towards kinks as towards clamps), the two sides averaged.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from cablefem import asymptotics
+
+__all__ = ["KINK_COLUMNS", "MIN_SPACING", "Kink", "KinkMoments", "kink_points"]
+
+#: the columns of ``kinks.csv``
+KINK_COLUMNS = ["time", "kink", "s", "tension", "delta", "moment", "Mx", "My", "Mz",
+                "layer_length", "valid"]
+#: a kink's layer is valid when the nearest other kink or anchor is at least this many
+#: layer lengths away (the layer's profile has decayed to e^-3 = 5 % there)
+MIN_SPACING = 3.0
+
+
+@dataclass
+class Kink:
+    """An interior node where a concentrated force acts: ``name`` (``point_load0``,
+    ``point_mass1``, ``damper0``), the node and its stress-free arc length ``s``."""
+
+    name: str
+    node: int
+    s: float
+
+
+def kink_points(model) -> list[Kink]:
+    """The kinks of a single cable (none for a network: its junctions are not covered)."""
+    if getattr(model, "is_network", False):
+        return []
+    case, geo = model.case, model.geometry
+    out, seen = [], set()
+    items = ([(f"point_load{i}", pl.s) for i, pl in enumerate(case.point_loads)]
+             + [(f"point_mass{i}", pm.s) for i, pm in enumerate(case.point_masses)]
+             + [(f"damper{i}", s) for i, s in enumerate(getattr(model, "damper_s", ()))])
+    for name, s in items:
+        k = geo.node_at(s)
+        if k in seen or k == 0 or k == len(geo.stations) - 1:
+            continue  # one kink per node (a mass with a load: the first item names it)
+        seen.add(k)
+        out.append(Kink(name, k, float(geo.stations[k])))
+    return out
+
+
+class KinkMoments:
+    """The kinks' moment columns from the model's current state (collective):
+    :meth:`measure` reads the positions of each kink's node and its two neighbours (a
+    small all-reduce) and returns the columns of :data:`KINK_COLUMNS` but time."""
+
+    def __init__(self, model, omega: float | None = None):
+        self.model = model
+        self.kinks = kink_points(model)
+        self.omega = omega
+        sec = model.case.section
+        self.EI, self.EA, self.m = sec.EI, sec.EA, sec.mass
+        st = model.geometry.stations
+        self.nodes = np.array([[k.node - 1, k.node, k.node + 1] for k in self.kinks],
+                              dtype=np.int64).reshape(-1, 3)
+        self.h = np.diff(st[self.nodes], axis=1) if self.kinks else np.zeros((0, 2))
+        # the distance from each kink to its nearest other kink or anchor
+        marks = np.array(sorted({0.0, float(st[-1])} | {k.s for k in self.kinks}))
+        self.spacing = np.array([np.min(np.abs(marks[marks != k.s] - k.s))
+                                 for k in self.kinks])
+
+    @property
+    def names(self) -> list[str]:
+        return [k.name for k in self.kinks]
+
+    def positions(self) -> np.ndarray:
+        """(n_kinks, 3, 3) current positions of each kink's three nodes, on every rank."""
+        m = self.model
+        bs = m.bs
+        n_owned = m.V.dofmap.index_map.size_local
+        u = m.u.x.array[: bs * n_owned].reshape(-1, bs)[:, :3]
+        out = np.zeros(self.nodes.shape + (3,))
+        for j in range(3):
+            hit = np.nonzero(np.isin(m._owned_nodes, self.nodes[:, j]))[0]
+            for i in hit:
+                rows = np.nonzero(self.nodes[:, j] == m._owned_nodes[i])[0]
+                out[rows, j] = u[i]
+        out = m.comm.allreduce(out)
+        return out + m.geometry.points[self.nodes]
+
+    def measure(self) -> dict[str, np.ndarray]:
+        """The columns (one row per kink) at the model's current state."""
+        return self.columns(self.positions())
+
+    def columns(self, r: np.ndarray) -> dict[str, np.ndarray]:
+        """The columns for positions ``r`` (n_kinks, 3, 3) of each kink's three nodes."""
+        d = np.diff(r, axis=1)  # (n, 2, 3): the two elements
+        length = np.linalg.norm(d, axis=2)
+        e = d / length[..., None]
+        strain = length / self.h - 1.0
+        T2 = self.EA * (np.maximum(strain, 0.0) if self.model.tension_only else strain)
+        T = T2.mean(axis=1)
+        bis = e[:, 0] + e[:, 1]
+        qs = (self.m, self.omega) if self.omega else None
+        with np.errstate(invalid="ignore", divide="ignore"):
+            lay = asymptotics.layer(T[:, None] * e[:, 1], bis, self.EI, self.EA,
+                                    quasi_static=qs, length=self.model.length)
+            valid = lay.valid & (self.spacing >= MIN_SPACING * lay.layer_length)
+        Mv = np.nan_to_num(lay.moment_vector)
+        return {"tension": T, "delta": 2.0 * lay.delta, "moment": lay.moment,
+                "Mx": Mv[:, 0], "My": Mv[:, 1], "Mz": Mv[:, 2],
+                "layer_length": lay.layer_length, "valid": valid.astype(int)}
+
+
+def rod_kink_moments(model, kinks: list[Kink]) -> np.ndarray:
+    """The rod's moment magnitude at each kink's node (collective): its element moments
+    (``model.moment_field``) extrapolated to the node from each side, quadratically from the
+    three nearest elements, the two sides averaged."""
+    if not kinks:
+        return np.zeros(0)
+    f = model.moment_field()
+    W = f.function_space
+    n_owned = W.dofmap.index_map.size_local
+    mid = W.tabulate_dof_coordinates()[:n_owned]
+    vals = np.linalg.norm(f.x.array[: 3 * n_owned].reshape(-1, 3), axis=1)
+    parts = model.comm.allgather((mid, vals))
+    mid = np.concatenate([p[0] for p in parts])
+    vals = np.concatenate([p[1] for p in parts])
+    geo = model.geometry
+    st = geo.stations
+    # each element's midpoint at the mean of its two stations (the reference is straight)
+    s_mid = st[:-1] + 0.5 * np.diff(st)
+    ref_mid = 0.5 * (geo.points[:-1] + geo.points[1:])
+    order = np.array([int(np.argmin(np.linalg.norm(ref_mid - x, axis=1))) for x in mid])
+    M = np.full(st.size - 1, np.nan)
+    M[order] = vals
+    out = []
+    for k in kinks:
+        sides = []
+        for cells in (np.arange(k.node - 3, k.node)[::-1], np.arange(k.node, k.node + 3)):
+            cells = cells[(cells >= 0) & (cells < M.size)]
+            if cells.size < 3:
+                sides.append(M[cells[0]])
+                continue
+            coef = np.polyfit(s_mid[cells] - k.s, M[cells], 2)
+            sides.append(np.polyval(coef, 0.0))
+        out.append(0.5 * (sides[0] + sides[1]))
+    return np.array(out)
