@@ -29,7 +29,7 @@ _API = {
     "describe_cable": "cablefem.describe", "describe_network": "cablefem.describe",
     "Gravity": "cablefem.description", "DistributedLoad": "cablefem.description",
     "PointMass": "cablefem.description", "PointLoad": "cablefem.description",
-    "Damper": "cablefem.description",
+    "Damper": "cablefem.description", "Fluid": "cablefem.description",
     "Damping": "cablefem.description", "CableSpec": "cablefem.description",
     "HarmonicMotion": "cablefem.motion", "EllipseMotion": "cablefem.motion",
     "TableMotion": "cablefem.motion", "TimeFunction": "cablefem.motion",

@@ -27,6 +27,7 @@ from cablefem.anchor import AnchorBC
 from cablefem.dampers import damper_stations, damper_work
 from cablefem.description import CableDescription
 from cablefem.errors import CaseError
+from cablefem.fluid import add_fluid_terms
 from cablefem.geometry import create_line_mesh, graded_stations, polyline_cable, straight_cable
 from cablefem.jit import quiet_compiler
 
@@ -381,6 +382,8 @@ class CableModel:
             "tension": T if T is not None else forms.tension(u, t0, self.EA,
                                                               self.tension_only, cc),
             "strain": forms.axial_strain(u, t0, cc)}
+        if getattr(self.case, "fluid", None) is not None:  # water or wind (Morison)
+            add_fluid_terms(self)
         strain = forms.strain_energy_density(u, t0, self.EA, self.tension_only, cc) * ufl.dx
         if self.case.solver.span_bending:
             strain = strain + self._add_span_bending()
@@ -504,6 +507,8 @@ class CableModel:
             c.value[:] = np.asarray(ld.value) * ld.time.value(t)
         for c, pl in self.point_loads:
             c.value[:] = np.asarray(pl.value) * pl.time.value(t)
+        if getattr(self, "fluid_factor", None) is not None:
+            self.fluid_factor.value = self.case.fluid.time.value(t)
 
     def invalidate_time(self) -> None:
         """Make the next :meth:`set_time` write everything again (the hinges changed)."""

@@ -23,7 +23,8 @@ from cablefem.anchor import Anchor
 from cablefem.motion import TimeFunction
 from cablefem.properties import Section
 
-__all__ = ["Gravity", "Geometry", "MeshSpec", "DistributedLoad", "PointMass", "PointLoad", "Damper",
+__all__ = ["Gravity", "Geometry", "MeshSpec", "DistributedLoad", "PointMass", "PointLoad",
+           "Damper", "Fluid",
            "Damping", "SolverSpec", "BeamSpec", "CableSpec", "NetworkSpec", "CableDescription",
            "rayleigh_coefficients", "stress_free_length", "GEOMETRY_KINDS", "GEOMETRY_BOUNDS",
            "BEAM_BOUNDS", "DAMPING_MODELS", "OUTER_CORRECTIONS", "MAX_ELEMENTS"]
@@ -124,6 +125,26 @@ class Damper:
 
 
 @dataclass
+class Fluid:
+    """The water (or air) around a single cable (``docs/fluid.md``): ``density`` (kg/m^3);
+    the free ``surface`` as an elevation against gravity (m; None: everywhere immersed,
+    as in air); the ``current`` velocity (m/s, 3-vector, uniform) times ``time.value(t)``
+    in dynamics (a gust or turbulence history); the hydrodynamic ``diameter`` (m) and the
+    Morison coefficients ``cd_normal``, ``cd_tangential``, ``ca_normal``; ``buoyancy``
+    (False in air)."""
+
+    density: float
+    diameter: float
+    current: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    surface: float | None = None
+    cd_normal: float = 1.2
+    cd_tangential: float = 0.008
+    ca_normal: float = 1.0
+    buoyancy: bool = True
+    time: TimeFunction = field(default_factory=TimeFunction.constant)
+
+
+@dataclass
 class Damping:
     """Damping model 'none' | 'rayleigh' (current tangent) | 'rayleigh_k0' (static tangent)
     | 'axial', with resolved ``alpha`` (1/s), ``beta`` (s); ``ratios`` and ``frequencies``
@@ -207,6 +228,7 @@ class CableDescription:
     point_masses: list[PointMass] = field(default_factory=list)
     point_loads: list[PointLoad] = field(default_factory=list)
     dampers: list[Damper] = field(default_factory=list)
+    fluid: Fluid | None = None
     damping: Damping = field(default_factory=Damping)
     solver: SolverSpec = field(default_factory=SolverSpec)
     beam: BeamSpec = field(default_factory=BeamSpec)

@@ -238,6 +238,9 @@ class BeamModel(CableModel):
         problems = []
         if case.network is not None:
             problems.append(("network", "the beam model takes single cables, not networks"))
+        elif getattr(case, "fluid", None) is not None:
+            problems.append(("fluid", "the beam model has no fluid forces: compare the "
+                             "string with the rod in air without [fluid]"))
         elif case.geometry.kind == "polyline":
             problems.append(("geometry.polyline", "the beam model needs a straight stress-free "
                              "reference: give length, horizontal_tension or sag_ratio"))

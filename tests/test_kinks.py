@@ -141,7 +141,7 @@ def test_damper_kink_against_the_rod_in_dynamics(mpi_tmp_path):
     for model in ("string", "beam"):
         case = parse_case(d)
         res = run_case(case, mpi_tmp_path / model, comm, figures=False, progress=False,
-                       modes=0, kind=model)
+                       modes=0, model=model)
         out[model] = res.summary["kinks"]["damper0"]["steady_state_moment"]
     a, b = out["string"], out["beam"]
     assert abs(a["peak"] / b["peak"] - 1) < 0.02

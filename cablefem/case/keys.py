@@ -153,6 +153,27 @@ CASE_KEYS: dict[str, KeyDoc | TableDoc] = {
                             "default: the plane normal to the cable at the point (the "
                             "dashpot force -c (v - (v.t) t), t the cable's current tangent)."),
     }),
+    "fluid": TableDoc("table", None, "", "Water or air around the cable: Morison drag on "
+                      "the relative velocity, added mass and buoyancy (docs/fluid.md). "
+                      "Single cables only.", {
+        "density": KeyDoc("number", REQUIRED, "kg/m^3", "Fluid density, > 0 (sea water "
+                          "1025, air 1.225)."),
+        "diameter": KeyDoc("number", None, "m", "Hydrodynamic diameter D, > 0; default "
+                           "section.diameter (one of them is required)."),
+        "current": KeyDoc("3-vector", [0.0, 0.0, 0.0], "m/s", "Fluid velocity (current or "
+                          "mean wind), uniform."),
+        "surface": KeyDoc("number", None, "m", "Elevation of the free surface along -gravity "
+                          "(buoyancy and added mass below it only); default: everywhere "
+                          "immersed."),
+        "cd_normal": KeyDoc("number", 1.2, "-", "Normal drag coefficient on D, >= 0."),
+        "cd_tangential": KeyDoc("number", 0.008, "-", "Tangential drag coefficient on the "
+                                "area pi D per length (MoorDyn's convention), >= 0."),
+        "ca_normal": KeyDoc("number", 1.0, "-", "Normal added-mass coefficient on "
+                            "rho pi D^2/4, >= 0."),
+        "buoyancy": KeyDoc("boolean", True, "", "Buoyancy rho g pi D^2/4 against gravity "
+                           "below the surface (false in air)."),
+        "time": _TIME_DOC,
+    }),
     "damping": TableDoc("table", None, "", "Damping; default none. Give alpha/beta, or ratio "
                         "(or ratios) with frequencies, not both.", {
         "model": KeyDoc("string", "rayleigh", "", "'rayleigh' alpha M v + beta K_t(u) v, K_t "

@@ -36,7 +36,14 @@ from cablefem.case.schema import (
     rayleigh_coefficients,
 )
 from cablefem.describe import anchor_problems, zero_segments
-from cablefem.description import BEAM_BOUNDS, GEOMETRY_BOUNDS, GEOMETRY_KINDS, NAME, Damper
+from cablefem.description import (
+    BEAM_BOUNDS,
+    GEOMETRY_BOUNDS,
+    GEOMETRY_KINDS,
+    NAME,
+    Damper,
+    Fluid,
+)
 from cablefem.errors import CaseError
 from cablefem.motion import (
     EllipseMotion,
@@ -273,6 +280,23 @@ def _parse_dampers(readers: list[_Reader], anchors: list, length: float | None
     return out
 
 
+def _parse_fluid(r: _Reader | None, section, base_dir: Path) -> Fluid | None:
+    """``[fluid]``: the diameter defaults to the section's."""
+    if r is None:
+        return None
+    D = r.number("diameter", gt=0)
+    if D is None:
+        D = getattr(section, "diameter", None) if section is not None else None
+        if D is None and section is not None:
+            r.add("diameter", "required: give fluid.diameter or section.diameter")
+    current = r.vector("current")
+    return Fluid(r.number("density", gt=0), D,
+                 np.zeros(3) if current is None else current, r.number("surface"),
+                 r.number("cd_normal", ge=0), r.number("cd_tangential", ge=0),
+                 r.number("ca_normal", ge=0), r.boolean("buoyancy"),
+                 _parse_time(r.table("time"), base_dir) or TimeFunction.constant())
+
+
 def _check_positions_on_cable(items: list, readers: list[_Reader], length: float | None) -> None:
     """``s < l`` for point masses and loads, when the case gives l directly."""
     for item, r in zip(items, readers):
@@ -355,6 +379,7 @@ def parse_case(data: dict, base_dir: str | os.PathLike = Path("."),
     _check_positions_on_cable(point_loads, pload_rs, length)
 
     dampers = _parse_dampers(top.tables("dampers"), anchors, length)
+    fluid = _parse_fluid(top.table("fluid"), section, base_dir)
     damping = _parse_damping(top.table("damping"))
     dynamics = _parse_dynamics(top.table("dynamics"))
     modal = ModalSpec(table("modal").integer("modes"))
@@ -379,7 +404,8 @@ def parse_case(data: dict, base_dir: str | os.PathLike = Path("."),
         raise RuntimeError("cablefem internal error: a case value failed without a message")
     return _finish(Case(title=title, section=section, gravity=gravity, geometry=geometry,
                         mesh=mesh, anchors=anchors, loads=loads, point_masses=masses,
-                        point_loads=point_loads, dampers=dampers, damping=damping,
+                        point_loads=point_loads, dampers=dampers, fluid=fluid,
+                        damping=damping,
                         dynamics=dynamics, modal=modal, solver=solver, source=source,
                         fatigue=fatigue,
                         beam=beam, units=units or "SI"))
