@@ -37,7 +37,7 @@ def create_cable(comm: MPI.Comm, anchors: list[Anchor], section: Section, *,
                  tension_only: bool = True, outer_correction: str = "hinge",
                  span_bending: bool = False, petsc_options: dict | None = None,
                  petsc_options_prefix: str = "cable_", units: str = "SI",
-                 name: str = "<python>", dampers=()):
+                 name: str = "<python>", dampers=(), fluid=None):
     """The extensible string of one cable between two anchors
     (:class:`cablefem.cable.CableModel`), ready for :func:`cablefem.statics.solve_static`.
 
@@ -67,6 +67,9 @@ def create_cable(comm: MPI.Comm, anchors: list[Anchor], section: Section, *,
         :class:`cablefem.description.Damper` (external dashpots with springs, from the
         ground to the cable; they act on the motion from the static state,
         ``docs/dampers.md``).
+    fluid
+        :class:`cablefem.description.Fluid`: water or air around the cable (Morison drag,
+        added mass, buoyancy; ``docs/fluid.md``).
     tension_only
         No compression (``T = EA max(strain, 0)``).
     outer_correction
@@ -97,7 +100,7 @@ def create_cable(comm: MPI.Comm, anchors: list[Anchor], section: Section, *,
         gravity=gravity, loads=loads, point_masses=point_masses, point_loads=point_loads,
         damping=damping, tension_only=tension_only, outer_correction=outer_correction,
         span_bending=span_bending, petsc_options=petsc_options, units=units, source=name,
-        dampers=dampers)
+        dampers=dampers, fluid=fluid)
     return _named(CableModel, comm, description, petsc_options_prefix)
 
 

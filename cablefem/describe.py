@@ -30,6 +30,7 @@ from cablefem.description import (
     Damper,
     Damping,
     DistributedLoad,
+    Fluid,
     Geometry,
     Gravity,
     MeshSpec,
@@ -234,8 +235,8 @@ def describe_cable(anchors: list[Anchor], section: Section, *, length: float | N
                    damping: Damping | None = None, tension_only: bool = True,
                    outer_correction: str = "hinge", span_bending: bool = False,
                    petsc_options: dict | None = None, beam: BeamSpec | None = None,
-                   units: str = "SI", source: str = "<python>", dampers=()
-                   ) -> CableDescription:
+                   units: str = "SI", source: str = "<python>", dampers=(),
+                   fluid: Fluid | None = None) -> CableDescription:
     """A checked description of a single cable (the arguments of
     :func:`cablefem.create_cable`, which see).
 
@@ -291,11 +292,21 @@ def describe_cable(anchors: list[Anchor], section: Section, *, length: float | N
     if beam is not None and not isinstance(beam, BeamSpec):
         problems.append(("beam", f"expected a BeamSpec, got {show(beam)}"))
     damper_list = _dampers(problems, dampers, anchor_list)
+    if fluid is not None and not isinstance(fluid, Fluid):
+        problems.append(("fluid", f"expected a Fluid, got {show(fluid)}"))
+    elif fluid is not None:
+        for name, unit, bounds in (("density", "kg/m^3", {"gt": 0}), ("diameter", "m",
+                                                                      {"gt": 0}),
+                                   ("cd_normal", "", {"ge": 0}),
+                                   ("cd_tangential", "", {"ge": 0}),
+                                   ("ca_normal", "", {"ge": 0})):
+            _check(problems, f"fluid.{name}", number_problem(getattr(fluid, name), unit,
+                                                             **bounds))
     if problems:
         raise CaseError(problems, source)
     return CableDescription(section=section, anchors=anchor_list, geometry=geometry,
                             beam=beam or BeamSpec(), source=source, units=units,
-                            dampers=damper_list, **parts)
+                            dampers=damper_list, fluid=fluid, **parts)
 
 
 def _dampers(problems: list, dampers, anchors: list) -> list[Damper]:

@@ -167,3 +167,16 @@ def test_fluid_needs_a_diameter():
     d["fluid"].pop("diameter")
     with pytest.raises(CaseError, match="fluid.diameter"):
         parse_case(d)
+
+
+def test_python_api():
+    """create_cable takes a Fluid; a bad one names its field."""
+    from cablefem import Anchor, Fluid, Section, create_cable
+
+    anchors = [Anchor("p", [0.0, 0, 0], "pinned"), Anchor("q", [L, 0, 0], "pinned")]
+    sec = Section(EA=1e8, EI=1e-6, GJ=0.0, mass=M)
+    model = create_cable(comm, anchors, sec, length=L / (1 + T0 / 1e8), elements=20,
+                         outer_correction="none", fluid=Fluid(RHO, D))
+    assert {"fluid_static", "fluid_dynamic"} <= set(model.forms.user)
+    with pytest.raises(CaseError, match="fluid.density"):
+        create_cable(comm, anchors, sec, length=L, fluid=Fluid(-1.0, D))
