@@ -27,9 +27,10 @@ from cablefem.anchor import AnchorBC
 from cablefem.dampers import damper_stations, damper_work
 from cablefem.description import CableDescription
 from cablefem.errors import CaseError
-from cablefem.fluid import add_fluid_terms
+from cablefem.fluid import add_fluid_terms, submerged_weight
 from cablefem.geometry import create_line_mesh, graded_stations, polyline_cable, straight_cable
 from cablefem.jit import quiet_compiler
+from cablefem.seabed import GroundedCatenary, add_seabed_terms
 
 __all__ = ["CableModel", "AnchorBC", "comm_first"]  # AnchorBC: from cablefem.anchor
 
@@ -242,9 +243,15 @@ class CableModel:
             stations = graded_stations(length, case.mesh.elements, case.mesh.grading,
                                        tuple(extra))
             g = straight_cable(p, (q - p) / np.linalg.norm(q - p), stations, names)
-        # initial shape: the elastic catenary through the anchors (exact for the bare cable)
+        # initial shape: the elastic catenary through the anchors (exact for the bare cable;
+        # with a seabed it crosses, the catenary with its grounded part)
+        fl = getattr(case, "fluid", None)
+        self.submerged_weight = (submerged_weight(fl, sec.mass, case.gravity.g)
+                                 if fl is not None else self.weight)
         try:
             shape = catenary.catenary_between(p, q, length, self.weight, sec.EA, gdir)
+            if getattr(case, "seabed", None) is not None:
+                shape = self._grounded(shape, p, q, length, gdir)
             self.catenary_shape = shape
             r0 = shape.position(g.stations)
             max_tension = float(np.max(shape.tension(g.stations)))
@@ -256,6 +263,22 @@ class CableModel:
         self.warnings += _plausibility(f"geometry.{geo.kind}", length,
                                        float(np.linalg.norm(q - p)), max_tension, sec.EA)
         return g, r0
+
+    def _grounded(self, shape, p, q, length, gdir):
+        """The catenary with its grounded part when the free one dips below the seabed
+        (:class:`cablefem.seabed.GroundedCatenary`), else ``shape``."""
+        sb, up = self.case.seabed, -np.asarray(gdir, float) / np.linalg.norm(gdir)
+        s = np.linspace(0.0, length, 201)
+        if np.min(shape.position(s) @ up) >= sb.z:
+            return shape
+        anchor_first = float(p @ up) <= float(q @ up)
+        a, f = (p, q) if anchor_first else (q, p)
+        try:
+            return GroundedCatenary(a, f, length, self.submerged_weight, up, anchor_first,
+                                    self.case.section.EA)
+        except ValueError as err:
+            self.warnings.append(("seabed", f"statics starts from the free catenary ({err})"))
+            return shape
 
     def _locate_node(self, k: int) -> np.ndarray:
         """Local vertex indices (0 or 1 of them) of reference node ``k``."""
@@ -384,6 +407,8 @@ class CableModel:
             "strain": forms.axial_strain(u, t0, cc)}
         if getattr(self.case, "fluid", None) is not None:  # water or wind (Morison)
             add_fluid_terms(self)
+        if getattr(self.case, "seabed", None) is not None:
+            add_seabed_terms(self, self.submerged_weight)
         strain = forms.strain_energy_density(u, t0, self.EA, self.tension_only, cc) * ufl.dx
         if self.case.solver.span_bending:
             strain = strain + self._add_span_bending()

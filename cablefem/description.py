@@ -24,7 +24,7 @@ from cablefem.motion import TimeFunction
 from cablefem.properties import Section
 
 __all__ = ["Gravity", "Geometry", "MeshSpec", "DistributedLoad", "PointMass", "PointLoad",
-           "Damper", "Fluid",
+           "Damper", "Fluid", "Seabed",
            "Damping", "SolverSpec", "BeamSpec", "CableSpec", "NetworkSpec", "CableDescription",
            "rayleigh_coefficients", "stress_free_length", "GEOMETRY_KINDS", "GEOMETRY_BOUNDS",
            "BEAM_BOUNDS", "DAMPING_MODELS", "OUTER_CORRECTIONS", "MAX_ELEMENTS"]
@@ -145,6 +145,19 @@ class Fluid:
 
 
 @dataclass
+class Seabed:
+    """A flat seabed (``docs/seabed.md``) at elevation ``z`` (m, along −gravity): contact
+    ``stiffness`` (N/m per m of cable), vertical ``damping`` (N s/m per m) and Coulomb
+    ``friction`` (coefficient) regularised over ``friction_velocity`` (m/s)."""
+
+    z: float
+    stiffness: float
+    damping: float = 0.0
+    friction: float = 0.0
+    friction_velocity: float = 0.01
+
+
+@dataclass
 class Damping:
     """Damping model 'none' | 'rayleigh' (current tangent) | 'rayleigh_k0' (static tangent)
     | 'axial', with resolved ``alpha`` (1/s), ``beta`` (s); ``ratios`` and ``frequencies``
@@ -229,6 +242,7 @@ class CableDescription:
     point_loads: list[PointLoad] = field(default_factory=list)
     dampers: list[Damper] = field(default_factory=list)
     fluid: Fluid | None = None
+    seabed: Seabed | None = None
     damping: Damping = field(default_factory=Damping)
     solver: SolverSpec = field(default_factory=SolverSpec)
     beam: BeamSpec = field(default_factory=BeamSpec)

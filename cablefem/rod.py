@@ -238,6 +238,8 @@ class BeamModel(CableModel):
         problems = []
         if case.network is not None:
             problems.append(("network", "the beam model takes single cables, not networks"))
+        elif getattr(case, "seabed", None) is not None:
+            problems.append(("seabed", "the beam model has no seabed contact"))
         elif getattr(case, "fluid", None) is not None:
             problems.append(("fluid", "the beam model has no fluid forces: compare the "
                              "string with the rod in air without [fluid]"))

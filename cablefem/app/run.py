@@ -251,6 +251,16 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
     summary["outer_correction"] = "none" if kind == "beam" else case.solver.outer_correction
     if model.hinges:
         summary["static"]["virtual_hinges"] = model.hinges.report()
+    if getattr(case, "seabed", None) is not None:  # where the line leaves the seabed
+        from cablefem.seabed import touchdown
+
+        td = touchdown(model)
+        if td is None:
+            warn(summary, "seabed", "the cable does not touch the seabed in the static state")
+        else:
+            summary["static"]["touchdown"] = td
+            log.info("touchdown at s = %.6g (%s), grounded length %.6g", td["s"],
+                     ", ".join(f"{x:.6g}" for x in td["position"]), td["grounded_length"])
     # a folder found after a kill says what happened: running, last checkpoint (none yet)
     summary["checkpoint"] = None
     if not restart:

@@ -174,6 +174,20 @@ CASE_KEYS: dict[str, KeyDoc | TableDoc] = {
                            "below the surface (false in air)."),
         "time": _TIME_DOC,
     }),
+    "seabed": TableDoc("table", None, "", "A flat seabed normal to gravity: penalty contact, "
+                       "damping and friction; statics starts from the catenary with its "
+                       "grounded part (docs/seabed.md). Single cables only.", {
+        "z": KeyDoc("number", REQUIRED, "m", "Elevation of the seabed along -gravity."),
+        "stiffness": KeyDoc("number", REQUIRED, "N/m^2", "Contact stiffness per length of "
+                            "cable, > 0 (the lying cable sinks in by its submerged weight / "
+                            "stiffness)."),
+        "damping": KeyDoc("number", 0.0, "N s/m^2", "Vertical contact damping per length, "
+                          ">= 0."),
+        "friction": KeyDoc("number", 0.0, "-", "Coulomb friction coefficient, >= 0 "
+                           "(dynamics only)."),
+        "friction_velocity": KeyDoc("number", 0.01, "m/s", "Sliding speed over which the "
+                                    "friction force builds up (regularisation), > 0."),
+    }),
     "damping": TableDoc("table", None, "", "Damping; default none. Give alpha/beta, or ratio "
                         "(or ratios) with frequencies, not both.", {
         "model": KeyDoc("string", "rayleigh", "", "'rayleigh' alpha M v + beta K_t(u) v, K_t "

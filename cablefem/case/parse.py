@@ -43,6 +43,7 @@ from cablefem.description import (
     NAME,
     Damper,
     Fluid,
+    Seabed,
 )
 from cablefem.errors import CaseError
 from cablefem.motion import (
@@ -380,6 +381,11 @@ def parse_case(data: dict, base_dir: str | os.PathLike = Path("."),
 
     dampers = _parse_dampers(top.tables("dampers"), anchors, length)
     fluid = _parse_fluid(top.table("fluid"), section, base_dir)
+    seabed_r = top.table("seabed")
+    seabed = None if seabed_r is None else Seabed(
+        seabed_r.number("z"), seabed_r.number("stiffness", gt=0),
+        seabed_r.number("damping", ge=0), seabed_r.number("friction", ge=0),
+        seabed_r.number("friction_velocity", gt=0))
     damping = _parse_damping(top.table("damping"))
     dynamics = _parse_dynamics(top.table("dynamics"))
     modal = ModalSpec(table("modal").integer("modes"))
@@ -404,7 +410,7 @@ def parse_case(data: dict, base_dir: str | os.PathLike = Path("."),
         raise RuntimeError("cablefem internal error: a case value failed without a message")
     return _finish(Case(title=title, section=section, gravity=gravity, geometry=geometry,
                         mesh=mesh, anchors=anchors, loads=loads, point_masses=masses,
-                        point_loads=point_loads, dampers=dampers, fluid=fluid,
+                        point_loads=point_loads, dampers=dampers, fluid=fluid, seabed=seabed,
                         damping=damping,
                         dynamics=dynamics, modal=modal, solver=solver, source=source,
                         fatigue=fatigue,

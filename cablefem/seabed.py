@@ -1,0 +1,184 @@
+"""A flat seabed under a single cable (``[seabed]``, ``docs/seabed.md``).
+
+The seabed is the plane at elevation ``z`` (along −gravity). Where the cable's current
+position is below it by the penetration ``p``, the seabed pushes back per unit stress-free
+length with ``k s(p)``, ``s`` the penetration smoothed over ``PENETRATION_BLEND`` of the
+lying cable's own static penetration ``e = w/k`` (``s = p²/(2 b)`` below ``b``, ``p − b/2``
+above: continuous with its slope, so Newton converges), plus, in dynamics, a vertical
+dashpot ``c`` while in contact and a regularised Coulomb friction ``μ k s`` against the
+velocity along the seabed, ``−μ k s v_h / sqrt(|v_h|² + v0²)``. Jacobians by UFL.
+
+Statics starts from the catenary with its grounded part (:class:`GroundedCatenary`):
+an inextensible catenary of submerged weight ``w`` from the touchdown point, where its
+tangent is horizontal, up to the fairlead, and straight along the seabed to the anchor.
+With the fairlead ``h`` above the seabed and the horizontal tension ``H``: suspended length
+``l_s = sqrt(h² + 2 h H/w)``, its horizontal span ``(H/w) asinh(l_s w/H)``, grounded length
+``l − l_s``, fairlead tension ``H + w h``.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import ufl
+from dolfinx import fem
+from petsc4py import PETSc
+from scipy.optimize import brentq
+
+__all__ = ["PENETRATION_BLEND", "GroundedCatenary", "add_seabed_terms", "touchdown"]
+
+#: the smoothing length of the contact law as a fraction of the static penetration w/k
+PENETRATION_BLEND = 0.1
+#: the least strain of the statics' initial guess (GroundedCatenary.position)
+GUESS_STRAIN = 1.0e-3
+
+
+class GroundedCatenary:
+    """The grounded inextensible catenary between an anchor on the seabed and a fairlead
+    above it (both points given; ``anchor_first``: the anchor is the cable's first end,
+    ``s = 0``). ValueError when the line is too short to lie on the seabed (or too long
+    for a catenary at all)."""
+
+    def __init__(self, anchor, fairlead, length: float, w: float, up, anchor_first: bool,
+                 EA: float = math.inf):
+        self.anchor, self.fairlead = np.asarray(anchor, float), np.asarray(fairlead, float)
+        self.up = np.asarray(up, float) / np.linalg.norm(up)
+        self.l, self.w, self.first, self.EA = float(length), float(w), anchor_first, EA
+        self._guess = None
+        d = self.fairlead - self.anchor
+        self.h = float(d @ self.up)
+        horiz = d - self.h * self.up
+        self.X = float(np.linalg.norm(horiz))
+        if not (self.h > 0 and self.X > 0 and w > 0):
+            raise ValueError("a grounded catenary needs the fairlead above and away from "
+                             "the anchor, and a weight")
+        self.e_h = horiz / self.X
+        if self.l <= math.hypot(self.X, self.h) or self.l >= self.X + self.h:
+            raise ValueError("the line is too short or too long for a grounded catenary")
+
+        def gap(H):
+            ls = self.suspended_length(H)
+            return (self.l - ls) + H / w * math.asinh(ls * w / H) - self.X
+
+        hi = w * self.l
+        while gap(hi) < 0 and hi < 1e12 * w * self.l:
+            hi *= 10.0
+        lo = 1e-12 * hi
+        if gap(lo) * gap(hi) > 0 or self.suspended_length(hi) > self.l:
+            raise ValueError("no grounded catenary through the anchors")
+        self.H = brentq(gap, lo, hi, xtol=1e-14 * hi, rtol=1e-14)
+        self.ls = self.suspended_length(self.H)
+        if self.ls >= self.l:
+            raise ValueError("the line is not long enough to touch the seabed")
+
+    def suspended_length(self, H: float) -> float:
+        return math.sqrt(self.h**2 + 2.0 * self.h * H / self.w)
+
+    @property
+    def grounded_length(self) -> float:
+        return self.l - self.ls
+
+    @property
+    def fairlead_tension(self) -> float:
+        return self.H + self.w * self.h
+
+    def _sigma(self, s):
+        """Arc length from the anchor along the line."""
+        s = np.asarray(s, float)
+        return s if self.first else self.l - s
+
+    def position(self, s) -> np.ndarray:
+        """A guess for statics: the grounded catenary of the stretched length
+        ``l (1 + e)``, ``e = max(H/EA, GUESS_STRAIN)``, at the stretched arc lengths, so
+        that it reaches the fairlead and every element's chord is in tension (a tension-only
+        element without it has no stiffness; the chord of a curved element is shorter than
+        its arc by (kappa h)^2/24)."""
+        e = max(self.H / self.EA, GUESS_STRAIN)
+        if self._guess is None:
+            self._guess = GroundedCatenary(self.anchor, self.fairlead, self.l * (1.0 + e),
+                                           self.w, self.up, True)
+        return self._guess.shape(self._sigma(s) * (1.0 + e))
+
+    def shape(self, a) -> np.ndarray:
+        """The inextensible shape at arc length ``a`` from the anchor."""
+        a = np.asarray(a, float)
+        g = self.grounded_length
+        sig = np.maximum(a - g, 0.0)  # arc length from the touchdown point
+        c = self.H / self.w
+        x = np.where(a <= g, a, g + c * np.arcsinh(sig / c))
+        z = np.where(a <= g, 0.0, c * (np.sqrt(1.0 + (sig / c) ** 2) - 1.0))
+        return self.anchor + x[..., None] * self.e_h + z[..., None] * self.up
+
+    def tension(self, s) -> np.ndarray:
+        sig = np.maximum(self._sigma(s) - self.grounded_length, 0.0)
+        return np.sqrt(self.H**2 + (self.w * sig) ** 2)
+
+
+def add_seabed_terms(model, w: float) -> None:
+    """Add the seabed's terms to ``model.forms``: ``seabed`` (the contact force, static)
+    and ``seabed_dynamic`` (dashpot and friction); ``w`` the submerged weight per length
+    (N/m), which sets the smoothing of the contact law."""
+    sb = model.case.seabed
+    mesh, u, v, du = model.mesh, model.u, model.v, model.du
+
+    def const(x):
+        return fem.Constant(mesh, PETSc.ScalarType(x))
+
+    k, c, mu = const(sb.stiffness), const(sb.damping), const(sb.friction)
+    b = const(PENETRATION_BLEND * max(w, 1e-300) / sb.stiffness)
+    v0 = const(sb.friction_velocity)
+    up = -model.gravity / ufl.sqrt(ufl.dot(model.gravity, model.gravity))
+    x = ufl.SpatialCoordinate(mesh) + u
+    p = sb.z - ufl.dot(up, x)  # penetration
+    smooth = ufl.conditional(ufl.gt(p, b), p - b / 2,
+                             ufl.conditional(ufl.gt(p, 0.0), p * p / (2 * b), 0.0))
+    cc = model.c
+    model.forms.add("seabed", -k * smooth * ufl.dot(up, du) * cc * ufl.dx, kind="static")
+    touching = ufl.conditional(ufl.gt(p, 0.0), 1.0, 0.0)
+    vn = ufl.dot(v, up)
+    vh = v - vn * up
+    f = -c * touching * vn * up - mu * k * smooth * vh / ufl.sqrt(ufl.dot(vh, vh) + v0 * v0)
+    model.forms.add("seabed_dynamic", -ufl.inner(f, du) * cc * ufl.dx, kind="dynamic")
+
+
+def touchdown(model) -> dict | None:
+    """The touchdown point at the model's current state (collective; every rank gets it):
+    where the penetration crosses zero between the last node in contact and the suspended
+    part (towards the higher end, the fairlead), its stress-free station ``s`` and
+    position, and the grounded length (stress-free, from the nodes in contact; linear
+    between a node in contact and one not). None when nothing touches."""
+    sb = model.case.seabed
+    r = model.gather_nodal(model.u)
+    out = None
+    if model.comm.rank == 0:
+        r = r + model.geometry.points
+        g = np.asarray(model.g_vec, float)
+        up = -g / np.linalg.norm(g)
+        pen = sb.z - r @ up
+        st = model.geometry.stations
+        on = pen > 0.0
+        if np.any(on):
+            # grounded length: each element's share in contact (linear in penetration)
+            grounded = 0.0
+            for i in range(st.size - 1):
+                a, b_ = pen[i], pen[i + 1]
+                h = st[i + 1] - st[i]
+                if a > 0 and b_ > 0:
+                    grounded += h
+                elif a > 0 or b_ > 0:
+                    grounded += h * max(a, b_) / (abs(a) + abs(b_))
+            # towards the fairlead (the higher end): the last node in contact, and where
+            # the penetration crosses zero between it and the next node
+            up_end = -1 if r[-1] @ up >= r[0] @ up else 0
+            idx = np.nonzero(on)[0]
+            k = int(idx[-1] if up_end == -1 else idx[0])
+            n = k + 1 if up_end == -1 else k - 1
+            s_td, x_td = float(st[k]), r[k]
+            if 0 <= n < st.size and pen[n] < 0:
+                f = pen[k] / (pen[k] - pen[n])
+                s_td = float(st[k] + f * (st[n] - st[k]))
+                x_td = r[k] + f * (r[n] - r[k])
+            out = {"s": s_td, "position": np.asarray(x_td).tolist(), "node": k,
+                   "grounded_length": float(grounded)}
+    return model.comm.bcast(out, root=0)

@@ -1,0 +1,107 @@
+"""A flat seabed ([seabed], cablefem.seabed): the grounded catenary's closed forms, the
+touchdown report, a dynamic run with damping and friction, bad input (serially and under
+mpirun -n 2)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from mpi4py import MPI
+
+from cablefem.app.run import run_case
+from cablefem.cable import CableModel
+from cablefem.case import CaseError, parse_case
+from cablefem.seabed import GroundedCatenary, touchdown
+from cablefem.statics import solve_static
+
+comm = MPI.COMM_WORLD
+M, G, LINE, H_F, X_F = 50.0, 9.81, 150.0, 50.0, 120.0  # kg/m, m/s^2, m, m, m
+W = M * G
+
+
+def mooring(elements: int = 150, **extra) -> dict:
+    """A 150 m line from an anchor on the seabed (z = 0) to a fairlead 50 m above it and
+    120 m away; nearly inextensible (EA = 1e10 N: T/EA ~ 3e-6), contact stiffness 1e6
+    N/m^2 (the lying line sinks in by w/k = 0.5 mm)."""
+    d = {"title": "mooring", "section": {"EA": 1e10, "EI": 1e3, "mass": M},
+         "gravity": {"g": G}, "geometry": {"length": LINE}, "mesh": {"elements": elements},
+         "anchors": [{"name": "anchor", "position": [0.0, 0, 0], "type": "pinned"},
+                     {"name": "fairlead", "position": [X_F, 0, H_F], "type": "pinned"}],
+         "seabed": {"z": 0.0, "stiffness": 1e6},
+         "solver": {"outer_correction": "none"}}
+    d.update(extra)
+    return d
+
+
+def test_grounded_catenary_closed_forms():
+    """The closed forms: the suspended length sqrt(h^2 + 2 h H/w) and its horizontal span
+    (H/w) asinh(l_s w/H) plus the grounded length reach the fairlead, whose tension is
+    H + w h (round-off of the root: 1e-12)."""
+    gc = GroundedCatenary([0, 0, 0], [X_F, 0, H_F], LINE, W, [0, 0, 1], True)
+    assert gc.ls == pytest.approx(math.sqrt(H_F**2 + 2 * H_F * gc.H / W), rel=1e-12)
+    assert gc.grounded_length + gc.H / W * math.asinh(gc.ls * W / gc.H) == pytest.approx(
+        X_F, rel=1e-12)
+    np.testing.assert_allclose(gc.position(LINE), [X_F, 0, H_F], rtol=1e-12, atol=1e-9)
+    assert gc.tension(LINE) == pytest.approx(gc.fairlead_tension, rel=1e-12)
+
+
+def test_mooring_line_statics_against_the_closed_forms():
+    """The FE line on the penalty seabed against the inextensible grounded catenary:
+    horizontal and fairlead tensions within 1e-4 (the stretch T/EA = 3e-6, the penetration
+    w/k = 0.5 mm against the 50 m height, the mesh's O(h^2); measured -7e-5 and -2e-5);
+    the touchdown, where the penetration crosses zero, within 0.25 of an element of the
+    closed form's grounded length (the contact's soft transition over a few elements:
+    measured 0.16 m at 1 m elements, 0.03 m at 0.5 m)."""
+    model = CableModel(comm, parse_case(mooring()))
+    st = solve_static(model)
+    gc = GroundedCatenary([0, 0, 0], [X_F, 0, H_F], LINE, W, [0, 0, 1], True)
+    F = st.anchor_forces[1][:3]
+    assert abs(F[0]) == pytest.approx(gc.H, rel=1e-4)
+    assert np.linalg.norm(F) == pytest.approx(gc.fairlead_tension, rel=1e-4)
+    td = touchdown(model)
+    assert td["s"] == pytest.approx(gc.grounded_length, abs=0.25 * LINE / 150)
+    assert td["grounded_length"] == pytest.approx(td["s"], rel=1e-12)  # one contact run
+    assert abs(td["position"][2]) < 1e-9 * LINE  # on the seabed plane
+
+
+def test_dynamic_run_with_damping_and_friction(mpi_tmp_path):
+    """The fairlead moves 1 m horizontally (a slow surge, a quarter period in 2 s): the run
+    completes with contact damping and friction and reports the static touchdown (as in
+    the static test, at 2 m elements), and the grounded part's tension at the anchor is H
+    (measured 1.4e-3 at 2 m elements, whose contact transition is coarser; 3e-3
+    allowed)."""
+    d = mooring(elements=75, dynamics={"t_end": 2.0, "dt": 0.02})
+    d["seabed"].update({"damping": 1e3, "friction": 0.5})
+    d["anchors"][1]["motion"] = {"type": "harmonic", "amplitude": [1.0, 0, 0],
+                                 "omega": 0.785}
+    res = run_case(parse_case(d), mpi_tmp_path / "run", comm, figures=False,
+                   progress=False, modes=0)
+    assert res.summary["status"] == "completed"
+    td = res.summary["static"]["touchdown"]
+    gc = GroundedCatenary([0, 0, 0], [X_F, 0, H_F], LINE, W, [0, 0, 1], True)
+    assert td["s"] == pytest.approx(gc.grounded_length, abs=0.25 * LINE / 75)
+    assert res.summary["anchors"]["anchor"]["static_tension"] == pytest.approx(gc.H,
+                                                                              rel=3e-3)
+
+
+@pytest.mark.parametrize("seabed,key", [
+    ({"stiffness": 0.0}, "seabed.stiffness"),
+    ({"damping": -1.0}, "seabed.damping"),
+    ({"friction": -0.1}, "seabed.friction"),
+    ({"friction_velocity": 0.0}, "seabed.friction_velocity"),
+    ({"bogus": 1}, "seabed.bogus")])
+def test_bad_seabed_is_rejected_with_its_key(seabed, key):
+    d = mooring()
+    d["seabed"].update(seabed)
+    with pytest.raises(CaseError) as err:
+        parse_case(d)
+    assert key in str(err.value), str(err.value)
+
+
+def test_seabed_needs_z():
+    d = mooring()
+    d["seabed"].pop("z")
+    with pytest.raises(CaseError, match="seabed.z"):
+        parse_case(d)
