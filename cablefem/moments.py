@@ -273,6 +273,13 @@ class AnchorMoments:
                                  a.section.EA, a.section.mass, a.motion)
                    for i, a in enumerate(model.anchors) if a.kind == "clamped"]
         loads = [(np.asarray(ld.value, float), ld.time) for _, ld in model.loads]
+        fluid = getattr(model.case, "fluid", None)
+        if fluid is not None and fluid.buoyancy:  # the submerged weight at the anchors
+            from cablefem.motion import TimeFunction  # (anchors below the surface)
+
+            area = np.pi * fluid.diameter**2 / 4
+            loads.append((-fluid.density * area * np.asarray(model.g_vec, float),
+                          TimeFunction.constant()))
         order = 1 if getattr(model, "hinges", None) else 0
         return cls(clamped, model.g_vec, model.length, loads, omega, form, order)
 
