@@ -30,6 +30,7 @@ _API = {
     "Gravity": "cablefem.description", "DistributedLoad": "cablefem.description",
     "PointMass": "cablefem.description", "PointLoad": "cablefem.description",
     "Damper": "cablefem.description", "Fluid": "cablefem.description",
+    "Seabed": "cablefem.description",
     "Damping": "cablefem.description", "CableSpec": "cablefem.description",
     "HarmonicMotion": "cablefem.motion", "EllipseMotion": "cablefem.motion",
     "TableMotion": "cablefem.motion", "TimeFunction": "cablefem.motion",
