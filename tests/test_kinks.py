@@ -146,3 +146,19 @@ def test_damper_kink_against_the_rod_in_dynamics(mpi_tmp_path):
     a, b = out["string"], out["beam"]
     assert abs(a["peak"] / b["peak"] - 1) < 0.02
     assert abs(a["rms"] / b["rms"] - 1) < 0.02
+
+
+def test_fatigue_covers_the_kinks(mpi_tmp_path):
+    """With [fatigue], the report has an entry per kink (kink:<name>) beside the anchors:
+    a harmonic point load's kink moment cycles, so its damage is positive; the stresses use
+    the cable's section (a 2 cm solid circle here)."""
+    d = taut(0.0, elements=40, dynamics={"t_end": 0.5, "dt": 0.002})
+    d["point_loads"][0]["value"] = [0.0, 0.0, -200.0]
+    d["point_loads"][0]["time"] = {"type": "harmonic", "omega": 20.0}
+    d["section"]["diameter"] = 0.02
+    d["fatigue"] = {"detail_category": 160e6, "m1": 4.0, "knee": False, "window": "all"}
+    res = run_case(parse_case(d), mpi_tmp_path / "fat", comm, figures=False,
+                   progress=False, modes=0)
+    fat = res.summary["fatigue"]
+    assert "kink:point_load0" in fat
+    assert fat["kink:point_load0"]["damage"] > 0

@@ -26,6 +26,30 @@ __all__ = ["run_fatigue"]
 log = logging.getLogger(__name__)
 
 
+def read_kinks(path: Path) -> dict[str, dict[str, np.ndarray]]:
+    """``kinks.csv`` (:mod:`cablefem.app.kinkout`) as kink -> ``time, tension, moment,
+    valid, moment_vector`` arrays (empty cells: NaN); nothing when there is no file."""
+    import csv
+
+    if not path.is_file():
+        return {}
+    rows: dict[str, list] = {}
+    with open(path, newline="") as fh:
+        for i, row in enumerate(csv.DictReader(fh), start=2):
+            try:
+                vals = [float(row[c]) if row[c] else np.nan for c in
+                        ("time", "tension", "moment", "Mx", "My", "Mz", "valid")]
+            except (KeyError, ValueError, TypeError) as err:
+                raise ValueError(f"{path}:{i}: not a kinks.csv row ({err})") from None
+            rows.setdefault(row["kink"], []).append(vals)
+    out = {}
+    for name, v in rows.items():
+        a = np.array(v)
+        out[name] = {"time": a[:, 0], "tension": a[:, 1], "moment": a[:, 2],
+                     "moment_vector": a[:, 3:6], "valid": np.nan_to_num(a[:, 6])}
+    return out
+
+
 def _stress_section(spec, section) -> StressSection:
     if spec.area is not None:
         return StressSection.effective(spec.area, spec.modulus)
@@ -79,7 +103,8 @@ def run_fatigue(case: Case, rundir: Path, outdir: Path | None = None, *,
                 window: str | None = None, invalid: str = "raise",
                 comm: MPI.Comm = MPI.COMM_WORLD, sections: dict[str, str] | None = None
                 ) -> dict:
-    """Fatigue reports of every clamped anchor in ``rundir/anchors.csv``; rank 0 computes
+    """Fatigue reports of every clamped anchor in ``rundir/anchors.csv`` and of every
+    interior kink in ``rundir/kinks.csv`` (a single cable; ``kink:<name>``); rank 0 computes
     and writes, the reports are returned on every rank. Raises CaseError without a
     ``[fatigue]`` table and ValueError on bad data (invalid samples with
     ``invalid="raise"``: the message names the anchor and the first bad time).
@@ -98,8 +123,9 @@ def run_fatigue(case: Case, rundir: Path, outdir: Path | None = None, *,
         try:
             curve = SNCurve(spec.detail_category, spec.m1, spec.m2, spec.knee, spec.N_C,
                             spec.N_knee, spec.N_cutoff)
-            data = read_moments(Path(rundir) / "anchors.csv")
             groups = {a.name for a in case.anchors if a.kind == "clamped"}
+            # no clamped anchor: no moment columns in anchors.csv (the kinks may have some)
+            data = read_moments(Path(rundir) / "anchors.csv") if groups else {}
             if case.network is None:
                 clamped = sorted(groups)
                 missing = [n for n in clamped if n not in data]
@@ -125,8 +151,17 @@ def run_fatigue(case: Case, rundir: Path, outdir: Path | None = None, *,
                                                                             sections[name]),
                     curve, invalid=invalid, window=win, fibres=spec.fibres, anchor=name)
                 reports[name]["window_rule"] = rule
+            if case.network is None:  # the interior kinks (kinks.csv), as "kink:<name>"
+                for name, d in read_kinks(Path(rundir) / "kinks.csv").items():
+                    vec = d["moment_vector"]  # a rod's file has the magnitude only
+                    M = vec if np.any(np.isfinite(vec)) else d["moment"]
+                    reports[f"kink:{name}"] = fatigue_report(
+                        d["time"], d["tension"], M, d["valid"],
+                        _stress_section(spec, case.section), curve, invalid=invalid,
+                        window=win, fibres=spec.fibres, anchor=f"kink:{name}")
+                    reports[f"kink:{name}"]["window_rule"] = rule
             outdir.mkdir(parents=True, exist_ok=True)
-            first = _stress_section(spec, sections[clamped[0]]) if clamped else None
+            first = _stress_section(spec, sections[clamped[0]] if clamped else case.section)
             write_report(outdir, reports, curve, first, spec.units)
             tu = unit(case.units, "time")
             for name, rep in reports.items():

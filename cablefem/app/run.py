@@ -499,9 +499,11 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
         if len(moments) > MAX_PANELS:
             log.info("figures: the %d most loaded of %d clamped anchors (all are in "
                      "anchors.csv)", MAX_PANELS, len(moments))
-    if case.fatigue is not None and error is None and not (len(times) > 1 and moments):
+    histories = moments or emitter.kinkout.kinks  # at clamped anchors or kinks
+    if case.fatigue is not None and error is None and not (len(times) > 1 and histories):
         warn(summary, "fatigue", "no fatigue report: it needs a time history at a clamped "
-             "anchor (" + ("no clamped anchor" if not moments else "no dynamics run") + ")")
+             "anchor or a kink (" + ("neither" if not histories else "no dynamics run")
+             + ")")
     elif case.fatigue is not None and error is None:
         from cablefem.app.fatigue import run_fatigue
 
