@@ -310,17 +310,13 @@ def describe_cable(anchors: list[Anchor], section: Section, *, length: float | N
 
 
 def _dampers(problems: list, dampers, anchors: list) -> list[Damper]:
-    """Check ``dampers`` (a sequence of :class:`Damper`) against the anchors' names."""
-    if not is_sequence(dampers) and not isinstance(dampers, tuple):
-        problems.append(("dampers", f"expected a list of Damper, got {show(dampers)}"))
-        return []
+    """Check ``dampers`` (a sequence of :class:`Damper`, copied by :func:`_items`) against
+    the anchors' names and the bounds of their values."""
     names = [getattr(a, "name", None) for a in anchors]
-    out = []
-    for i, d in enumerate(dampers):
+    out = _items(problems, "dampers", dampers, Damper, network=False)
+    given = [d for d in dampers if isinstance(d, Damper)] if out else []
+    for i, (d, new) in enumerate(zip(given, out)):
         key = f"dampers[{i}]"
-        if not isinstance(d, Damper):
-            problems.append((key, f"expected a Damper, got {show(d)}"))
-            continue
         if d.anchor not in names:
             problems.append((f"{key}.anchor", f"must name an anchor ({', '.join(map(str, names))}"
                              f"), got {show(d.anchor)}"))
@@ -328,9 +324,9 @@ def _dampers(problems: list, dampers, anchors: list) -> list[Damper]:
                                    ("coefficient", "N s/m", {"ge": 0}),
                                    ("stiffness", "N/m", {"ge": 0})):
             _check(problems, f"{key}.{name}", number_problem(getattr(d, name), unit, **bounds))
-        direction = (None if d.direction is None else
-                     _vector(problems, f"{key}.direction", d.direction, unit_vector=True))
-        out.append(Damper(d.anchor, d.distance, d.coefficient, d.stiffness, direction))
+        if d.direction is not None:
+            new.direction = _vector(problems, f"{key}.direction", d.direction,
+                                    unit_vector=True)
     return out
 
 
