@@ -16,8 +16,9 @@ about the axis ``b × e+`` (the kink's normal), decaying away from the node over
 of the two elements' tensions (they differ by a tangential force component).
 
 Each row is ``valid`` when the layer fits: the slack and quasi-static checks of the
-anchors, and the nearest other kink or anchor at least :data:`MIN_SPACING` layer lengths
-away (the layers would overlap).
+anchors, the nearest other kink or anchor at least :data:`MIN_SPACING` layer lengths away
+(the layers would overlap), and neither element in a virtual hinge's region (whose
+stress-free length the hinge changed).
 
 The rod (``cablefem.rod``) resolves the kink: its moment at the node is extrapolated from
 its element moments on each side (quadratic, from the three elements nearest the node;
@@ -94,6 +95,22 @@ class KinkMoments:
     def names(self) -> list[str]:
         return [k.name for k in self.kinks]
 
+    def _in_hinge_region(self) -> np.ndarray:
+        """Kinks next to an element whose law a virtual hinge changed (its stress-free
+        length is not the mesh's there, so the tension above would be off): invalid."""
+        out = np.zeros(len(self.kinks), bool)
+        hinges = getattr(self.model, "hinges", None)
+        if not hinges:
+            return out
+        st = self.model.geometry.stations
+        for hg in hinges.items:
+            extent = float(np.sum(hg.s[:hg.touched]))
+            if hg.anchor.node == 0:
+                out |= st[self.nodes[:, 0]] < extent * (1 - 1e-12)
+            else:
+                out |= st[self.nodes[:, 2]] > st[-1] - extent * (1 - 1e-12)
+        return out
+
     def positions(self) -> np.ndarray:
         """(n_kinks, 3, 3) current positions of each kink's three nodes, on every rank."""
         m = self.model
@@ -126,7 +143,8 @@ class KinkMoments:
         with np.errstate(invalid="ignore", divide="ignore"):
             lay = asymptotics.layer(T[:, None] * e[:, 1], bis, self.EI, self.EA,
                                     quasi_static=qs, length=self.model.length)
-            valid = lay.valid & (self.spacing >= MIN_SPACING * lay.layer_length)
+            valid = (lay.valid & (self.spacing >= MIN_SPACING * lay.layer_length)
+                     & ~self._in_hinge_region())
         Mv = np.nan_to_num(lay.moment_vector)
         return {"tension": T, "delta": 2.0 * lay.delta, "moment": lay.moment,
                 "Mx": Mv[:, 0], "My": Mv[:, 1], "Mz": Mv[:, 2],

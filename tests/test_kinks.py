@@ -162,3 +162,19 @@ def test_fatigue_covers_the_kinks(mpi_tmp_path):
     fat = res.summary["fatigue"]
     assert "kink:point_load0" in fat
     assert fat["kink:point_load0"]["damage"] > 0
+
+
+def test_kink_next_to_a_hinge_region_is_invalid():
+    """A point load on the node that ends a clamp's virtual-hinge region (4 elements of
+    0.25 m, the hinge in the first): that element's stress-free length is the hinge's, not
+    the mesh's, so the tension read from the mesh would be off: the kink is invalid. Two
+    elements further on it is valid."""
+    for s, valid in ((0.25, 0), (0.75, 1)):
+        d = taut(100.0, elements=40)
+        d["anchors"][0].update({"type": "clamped", "direction": [1.0, 0, 0]})
+        d["solver"]["outer_correction"] = "hinge"
+        d["point_loads"][0]["s"] = s
+        model = CableModel(comm, parse_case(d))
+        solve_static(model)
+        assert model.hinges.items[0].touched >= 1
+        assert KinkMoments(model).measure()["valid"][0] == valid, s
