@@ -31,6 +31,7 @@ _API = {
     "PointMass": "cablefem.description", "PointLoad": "cablefem.description",
     "Damper": "cablefem.description", "Fluid": "cablefem.description",
     "Seabed": "cablefem.description",
+    "Profile": "cablefem.flow", "AiryWave": "cablefem.flow", "VelocitySeries": "cablefem.flow",
     "Damping": "cablefem.description", "CableSpec": "cablefem.description",
     "HarmonicMotion": "cablefem.motion", "EllipseMotion": "cablefem.motion",
     "TableMotion": "cablefem.motion", "TimeFunction": "cablefem.motion",

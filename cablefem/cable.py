@@ -534,6 +534,8 @@ class CableModel:
             c.value[:] = np.asarray(pl.value) * pl.time.value(t)
         if getattr(self, "fluid_factor", None) is not None:
             self.fluid_factor.value = self.case.fluid.time.value(t)
+            # waves at the nodes' positions of the last converged state (fluid.py)
+            self.fluid_motion.update(t)
 
     def invalidate_time(self) -> None:
         """Make the next :meth:`set_time` write everything again (the hinges changed)."""

@@ -40,6 +40,7 @@ from cablefem.description import (
     SolverSpec,
 )
 from cablefem.errors import CaseError
+from cablefem.flow import flow_problems
 from cablefem.motion import TimeFunction
 from cablefem.properties import Section
 from cablefem.validation import is_sequence, number_problem, show, vector_problem
@@ -302,6 +303,7 @@ def describe_cable(anchors: list[Anchor], section: Section, *, length: float | N
                                    ("ca_normal", "", {"ge": 0})):
             _check(problems, f"fluid.{name}", number_problem(getattr(fluid, name), unit,
                                                              **bounds))
+        problems += flow_problems(fluid, parts.get("gravity"))
     if problems:
         raise CaseError(problems, source)
     return CableDescription(section=section, anchors=anchor_list, geometry=geometry,

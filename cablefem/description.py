@@ -20,11 +20,12 @@ import numpy as np
 
 from cablefem import catenary
 from cablefem.anchor import Anchor
-from cablefem.motion import TimeFunction
+from cablefem.flow import AiryWave, Profile, VelocitySeries
+from cablefem.motion import DEFAULT_RAMP_PERIODS, TimeFunction
 from cablefem.properties import Section
 
 __all__ = ["Gravity", "Geometry", "MeshSpec", "DistributedLoad", "PointMass", "PointLoad",
-           "Damper", "Fluid", "Seabed",
+           "Damper", "Fluid", "Seabed", "AiryWave", "Profile", "VelocitySeries",
            "Damping", "SolverSpec", "BeamSpec", "CableSpec", "NetworkSpec", "CableDescription",
            "rayleigh_coefficients", "stress_free_length", "GEOMETRY_KINDS", "GEOMETRY_BOUNDS",
            "BEAM_BOUNDS", "DAMPING_MODELS", "OUTER_CORRECTIONS", "MAX_ELEMENTS"]
@@ -131,7 +132,10 @@ class Fluid:
     as in air); the ``current`` velocity (m/s, 3-vector, uniform) times ``time.value(t)``
     in dynamics (a gust or turbulence history); the hydrodynamic ``diameter`` (m) and the
     Morison coefficients ``cd_normal``, ``cd_tangential``, ``ca_normal``; ``buoyancy``
-    (False in air)."""
+    (False in air). The fluid's motion (:mod:`cablefem.flow`): the ``profile`` factor of
+    the current with elevation (None: uniform), Airy ``waves`` on water of ``depth`` (m below
+    the surface; None: deep water) built up over ``wave_ramp`` (s; None: 3 periods of the
+    longest wave), and a uniform ``velocity`` history (dynamics only)."""
 
     density: float
     diameter: float
@@ -142,6 +146,17 @@ class Fluid:
     ca_normal: float = 1.0
     buoyancy: bool = True
     time: TimeFunction = field(default_factory=TimeFunction.constant)
+    profile: Profile | None = None
+    waves: tuple = ()
+    depth: float | None = None
+    wave_ramp: float | None = None
+    velocity: VelocitySeries | None = None
+
+    def ramp(self) -> float:
+        """The waves' build-up time (s): ``wave_ramp``, or 3 periods of the longest wave."""
+        if self.wave_ramp is not None:
+            return float(self.wave_ramp)
+        return DEFAULT_RAMP_PERIODS * max((w.period for w in self.waves), default=0.0)
 
 
 @dataclass

@@ -1,31 +1,34 @@
-"""Water and wind on a single cable: Morison's drag, added mass and buoyancy
-(``[fluid]``, ``docs/fluid.md``).
+"""Water and wind on a single cable: Morison's drag, added mass, fluid inertia and
+buoyancy (``[fluid]``, ``docs/fluid.md``).
 
-Per unit current length, with the fluid velocity ``u_f`` and the relative velocity
-``v_r = u_f − ṙ`` split along the cable's current unit tangent ``t`` into ``v_rn`` (normal)
-and ``v_rt = (v_r·t) t`` (tangential)::
+The fluid's velocity is ``u_f = f_t(t) f_z(z) U + u_w(x, t) + u_s(t)``: the current ``U``
+times the profile's factor at the elevation of the cable's current position (a UFL
+expression, :func:`_profile_factor`) and the time function, plus the waves and the uniform
+velocity history (:class:`FluidMotion`, from :mod:`cablefem.flow`). Per unit current
+length, with the relative velocity ``v_r = u_f − ṙ`` split along the cable's current unit
+tangent ``t`` into ``v_rn`` (normal) and ``v_rt = (v_r·t) t`` (tangential)::
 
     drag       f_d = ½ ρ C_dn D |v_rn| v_rn + ½ ρ C_dt π D |v_rt| v_rt
     added mass f_a = −C_an ρ A (r̈ − (r̈·t) t),          A = π D²/4
-    buoyancy   f_b = −ρ A g                                below the surface
+    inertia    f_i = (1 + C_an) ρ A (u̇_f − (u̇_f·t) t)
+    buoyancy   f_b = −ρ A g
 
-(the tangential drag acts on the area ``π D`` per length, MoorDyn's convention). The
-forces per current length are integrated over the current length, ``λ dx`` on the mesh.
-``|x|`` is regularised, ``sqrt(x·x + δ²)`` with ``δ = DELTA_V`` (m/s), so that every force
-is smooth and its Jacobian (UFL's derivative) exists at zero relative velocity: Newton
-stays quadratic. The free surface switches buoyancy and added mass sharply at the
-elevation of the cable's current position.
+all below the free surface only (the elevation of the current position against the
+surface's). ``|x|`` is regularised, ``sqrt(x·x + δ²)`` with ``δ = DELTA_V`` (m/s), so that
+every force is smooth and its Jacobian (UFL's derivative) exists at zero relative velocity:
+Newton stays quadratic. The waves are P1 functions evaluated at the nodes' positions of the
+last converged step (once per step, in :meth:`CableModel.set_time`): their dependence on
+the position is lagged by a step and not in the Jacobian.
 
-Statics sees the drag of the steady current on the cable at rest (``v = 0``) and the
-buoyancy; dynamics the drag on ``u_f(t) − v`` (``u_f(t)``: the current times the fluid's
-time function), added mass and buoyancy. The static drag is a static term; the dynamic one
-is added as the difference ``drag(u_f(t) − v) − drag(u_f)`` so that the two together are the
-drag on the relative velocity. The added mass enters the mass matrix (modal analysis,
-time integrator) and the linearised drag the damping matrix of the modal analysis.
+Statics sees the drag of the steady current on the cable at rest (scaled by the load
+factor: the load continuation ramps it) and the buoyancy; dynamics adds the difference
+``drag(u_f − v) − drag(f_z U)``, the added mass and the inertia. The modal analysis
+linearises about the cable at rest in the steady current (:func:`steady_flow`).
 """
 
 from __future__ import annotations
 
+import contextlib
 from types import SimpleNamespace
 
 import numpy as np
@@ -34,8 +37,10 @@ from dolfinx import fem
 from petsc4py import PETSc
 
 from cablefem import forms
+from cablefem.flow import POWER_FLOOR, wave_kinematics
 
-__all__ = ["DELTA_V", "add_fluid_terms", "submerged_weight"]
+__all__ = ["DELTA_V", "add_fluid_terms", "submerged_weight", "water_depth", "FluidMotion",
+           "steady_flow"]
 
 #: regularisation of |v| in the drag (m/s): far below any relevant relative velocity,
 #: the drag at |v| = 10 DELTA_V is within 0.5 % of the exact quadratic law
@@ -58,36 +63,143 @@ def submerged_weight(fluid, mass: float, g: float) -> float:
     return mass * g - (fluid.density * g * A if fluid.buoyancy else 0.0)
 
 
+def _profile_factor(profile, z):
+    """UFL: the profile's factor at elevation ``z`` (:class:`cablefem.flow.Profile`)."""
+    if profile is None:
+        return 1.0
+    if profile.kind == "power":
+        height = ufl.max_value(z - profile.ground, POWER_FLOOR * profile.reference)
+        return (height / profile.reference) ** profile.exponent
+    f = float(profile.factors[0])
+    for z0, z1, slope in profile.segments():
+        f = f + float(slope) * (ufl.min_value(ufl.max_value(z, float(z0)), float(z1))
+                                - float(z0))
+    return f
+
+
+def water_depth(model) -> float | None:
+    """The waves' water depth (m): ``fluid.depth``, else the surface above the seabed, else
+    None (deep water)."""
+    fl, bed = model.case.fluid, getattr(model.case, "seabed", None)
+    if fl.depth is not None:
+        return float(fl.depth)
+    if bed is not None and fl.surface is not None and fl.surface > bed.z:
+        return float(fl.surface - bed.z)
+    return None
+
+
+class FluidMotion:
+    """The unsteady part of the fluid's velocity and acceleration at the nodes: the waves
+    (P1 vector functions, evaluated at the nodes' positions of the last converged state)
+    and the uniform velocity history (Constants). :meth:`update` sets them for time t."""
+
+    def __init__(self, model) -> None:
+        fl = model.case.fluid
+        self.model, self.fluid = model, fl
+        mesh = model.mesh
+        self.up = -np.asarray(model.case.gravity.direction, dtype=float)
+        self.up /= np.linalg.norm(self.up)
+        self.depth = water_depth(model)
+        self.ramp = fl.ramp()
+        self.g = float(model.case.gravity.g)
+        self.wave_v = self.wave_a = None
+        if fl.waves:
+            self.wave_v = fem.Function(model.V, name="wave_velocity")
+            self.wave_a = fem.Function(model.V, name="wave_acceleration")
+            self.X = model.V.tabulate_dof_coordinates()
+        zero = np.zeros(3, dtype=PETSc.ScalarType)
+        self.series_v = fem.Constant(mesh, zero)
+        self.series_a = fem.Constant(mesh, zero.copy())
+
+    def velocity(self):
+        """UFL: the unsteady velocity (waves plus history)."""
+        return self.series_v if self.wave_v is None else self.wave_v + self.series_v
+
+    def acceleration(self):
+        """UFL: the fluid's acceleration (waves plus history)."""
+        return self.series_a if self.wave_a is None else self.wave_a + self.series_a
+
+    def update(self, t: float) -> None:
+        fl = self.fluid
+        if fl.velocity is not None:
+            self.series_v.value[:] = fl.velocity.velocity(t)
+            self.series_a.value[:] = fl.velocity.acceleration(t)
+        if self.wave_v is not None:
+            bs = self.model.bs
+            x = self.X + self.model.u.x.array.reshape(-1, bs)[:, :3]
+            vel, acc = wave_kinematics(fl.waves, x, t, self.up, fl.surface, self.depth,
+                                       self.g, self.ramp)
+            self.wave_v.x.array.reshape(-1, bs)[:, :3] = vel
+            self.wave_a.x.array.reshape(-1, bs)[:, :3] = acc
+
+
+@contextlib.contextmanager
+def steady_flow(model):
+    """Within the block the fluid is its steady current (time factor 1, no waves or
+    velocity history): the modal analysis linearises about the cable at rest in it."""
+    motion = getattr(model, "fluid_motion", None)
+    if motion is None:
+        yield
+        return
+    parts = [model.fluid_factor, motion.series_v, motion.series_a]
+    saved = [np.array(c.value, copy=True) for c in parts]
+    funcs = [f for f in (motion.wave_v, motion.wave_a) if f is not None]
+    saved_f = [f.x.array.copy() for f in funcs]
+    model.fluid_factor.value = 1.0
+    for c in parts[1:]:
+        c.value[:] = 0.0
+    for f in funcs:
+        f.x.array[:] = 0.0
+    try:
+        yield
+    finally:
+        for c, x in zip(parts, saved):
+            c.value = x
+        for f, x in zip(funcs, saved_f):
+            f.x.array[:] = x
+
+
 def add_fluid_terms(model) -> None:
     """Add the fluid's terms to ``model.forms``: ``fluid_static`` (steady drag, buoyancy)
-    and ``fluid_dynamic`` (the drag's change with the motion and the fluid's time function,
-    added mass). ``model.fluid_factor`` (a Constant) holds the time function's value."""
+    and ``fluid_dynamic`` (the drag's change with the motion, the fluid's time function,
+    waves and velocity history; added mass and fluid inertia). ``model.fluid_factor`` (a
+    Constant) holds the time function's value and ``model.fluid_motion``
+    (:class:`FluidMotion`) the unsteady flow; :meth:`CableModel.set_time` updates both."""
     fl = model.case.fluid
     mesh, u, v, a, du, t0 = model.mesh, model.u, model.v, model.a, model.du, model.t0
+
     def const(x):  # Constants: a zero coefficient keeps its term (and the code is reused)
         return fem.Constant(mesh, PETSc.ScalarType(x))
 
     rho = const(fl.density)
     k = SimpleNamespace(cdn_D=const(fl.cd_normal * fl.diameter),
                         cdt_piD=const(fl.cd_tangential * np.pi * fl.diameter),
-                        ma=const(fl.ca_normal * fl.density * np.pi * fl.diameter**2 / 4))
-    uf = fem.Constant(mesh, np.asarray(fl.current, dtype=PETSc.ScalarType))
+                        ma=const(fl.ca_normal * fl.density * np.pi * fl.diameter**2 / 4),
+                        mi=const((1.0 + fl.ca_normal) * fl.density * np.pi
+                                 * fl.diameter**2 / 4))
     model.fluid_factor = fem.Constant(mesh, PETSc.ScalarType(fl.time.value(0.0)))
+    model.fluid_motion = motion = FluidMotion(model)
     g = forms.stretch_vector(u, t0)
     lam = ufl.sqrt(ufl.dot(g, g))
     t = g / lam
     A = np.pi * fl.diameter**2 / 4
+    up = fem.Constant(mesh, np.asarray(motion.up, dtype=PETSc.ScalarType))
+    z = ufl.dot(up, ufl.SpatialCoordinate(mesh) + u)  # elevation of the current position
+    uf = fem.Constant(mesh, np.asarray(fl.current, dtype=PETSc.ScalarType)) \
+        * _profile_factor(fl.profile, z)
     wet = 1.0
-    if fl.surface is not None:  # elevation along -gravity of the current position
-        up = -model.gravity / ufl.sqrt(ufl.dot(model.gravity, model.gravity) + 1e-300)
-        x = ufl.SpatialCoordinate(mesh) + u
-        wet = ufl.conditional(ufl.lt(ufl.dot(up, x), fl.surface), 1.0, 0.0)
-    static = -ufl.inner(_drag(rho, k, t, uf), du) * lam * ufl.dx
+    if fl.surface is not None:
+        wet = ufl.conditional(ufl.lt(z, fl.surface), 1.0, 0.0)
+    # the current's drag is an extra load of statics: the load continuation ramps it
+    static = -wet * model.load_factor * ufl.inner(_drag(rho, k, t, uf), du) * lam * ufl.dx
     if fl.buoyancy:
         static += ufl.inner(wet * rho * A * model.gravity, du) * lam * ufl.dx
     model.forms.add("fluid_static", static, kind="static")
-    drag_change = _drag(rho, k, t, model.fluid_factor * uf - v) - _drag(rho, k, t, uf)
+    u_fluid = model.fluid_factor * uf + motion.velocity()
+    drag_change = _drag(rho, k, t, u_fluid - v) - _drag(rho, k, t, uf)
     an = a - ufl.dot(a, t) * t
-    dynamic = (-ufl.inner(drag_change, du)
-               + wet * k.ma * ufl.inner(an, du)) * lam * ufl.dx
+    af = motion.acceleration()
+    afn = af - ufl.dot(af, t) * t
+    dynamic = wet * (-ufl.inner(drag_change, du) + k.ma * ufl.inner(an, du)
+                     - k.mi * ufl.inner(afn, du)) * lam * ufl.dx
     model.forms.add("fluid_dynamic", dynamic, kind="dynamic")

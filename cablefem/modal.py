@@ -31,7 +31,9 @@ from dolfinx import fem
 from dolfinx.fem import petsc as fpetsc
 from slepc4py import SLEPc
 
+from cablefem.fluid import steady_flow
 from cablefem.petsc_utils import case_options, default_options, lu_options
+from cablefem.seabed import without_friction
 from cablefem.units import unit
 
 __all__ = ["ModalProblem", "ModalResult", "solve_modes", "classify_mode", "free_dofs"]
@@ -156,20 +158,22 @@ class ModalProblem:
         saved = [f.x.array.copy() for f in (model.v, model.a)]
         for f in (model.v, model.a):
             f.x.array[:] = 0.0
-        try:
-            # K: the static tangent, plus the dynamic terms' stiffness (dampers' springs)
-            self.K = fpetsc.assemble_matrix(forms.k_dynamic if dynamic_terms else
-                                            model.j_static, model.bcs, diagonal=1.0)
-            self.K.assemble()
-            self.M = fpetsc.assemble_matrix(model.m_form, model.bcs, diagonal=0.0)
-            self.M.assemble()
-            self.C = None  # the damping matrix, when the dynamic residual has one
-            if forms.c_form is not None:
-                self.C = fpetsc.assemble_matrix(forms.c_form, model.bcs, diagonal=0.0)
-                self.C.assemble()
-        finally:
-            for f, x in zip((model.v, model.a), saved):
-                f.x.array[:] = x
+        # about the steady current (no waves, gusts), the seabed's friction left out
+        with steady_flow(model), without_friction(model):
+            try:
+                # K: the static tangent, plus the dynamic terms' stiffness (dampers' springs)
+                self.K = fpetsc.assemble_matrix(forms.k_dynamic if dynamic_terms else
+                                                model.j_static, model.bcs, diagonal=1.0)
+                self.K.assemble()
+                self.M = fpetsc.assemble_matrix(model.m_form, model.bcs, diagonal=0.0)
+                self.M.assemble()
+                self.C = None  # the damping matrix, when the dynamic residual has one
+                if forms.c_form is not None:
+                    self.C = fpetsc.assemble_matrix(forms.c_form, model.bcs, diagonal=0.0)
+                    self.C.assemble()
+            finally:
+                for f, x in zip((model.v, model.a), saved):
+                    f.x.array[:] = x
         defaults = {"st_type": "sinvert", "eps_target": 0.0, "eps_tol": 1e-12,
                     **{"st_" + k: v for k, v in lu_options(model.comm.size).items()}}
         eps = SLEPc.EPS().create(model.comm)
@@ -219,7 +223,9 @@ class ModalProblem:
         ``<prefix>pep_``): each undamped mode takes the complex mode (``Im λ > 0``) whose
         shape is closest to it in the mass norm (MAC), or else the one left whose ``|λ|``
         is within 5 % of its frequency; ``ζ = −Re λ/|λ|``. A mode with no complex partner
-        (overdamped) gets NaN and a warning."""
+        (overdamped) gets NaN and a warning. ``K`` and ``C`` are about the cable at rest in
+        the steady current, without the seabed's regularised friction
+        (:func:`cablefem.seabed.without_friction`)."""
         model, n = self.model, len(res.omegas)
         pep = SLEPc.PEP().create(model.comm)
         pep.setOptionsPrefix(self.prefix + "pep_")
@@ -278,7 +284,7 @@ class ModalProblem:
                         "(overdamped?): no damping ratio", k + 1)
         for obj in [vr, vi, Mv, pep] + [Mx for _, shape in cands for Mx, _ in shape]:
             obj.destroy()
-        for k in range(n):
+        for k in np.nonzero(np.isfinite(zeta))[0]:
             log.info("mode %d: damping ratio %.6g (|lambda| = %.6g)", k + 1, zeta[k], wabs[k])
         return zeta, wabs
 

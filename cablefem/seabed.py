@@ -18,6 +18,7 @@ With the fairlead ``h`` above the seabed and the horizontal tension ``H``: suspe
 
 from __future__ import annotations
 
+import contextlib
 import math
 
 import numpy as np
@@ -26,7 +27,8 @@ from dolfinx import fem
 from petsc4py import PETSc
 from scipy.optimize import brentq
 
-__all__ = ["PENETRATION_BLEND", "GroundedCatenary", "add_seabed_terms", "touchdown"]
+__all__ = ["PENETRATION_BLEND", "GroundedCatenary", "add_seabed_terms", "touchdown",
+           "without_friction"]
 
 #: the smoothing length of the contact law as a fraction of the static penetration w/k
 PENETRATION_BLEND = 0.1
@@ -126,6 +128,7 @@ def add_seabed_terms(model, w: float) -> None:
         return fem.Constant(mesh, PETSc.ScalarType(x))
 
     k, c, mu = const(sb.stiffness), const(sb.damping), const(sb.friction)
+    model.seabed_friction = mu  # the modal analysis sets it to 0 (without_friction)
     b = const(PENETRATION_BLEND * max(w, 1e-300) / sb.stiffness)
     v0 = const(sb.friction_velocity)
     up = -model.gravity / ufl.sqrt(ufl.dot(model.gravity, model.gravity))
@@ -140,6 +143,25 @@ def add_seabed_terms(model, w: float) -> None:
     vh = v - vn * up
     f = -c * touching * vn * up - mu * k * smooth * vh / ufl.sqrt(ufl.dot(vh, vh) + v0 * v0)
     model.forms.add("seabed_dynamic", -ufl.inner(f, du) * cc * ufl.dx, kind="dynamic")
+
+
+@contextlib.contextmanager
+def without_friction(model):
+    """Within the block the seabed has no friction. The modal analysis leaves it out:
+    linearised at rest, the regularised Coulomb law is a dashpot ``μ k s/v0`` per length
+    (``μ w/v0`` on the lying part, e.g. 12 kN s/m² for a 250 N/m line with ``v0`` = 1 cm/s),
+    an artefact of the regularisation whose slow real roots would crowd out every
+    oscillating mode of the damped eigenproblem. The frequencies (K, M) never include it."""
+    mu = getattr(model, "seabed_friction", None)
+    if mu is None:
+        yield
+        return
+    saved = float(mu.value)
+    mu.value = 0.0
+    try:
+        yield
+    finally:
+        mu.value = saved
 
 
 def touchdown(model) -> dict | None:

@@ -299,7 +299,8 @@ class StaticProblem:
                      history.text())
             # what load_factor scales: the extra loads, and for a network the weight as well
             has_extra = bool(model.case.point_masses or model.case.point_loads
-                             or model.case.loads or model.ramp_weight)
+                             or model.case.loads or model.ramp_weight
+                             or getattr(model.case, "fluid", None) is not None)
             if not has_extra:
                 raise StaticError(
                     "static equilibrium not found: Newton failed from the elastic catenary "

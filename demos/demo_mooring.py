@@ -6,9 +6,11 @@
 # down, to a floater's fairlead 20 m below the surface and 350 m away, where a bend
 # stiffener clamps it along its static direction. The water (1025 kg/m³) gives it
 # buoyancy, added mass ($C_a = 1$) and Morison drag ($C_{dn} = 1.2$, $C_{dt} = 0.008$) in a
-# 0.5 m/s current; the seabed holds the lying part (contact stiffness $10^5$ N/m², damping,
-# friction 0.5). The floater surges $\pm 2$ m at 0.6 rad/s. What is the bending moment
-# where the line enters the bend stiffener?
+# current of 0.5 m/s at the surface that decays towards the seabed as the 1/7 power law,
+# and in a 4 m swell of 10.5 s (Airy waves on 100 m of water, built up over three periods);
+# the seabed holds the lying part (contact stiffness $10^5$ N/m², damping, friction 0.5).
+# The floater surges $\pm 2$ m at the swell's frequency, 0.6 rad/s. What is the bending
+# moment where the line enters the bend stiffener?
 #
 # **The line on the seabed** (docs/seabed.md). With the submerged weight
 # $w = m g - \rho g \pi D^2/4$ (248 N/m) and the fairlead $h$ above the seabed, the
@@ -21,8 +23,8 @@
 # anchor), $X$ the horizontal distance.
 #
 # **Water** (docs/fluid.md): drag on the relative velocity, normal and tangential, added
-# mass normal to the line, buoyancy below the surface; their Jacobians are derived, so
-# Newton stays quadratic.
+# mass normal to the line, the waves' inertia $(1 + C_a)\rho A \dot u_{f,n}$, buoyancy
+# below the surface; their Jacobians are derived, so Newton stays quadratic.
 #
 # Run: `python demos/demo_mooring.py --output output/mooring` (with the environment variable
 # `CI` set, the dynamics stop at 12 s).

@@ -105,3 +105,23 @@ def test_seabed_needs_z():
     d["seabed"].pop("z")
     with pytest.raises(CaseError, match="seabed.z"):
         parse_case(d)
+
+
+def test_modal_damping_leaves_out_the_friction():
+    """The damping ratios of a line lying on the seabed in a current: the regularised
+    friction, linearised at rest, is a dashpot mu w/v0 (25 kN s/m^2 here) whose slow real
+    roots crowded every oscillating mode out of the damped eigenproblem, so that every mode
+    was reported overdamped. Left out (docs/seabed.md), the ratios are those of the line
+    without friction, to the eigensolver's tolerance, and every mode has one."""
+    from cablefem.modal import solve_modes
+
+    def ratios(friction):
+        d = mooring(elements=60, fluid={"density": 1025.0, "diameter": 0.1,
+                                        "current": [0.3, 0, 0]})
+        d["seabed"]["friction"] = friction
+        model = CableModel(comm, parse_case(d))
+        solve_static(model)
+        return solve_modes(model, 4).damping_ratios
+    with_friction, without = ratios(0.5), ratios(0.0)
+    assert np.all(np.isfinite(with_friction)) and np.all(with_friction > 0)
+    np.testing.assert_allclose(with_friction, without, rtol=1e-6)

@@ -32,6 +32,12 @@ def _tables(case: Case) -> list[tuple[str, Any]]:
     for name in ("loads", "point_loads"):
         out += [(f"{name}[{i}].time", item.time) for i, item in enumerate(getattr(case, name))
                 if isinstance(item.time, TimeFunction) and item.time.kind == "table"]
+    fluid = getattr(case, "fluid", None)
+    if fluid is not None:
+        if fluid.time.kind == "table":
+            out.append(("fluid.time", fluid.time))
+        if fluid.velocity is not None:
+            out.append(("fluid.velocity", fluid.velocity))
     return out
 
 
@@ -60,7 +66,7 @@ def _table_warnings(case: Case, dt: float, t_end: float) -> list[tuple[str, str]
     out = []
     for key, table in _tables(case):
         motion = isinstance(table, TableMotion)
-        values = table.values if motion else table.factors
+        values = table.values if hasattr(table, "values") else table.factors
         out += [(f"{key}.file", m) for m in table_resolution(table.times, values, dt)]
         if not motion:
             continue
@@ -88,7 +94,7 @@ def _table_warnings(case: Case, dt: float, t_end: float) -> list[tuple[str, str]
 
 
 def startup_time(case: Case) -> tuple[float, str]:
-    """End of the start-up of the anchor motions (s) and why: the longest ramp of a
+    """End of the start-up of the anchor motions and waves (s) and why: the longest ramp of a
     harmonic or elliptic motion; a motion with ``ramp = 0`` that jumps at ``t = 0``
     (displacement or velocity not zero) counts :data:`DEFAULT_RAMP_PERIODS` of its
     periods, as long as its default ramp. 0 without such motions (tables start as given)."""
@@ -108,4 +114,7 @@ def startup_time(case: Case) -> tuple[float, str]:
             continue
         if t > best:
             best, why = t, reason
+    fluid = getattr(case, "fluid", None)
+    if fluid is not None and fluid.waves and fluid.ramp() > best:
+        best, why = fluid.ramp(), f"the waves' build-up fluid.wave_ramp = {fluid.ramp():g} s"
     return best, why

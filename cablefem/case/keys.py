@@ -161,7 +161,48 @@ CASE_KEYS: dict[str, KeyDoc | TableDoc] = {
         "diameter": KeyDoc("number", None, "m", "Hydrodynamic diameter D, > 0; default "
                            "section.diameter (one of them is required)."),
         "current": KeyDoc("3-vector", [0.0, 0.0, 0.0], "m/s", "Fluid velocity (current or "
-                          "mean wind), uniform."),
+                          "mean wind); times profile's factor at the elevation when a profile "
+                          "is given."),
+        "profile": TableDoc("table", None, "", "The current's (or mean wind's) factor against "
+                            "elevation along -gravity; default uniform.", {
+            "type": KeyDoc("string", REQUIRED, "", "'table' (piecewise linear through "
+                           "elevation, factor; held beyond the ends) | 'power' "
+                           "((z - ground)/reference)^exponent, held below 1 % of reference."),
+            "elevation": KeyDoc("list of numbers", None, "m", "table: elevations, strictly "
+                                "increasing, >= 2."),
+            "factor": KeyDoc("list of numbers", None, "-", "table: the factors at those "
+                             "elevations."),
+            "reference": KeyDoc("number", None, "m", "power: reference height above ground, "
+                                "> 0 (where the factor is 1)."),
+            "exponent": KeyDoc("number", None, "-", "power: exponent, >= 0 (e.g. 0.12 over "
+                               "the sea, 0.16-0.3 over land)."),
+            "ground": KeyDoc("number", 0.0, "m", "power: elevation of the ground or sea "
+                             "surface."),
+        }),
+        "waves": TableDoc("array of tables", None, "", "Airy (linear) wave components, summed (an "
+                          "irregular sea is many); need surface. Dynamics only, built up "
+                          "from rest over wave_ramp.", {
+            "height": KeyDoc("number", REQUIRED, "m", "Wave height H, crest to trough, > 0."),
+            "period": KeyDoc("number", REQUIRED, "s", "Period, > 0."),
+            "direction": KeyDoc("3-vector", REQUIRED, "-", "Direction of travel, horizontal "
+                                "(normal to gravity), normalised."),
+            "phase": KeyDoc("number", 0.0, "rad", "Phase: the surface elevation is "
+                            "H/2 cos(k d.x - omega t + phase)."),
+        }),
+        "depth": KeyDoc("number", None, "m", "Water depth below the surface for the waves' "
+                        "dispersion and decay, > 0; default: surface - seabed.z with a "
+                        "seabed, else deep water."),
+        "wave_ramp": KeyDoc("number", None, "s", "Build-up time of the waves from rest, >= 0 "
+                            f"(0: none); default {DEFAULT_RAMP_PERIODS:g} periods of the "
+                            "longest wave."),
+        "velocity": TableDoc("table", None, "", "A uniform fluid velocity history added in "
+                             "dynamics (turbulent wind, a measured orbital velocity); its "
+                             "derivative drives the fluid inertia.", {
+            "file": KeyDoc("string", REQUIRED, "", "CSV file, header time,vx,vy,vz (s, m/s), "
+                           "relative to the case file; C2 cubic spline; it must reach "
+                           "dynamics.t_end unless hold = true."),
+            "hold": KeyDoc("boolean", False, "", "Hold the last row after the table ends."),
+        }),
         "surface": KeyDoc("number", None, "m", "Elevation of the free surface along -gravity "
                           "(buoyancy and added mass below it only); default: everywhere "
                           "immersed."),

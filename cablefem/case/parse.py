@@ -41,11 +41,15 @@ from cablefem.description import (
     GEOMETRY_BOUNDS,
     GEOMETRY_KINDS,
     NAME,
+    AiryWave,
     Damper,
     Fluid,
+    Profile,
     Seabed,
+    VelocitySeries,
 )
 from cablefem.errors import CaseError
+from cablefem.flow import flow_problems, read_velocity_csv
 from cablefem.motion import (
     EllipseMotion,
     HarmonicMotion,
@@ -291,11 +295,61 @@ def _parse_fluid(r: _Reader | None, section, base_dir: Path) -> Fluid | None:
         if D is None and section is not None:
             r.add("diameter", "required: give fluid.diameter or section.diameter")
     current = r.vector("current")
+    surface = r.number("surface")
+    waves = [_parse_wave(w) for w in r.tables("waves")]
+    if waves and surface is None and not r.has("surface"):
+        r.add("waves", "waves need the free surface: give fluid.surface")
+    velocity = r.table("velocity")
+    if velocity is not None:
+        hold = velocity.boolean("hold")
+        velocity = (velocity.csv("file", read_velocity_csv, base_dir)
+                    if velocity.require("file", "a velocity history") else None)
+        if velocity is not None and hold:
+            velocity = VelocitySeries(velocity.times, velocity.values, velocity.source, True)
     return Fluid(r.number("density", gt=0), D,
-                 np.zeros(3) if current is None else current, r.number("surface"),
+                 np.zeros(3) if current is None else current, surface,
                  r.number("cd_normal", ge=0), r.number("cd_tangential", ge=0),
                  r.number("ca_normal", ge=0), r.boolean("buoyancy"),
-                 _parse_time(r.table("time"), base_dir) or TimeFunction.constant())
+                 _parse_time(r.table("time"), base_dir) or TimeFunction.constant(),
+                 _parse_profile(r.table("profile")), tuple(w for w in waves if w is not None),
+                 r.number("depth", gt=0), r.number("wave_ramp", ge=0), velocity)
+
+
+def _parse_profile(r: _Reader | None) -> Profile | None:
+    """``[fluid.profile]``: a table of factors against elevation, or a power law."""
+    if r is None:
+        return None
+    kind = r.string("type", choices=("table", "power"))
+    if kind is None:
+        return None
+    r.only({"table": ("elevation", "factor"),
+            "power": ("reference", "exponent", "ground")}[kind], f"a {kind} profile")
+    if kind == "power":
+        ref, exp, ground = (r.number("reference", gt=0), r.number("exponent", ge=0),
+                            r.number("ground"))
+        return None if _missing(ref, exp, ground) else Profile("power", reference=ref,
+                                                                exponent=exp, ground=ground)
+    present = r.require("elevation", "a table profile") & r.require("factor", "a table profile")
+    z, f = r.number_list("elevation"), r.number_list("factor")
+    if not present or z is None or f is None:
+        return None
+    if z.size != f.size:
+        r.add("factor", f"expected as many factors as elevations ({z.size}), got {f.size}")
+        return None
+    if np.any(np.diff(z) <= 0):
+        r.add("elevation", "must be strictly increasing")
+        return None
+    return Profile("table", elevations=z, factors=f)
+
+
+def _parse_wave(r: _Reader) -> AiryWave | None:
+    """``[[fluid.waves]]``: an Airy component with a horizontal direction (checked against
+    gravity in the model, which knows it)."""
+    height, period = r.number("height", gt=0), r.number("period", gt=0)
+    direction, phase = r.vector("direction", unit_vector=True), r.number("phase")
+    if _missing(height, period, direction, phase):
+        return None
+    return AiryWave(height, period, direction, phase)
 
 
 def _check_positions_on_cable(items: list, readers: list[_Reader], length: float | None) -> None:
@@ -381,6 +435,9 @@ def parse_case(data: dict, base_dir: str | os.PathLike = Path("."),
 
     dampers = _parse_dampers(top.tables("dampers"), anchors, length)
     fluid = _parse_fluid(top.table("fluid"), section, base_dir)
+    if fluid is not None:
+        problems += [p for p in flow_problems(fluid, gravity)
+                     if p[0] != "fluid.waves" or "surface" not in p[1]]  # reported already
     seabed_r = top.table("seabed")
     seabed = None if seabed_r is None else Seabed(
         seabed_r.number("z"), seabed_r.number("stiffness", gt=0),

@@ -128,6 +128,17 @@ class _Reader:
             return None
         return array
 
+    def number_list(self, name: str, min_count: int = 2, **bounds) -> np.ndarray | None:
+        """A list of at least ``min_count`` numbers (any length above)."""
+        value, given = self.raw(name)
+        if not given:
+            return None if value is None else np.array(value, dtype=float)
+        if not _is_sequence(value) or len(value) < min_count:
+            self.add(name, f"expected a list of at least {min_count} numbers, got "
+                           f"{_show(value)}")
+            return None
+        return self.numbers(name, len(value), value=value, **bounds)
+
     def vector(self, name: str, unit_vector: bool = False) -> np.ndarray | None:
         """A 3-vector; normalised (and checked non-zero) if ``unit_vector``."""
         array = self.numbers(name, 3, nonzero=unit_vector)

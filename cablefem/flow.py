@@ -1,0 +1,231 @@
+"""The fluid's own motion around a cable (``docs/fluid.md``): a current or mean wind that
+varies with elevation, regular (Airy) waves and a uniform velocity history.
+
+Pure NumPy (no dolfinx): :mod:`cablefem.fluid` turns these into the Morison forces.
+
+* :class:`Profile` — the factor ``f(z)`` on the case's ``current`` at elevation ``z``
+  (along −gravity): piecewise linear through a table (held beyond its ends), or the power
+  law ``((z − ground)/reference)^exponent`` of a mean wind, held below 1 % of the reference
+  height (:data:`POWER_FLOOR`).
+* :class:`AiryWave` — one linear (Airy) wave component of height ``H`` (crest to trough),
+  period ``T`` and horizontal direction ``d`` on water of depth ``h`` (None: deep)::
+
+      θ = k d·x − ω t + φ,   ω² = g k tanh(k h)
+      u = ½ H ω [cosh(k(ζ + h)) d cos θ + sinh(k(ζ + h)) e_z sin θ] / sinh(k h)
+      u̇ = ½ H ω² [cosh(k(ζ + h)) d sin θ − sinh(k(ζ + h)) e_z cos θ] / sinh(k h)
+
+  with ``ζ`` the elevation below the mean free surface (the deep-water limit ``e^{kζ}`` for
+  both ratios). Above the mean surface the kinematics are those at ``ζ = 0`` (constant
+  extrapolation; the cable's wetness is decided by the mean surface). Irregular seas are
+  sums of components.
+* :class:`VelocitySeries` — a uniform velocity history (turbulent wind, a measured orbital
+  velocity): a C2 cubic spline through a table ``time,vx,vy,vz``; its derivative is the
+  fluid's acceleration.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from cablefem.motion import _check_table, _read_csv, _Spline, ramp_factors
+
+__all__ = ["Profile", "AiryWave", "VelocitySeries", "wave_number", "wave_kinematics",
+           "read_velocity_csv", "flow_problems", "POWER_FLOOR"]
+
+#: the power-law profile is held below this fraction of its reference height (the law's
+#: slope is infinite at the ground)
+POWER_FLOOR = 0.01
+
+
+@dataclass(frozen=True, eq=False)
+class Profile:
+    """The factor on the current (or mean wind) at elevation ``z`` (m, along −gravity).
+
+    ``kind`` "table": piecewise linear through ``(elevations, factors)`` (>= 2 rows,
+    elevations strictly increasing), held at the end values beyond the table. ``kind``
+    "power": ``(max(z − ground, POWER_FLOOR reference)/reference)^exponent``.
+    """
+
+    kind: str
+    elevations: np.ndarray | None = None
+    factors: np.ndarray | None = None
+    reference: float = 10.0
+    exponent: float = 0.0
+    ground: float = 0.0
+
+    def __post_init__(self) -> None:
+        if self.kind == "table":
+            z, f = _check_table(self.elevations, self.factors, None)
+            object.__setattr__(self, "elevations", z)
+            object.__setattr__(self, "factors", f)
+        elif self.kind == "power":
+            if not (math.isfinite(self.reference) and self.reference > 0):
+                raise ValueError(f"reference must be > 0 (m), got {self.reference!r}")
+            if not (math.isfinite(self.exponent) and self.exponent >= 0):
+                raise ValueError(f"exponent must be >= 0, got {self.exponent!r}")
+        else:
+            raise ValueError(f"kind must be 'table' or 'power', got {self.kind!r}")
+
+    def segments(self):
+        """Table: ``(z_i, z_{i+1}, slope_i)`` of each segment (the factor is
+        ``factors[0] + Σ slope_i (clip(z, z_i, z_{i+1}) − z_i)``)."""
+        z, f = self.elevations, self.factors
+        return [(z[i], z[i + 1], (f[i + 1] - f[i]) / (z[i + 1] - z[i]))
+                for i in range(z.size - 1)]
+
+    def __call__(self, z) -> np.ndarray:
+        """The factor at elevations ``z`` (array)."""
+        z = np.asarray(z, dtype=float)
+        if self.kind == "table":
+            return np.interp(z, self.elevations, self.factors)
+        height = np.maximum(z - self.ground, POWER_FLOOR * self.reference)
+        return (height / self.reference) ** self.exponent
+
+    def describe(self) -> dict:
+        if self.kind == "table":
+            return {"type": "table", "elevation": self.elevations.tolist(),
+                    "factor": self.factors.tolist()}
+        return {"type": "power", "reference": self.reference, "exponent": self.exponent,
+                "ground": self.ground}
+
+
+def wave_number(omega: float, g: float, depth: float | None) -> float:
+    """The root ``k`` of the dispersion relation ``ω² = g k tanh(k h)`` (``h = depth``;
+    None: deep water, ``k = ω²/g``), by Newton from the deep-water value."""
+    k = omega**2 / g
+    if depth is None:
+        return k
+    k = max(k, omega / math.sqrt(g * depth))  # the larger of the deep and shallow limits
+    for _ in range(100):
+        th = math.tanh(k * depth)
+        f = g * k * th - omega**2
+        df = g * th + g * k * depth * (1.0 - th**2)
+        step = f / df
+        k -= step
+        if abs(step) < 1e-14 * k:
+            return k
+    raise ArithmeticError(f"no wave number for omega = {omega!r}, depth = {depth!r}")
+
+
+@dataclass(frozen=True, eq=False)
+class AiryWave:
+    """A linear wave component: ``height`` (m, crest to trough), ``period`` (s), unit
+    horizontal ``direction`` of travel, ``phase`` φ (rad): the surface elevation is
+    ``½ H cos(k d·x − ω t + φ)``."""
+
+    height: float
+    period: float
+    direction: np.ndarray
+    phase: float = 0.0
+
+    @property
+    def omega(self) -> float:
+        return 2.0 * math.pi / self.period
+
+    def describe(self) -> dict:
+        return {"height": self.height, "period": self.period,
+                "direction": np.asarray(self.direction, float).tolist(), "phase": self.phase}
+
+
+def _depth_ratios(k: float, zeta: np.ndarray, depth: float | None):
+    """cosh(k(ζ + h))/sinh(k h) and sinh(k(ζ + h))/sinh(k h), written so that they neither
+    overflow for deep water nor lose accuracy (exponentials of non-positive arguments)."""
+    if depth is None or k * depth > 30.0:  # tanh(30) = 1 to 1e-26: deep water
+        e = np.exp(k * zeta)
+        return e, e
+    z = np.maximum(zeta, -depth)  # below the seabed: the bottom's kinematics
+    a = np.exp(k * z)
+    b = np.exp(-k * (z + 2.0 * depth))
+    den = 1.0 - math.exp(-2.0 * k * depth)
+    return (a + b) / den, (a - b) / den
+
+
+def wave_kinematics(waves, points: np.ndarray, t: float, up: np.ndarray, surface: float,
+                    depth: float | None, g: float, ramp: float = 0.0):
+    """Velocity and acceleration (each (n, 3)) of the sum of ``waves`` at ``points`` (n, 3)
+    at time ``t``; ``up`` is the unit vector against gravity, ``surface`` the mean surface's
+    elevation along it. ``ramp`` > 0 (s) builds the waves up smoothly from rest
+    (:func:`cablefem.motion.ramp_factors`: ``r u`` and ``r u̇ + ṙ u``)."""
+    points = np.asarray(points, dtype=float).reshape(-1, 3)
+    up = np.asarray(up, dtype=float)
+    vel = np.zeros_like(points)
+    acc = np.zeros_like(points)
+    r, dr, _ = ramp_factors(t, ramp)
+    if r == 0.0 and dr == 0.0:
+        return vel, acc
+    zeta = np.minimum(points @ up - surface, 0.0)
+    for w in waves:
+        d = np.asarray(w.direction, dtype=float)
+        k = wave_number(w.omega, g, depth)
+        ch, sh = _depth_ratios(k, zeta, depth)
+        theta = k * (points @ d) - w.omega * t + w.phase
+        a = 0.5 * w.height * w.omega
+        c, s = np.cos(theta), np.sin(theta)
+        u = a * (np.outer(ch * c, d) + np.outer(sh * s, up))
+        du = a * w.omega * (np.outer(ch * s, d) - np.outer(sh * c, up))
+        vel += r * u
+        acc += r * du + dr * u
+    return vel, acc
+
+
+@dataclass(frozen=True, eq=False)
+class VelocitySeries:
+    """A uniform fluid velocity history (m/s): C2 cubic spline (not-a-knot ends) through
+    ``(times, values)``, held outside the table (acceleration zero there)."""
+
+    times: np.ndarray
+    values: np.ndarray
+    source: str | None = None
+    hold: bool = False
+    _spline: _Spline = field(init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        times, values = _check_table(self.times, self.values, 3)
+        object.__setattr__(self, "times", times)
+        object.__setattr__(self, "values", values)
+        object.__setattr__(self, "_spline", _Spline(times, values))
+
+    def velocity(self, t: float) -> np.ndarray:
+        return self._spline(t)
+
+    def acceleration(self, t: float) -> np.ndarray:
+        return self._spline(t, 1)
+
+    def describe(self) -> dict:
+        out: dict = {"type": "table", "file": self.source, "rows": int(self.times.size),
+                     "interpolation": "cubic spline, not-a-knot", "hold": self.hold}
+        if self.source is None:
+            out.update(times=self.times.tolist(), values=self.values.tolist())
+        return out
+
+
+def read_velocity_csv(path, key: str = "file") -> VelocitySeries:
+    """A velocity history from a CSV file with the header ``time,vx,vy,vz`` (s, m/s); the
+    rules and errors of :func:`cablefem.motion.read_motion_csv`."""
+    times, values = _read_csv(path, ("time", "vx", "vy", "vz"), key)
+    return VelocitySeries(times, values, source=str(path))
+
+
+def flow_problems(fluid, gravity) -> list[tuple[str, str]]:
+    """``(key, message)`` of a fluid's motion that does not fit the case: waves without a
+    free surface or without gravity, or not travelling horizontally."""
+    out: list[tuple[str, str]] = []
+    if not fluid.waves:
+        return out
+    if fluid.surface is None:
+        out.append(("fluid.waves", "waves need the free surface: give fluid.surface"))
+    if gravity is None:
+        return out
+    if not gravity.g > 0:
+        out.append(("fluid.waves", "waves need gravity (gravity.g > 0)"))
+    gdir = np.asarray(gravity.direction, dtype=float)
+    gdir = gdir / np.linalg.norm(gdir)
+    for i, w in enumerate(fluid.waves):
+        c = float(np.dot(np.asarray(w.direction, float), gdir))
+        if abs(c) > 1e-6:
+            out.append((f"fluid.waves[{i}].direction", f"must be horizontal (normal to "
+                        f"gravity), its component along gravity is {c:.3g}"))
+    return out
