@@ -57,3 +57,29 @@ def test_series_resumed_and_partitioned(mpi_tmp_path, make_case):
         s = json.loads((mpi_tmp_path / "resumed" / "summary.json").read_text())
         assert s["status"] == "completed" and s["mpi_ranks"] == comm.size
     comm.Barrier()
+
+
+def test_a_new_run_leaves_nothing_of_the_last_one(mpi_tmp_path):
+    """A run into a folder that holds another case's outputs (a point load: kinks.csv, a
+    damper, figures, modes) ends with exactly the files of the same run into an empty
+    folder: nothing stale that ``cablefem fatigue`` or ParaView would read as this run's
+    (kinks.csv was left behind, and fatigue reported the old run's kink)."""
+    from cablefem.case import parse_case
+
+    base = {"title": "t", "section": {"EA": 1e6, "EI": 1.0, "mass": 1.0},
+            "gravity": {"g": 0.0}, "geometry": {"length": 9.9},
+            "mesh": {"elements": 20},
+            "anchors": [{"name": "p", "position": [0.0, 0, 0], "type": "clamped"},
+                        {"name": "q", "position": [10.0, 0, 0], "type": "pinned"}],
+            "dynamics": {"t_end": 0.01, "dt": 0.005}}
+    rich = dict(base, point_loads=[{"s": 4.0, "value": [0.0, 0.0, -100.0]}],
+                dampers=[{"anchor": "p", "distance": 0.5, "coefficient": 100.0,
+                          "direction": [0.0, 0, 1]}])
+    run_case(parse_case(rich), mpi_tmp_path / "reused", comm, progress=False, modes=2)
+    kw = dict(figures=False, progress=False, modes=0)
+    run_case(parse_case(base), mpi_tmp_path / "reused", comm, **kw)
+    run_case(parse_case(base), mpi_tmp_path / "clean", comm, **kw)
+    if comm.rank == 0:
+        ls = lambda d: sorted(str(p.relative_to(d)) for p in d.rglob("*"))  # noqa: E731
+        assert ls(mpi_tmp_path / "reused") == ls(mpi_tmp_path / "clean")
+    comm.Barrier()
