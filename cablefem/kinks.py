@@ -127,7 +127,8 @@ class KinkMoments:
         return out + m.geometry.points[self.nodes]
 
     def measure(self) -> dict[str, np.ndarray]:
-        """The columns (one row per kink) at the model's current state."""
+        """The columns (one row per kink) at the model's current state, and ``normal``
+        (n_kinks, 3), the unit axis ``e- × e+`` of the turn (zero without one)."""
         return self.columns(self.positions())
 
     def columns(self, r: np.ndarray) -> dict[str, np.ndarray]:
@@ -146,22 +147,25 @@ class KinkMoments:
             valid = (lay.valid & (self.spacing >= MIN_SPACING * lay.layer_length)
                      & ~self._in_hinge_region())
         Mv = np.nan_to_num(lay.moment_vector)
+        turn = np.cross(e[:, 0], e[:, 1])  # the axis the tangent turns about, e- × e+
+        size = np.linalg.norm(turn, axis=1)
+        normal = np.where(size[:, None] > 1e-14, turn / np.maximum(size, 1e-300)[:, None],
+                          0.0)
         return {"tension": T, "delta": 2.0 * lay.delta, "moment": lay.moment,
                 "Mx": Mv[:, 0], "My": Mv[:, 1], "Mz": Mv[:, 2],
-                "layer_length": lay.layer_length, "valid": valid.astype(int)}
+                "layer_length": lay.layer_length, "valid": valid.astype(int),
+                "normal": normal}
 
 
-def rod_kink_moments(model, kinks: list[Kink]) -> np.ndarray:
-    """The rod's moment magnitude at each kink's node (collective): its element moments
-    (``model.moment_field``) extrapolated to the node from each side, quadratically from the
-    three nearest elements, the two sides averaged."""
-    if not kinks:
-        return np.zeros(0)
+def rod_moments_along(model) -> tuple[np.ndarray, np.ndarray]:
+    """The rod's element moments along the cable, on every rank (collective): the
+    stress-free station of each element's midpoint (n_el,) and its moment vector (n_el, 3),
+    in the order of the mesh's elements."""
     f = model.moment_field()
     W = f.function_space
     n_owned = W.dofmap.index_map.size_local
     mid = W.tabulate_dof_coordinates()[:n_owned]
-    vals = np.linalg.norm(f.x.array[: 3 * n_owned].reshape(-1, 3), axis=1)
+    vals = f.x.array[: 3 * n_owned].reshape(-1, 3)
     parts = model.comm.allgather((mid, vals))
     mid = np.concatenate([p[0] for p in parts])
     vals = np.concatenate([p[1] for p in parts])
@@ -171,8 +175,19 @@ def rod_kink_moments(model, kinks: list[Kink]) -> np.ndarray:
     s_mid = st[:-1] + 0.5 * np.diff(st)
     ref_mid = 0.5 * (geo.points[:-1] + geo.points[1:])
     order = np.array([int(np.argmin(np.linalg.norm(ref_mid - x, axis=1))) for x in mid])
-    M = np.full(st.size - 1, np.nan)
+    M = np.full((st.size - 1, 3), np.nan)
     M[order] = vals
+    return s_mid, M
+
+
+def rod_kink_moments(model, kinks: list[Kink]) -> np.ndarray:
+    """The rod's moment magnitude at each kink's node (collective): its element moments
+    (:func:`rod_moments_along`) extrapolated to the node from each side, quadratically from
+    the three nearest elements, the two sides averaged."""
+    if not kinks:
+        return np.zeros(0)
+    s_mid, M = rod_moments_along(model)
+    M = np.linalg.norm(M, axis=1)
     out = []
     for k in kinks:
         sides = []

@@ -180,13 +180,18 @@ def anchor_moments(forces: np.ndarray, direction: np.ndarray, EI: float, EA: flo
 def composite_field(node_s: np.ndarray, r: np.ndarray, a: np.ndarray, EA: float, EI: float,
                     mass: float, load: np.ndarray, stations: np.ndarray,
                     anchor_s: list[float], deltas: np.ndarray, ells: np.ndarray,
-                    normals: np.ndarray, tension_only: bool = True
-                    ) -> tuple[np.ndarray, np.ndarray]:
-    """Composite curvature along the cable at one time (docs/theory.md §4).
+                    normals: np.ndarray, tension_only: bool = True,
+                    kinks: tuple | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Composite curvature along the cable at one time (docs/theory.md §4, docs/kinks.md).
 
     ``node_s`` (n,), ``r`` (n, 3), ``a`` (n, 3): stations, positions and accelerations of
     the string's nodes; ``stations`` (P,): where to evaluate; ``anchor_s``, ``deltas``,
     ``ells``, ``normals``: the clamped anchors (at ``s = 0`` or ``s = l``) and their layers.
+    ``kinks``: ``(s, delta, ell, normal)`` of the interior kinks (K,), (K,), (K,), (K, 3):
+    station, whole kink angle ``Δ_k``, layer length and unit normal ``e- × e+`` of the
+    turn; each adds the clamped layer of angle ``Δ_k/2`` on both sides, in ``|s − s_k|``
+    (the string turns by ``Δ_k`` at the node, which its straight P1 elements do not
+    show: the layers add that turn, spread over a few ``ℓ``). NaN ``delta``: nothing.
     Returns positions (P, 3) and the composite curvature (P, 3) in 1/m, as vectors in the
     direction of increasing ``s`` (multiply by EI for the moment).
     The string's curvature on each P1 element uses the element's tangent and tension and
@@ -205,11 +210,23 @@ def composite_field(node_s: np.ndarray, r: np.ndarray, a: np.ndarray, EA: float,
     ks = asymptotics.string_curvature(tang[e], T[e], mass, acc, load)
     ks = np.nan_to_num(ks, nan=0.0)  # slack element: no string curvature from tension
     L = node_s[-1]
-    if len(anchor_s) == 0:
+    sig = [stations - s0 if s0 < 0.5 * L else L - stations for s0 in anchor_s]
+    orient = [1.0 if s0 < 0.5 * L else -1.0 for s0 in anchor_s]
+    half = np.asarray(deltas, float).reshape(-1)
+    ells = np.asarray(ells, float).reshape(-1)
+    normals = np.asarray(normals, float).reshape(-1, 3)
+    if kinks is not None and len(kinks[0]):
+        s_k, d_k, l_k, n_k = (np.asarray(x, float) for x in kinks)
+        # both sides turn the same way: the same sign in the direction of travel
+        sig += [np.abs(stations - s0) for s0 in s_k]
+        orient += [1.0] * s_k.size
+        half = np.concatenate([half, 0.5 * d_k])
+        ells = np.concatenate([ells, l_k])
+        normals = np.concatenate([normals, n_k.reshape(-1, 3)])
+    if not sig:
         return pos, ks
-    sig = np.array([stations - s0 if s0 < 0.5 * L else L - stations for s0 in anchor_s])
-    orient = np.array([1.0 if s0 < 0.5 * L else -1.0 for s0 in anchor_s])
-    kap = asymptotics.composite_curvature(ks, sig, deltas, ells, normals, orientation=orient)
+    kap = asymptotics.composite_curvature(ks, np.array(sig), half, ells, normals,
+                                          orientation=np.array(orient))
     return pos, kap
 
 

@@ -98,15 +98,21 @@ class RunOutput:
         # the composite field's stations, from the static layers (resolve half the static
         # layer length: tension can rise in dynamics); fixed for the run and its restarts
         self.stations = None
+        #: a single string's interior kinks: their layers join the composite field
+        self.kinked = bool(self.kinkout.kinks) and not (self.beam or self.network)
         if self.clamped and self.network:
             self._segments_setup(static_forces)
-        elif self.clamped and not self.beam:
+        elif (self.clamped or self.kinked) and not self.beam:
             idx = {a.name: i for i, a in enumerate(model.anchors)}
             ells = [0.5 * self._moments(c, np.zeros(1), static_forces[idx[c.name]][None, :]
                                         )["layer_length"][0] for c in self.clamped]
             s_a = [model.geometry.stations[c.node] for c in self.clamped]
+            if self.kinked:  # model.u is the static state here
+                s_a += [k.s for k in self.kinkout.kinks]
+                ells += list(0.5 * self.kinkout.static["layer_length"])
             self.stations = asymptotics.graded_stations(
-                model.length, s_a, [e if np.isfinite(e) else np.nan for e in ells])
+                model.length, s_a,
+                [e if np.isfinite(e) and e > 0 else np.nan for e in ells])
             r = self._nodal_positions()  # model.u is the static state here
             pts = None
             if model.comm.rank == 0:
@@ -254,7 +260,7 @@ class RunOutput:
         m = self.model
         self.string.write(t)
         self.last_fields_time = t
-        if not self.clamped or self.beam:  # a beam's moment field is in string.xdmf
+        if self.moments is None:  # nothing clamped or kinked; a beam's is in string.xdmf
             return
         if self._pending and self.times[-1] == t:
             self.flush()  # this time's row: its layers are those of the field
@@ -272,16 +278,30 @@ class RunOutput:
         s_a = [m.geometry.stations[c.node] for c in self.clamped]
         r = self._nodal_positions()
         a = m.gather_nodal(m.a)
+        kinks = self._kink_layers()
         pos = kap = None
         if m.comm.rank == 0:
             get = lambda k: np.array([layers[c.name][k][0] for c in self.clamped])  # noqa
             deltas = np.where(get("slack"), np.nan, get("delta"))
+            normals = np.nan_to_num(get("normal")).reshape(-1, 3)
             pos, kap = composite_field(m.geometry.stations, r, a, self.EA, self.EI, self.m,
                                        self.load_at(t), self.stations, s_a, deltas,
-                                       get("layer_length"), np.nan_to_num(get("normal")),
-                                       m.tension_only)
+                                       get("layer_length"), normals, m.tension_only,
+                                       kinks=kinks)
         self.moments.write(t, pos, kap, None if kap is None else self.EI * kap,
                            self.stations)
+
+    def _kink_layers(self) -> tuple | None:
+        """The interior kinks' ``(s, delta, ell, normal)`` in the current state for
+        :func:`composite_field` (collective; None without kinks). A kink without a layer
+        (slack: no tension, no length) adds nothing (NaN angle)."""
+        if not self.kinked:
+            return None
+        c = self.kinkout.moments.measure()
+        ell = c["layer_length"]
+        ok = np.isfinite(ell) & (ell > 0) & np.isfinite(c["delta"])
+        return (np.array([k.s for k in self.kinkout.kinks]), np.where(ok, c["delta"], np.nan),
+                np.where(ok, ell, 1.0), c["normal"])
 
     def _nodal_positions(self) -> np.ndarray | None:
         u = self.model.gather_nodal(self.model.u)
