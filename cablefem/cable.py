@@ -327,13 +327,89 @@ class CableModel:
         return dmesh.meshtags(self.mesh, 0, ents_a[order], vals_a[order])
 
     def _point_tags(self) -> None:
-        """Vertex tags for point masses and point loads (one tag per loaded node)."""
+        """Vertex tags for point masses and point loads (one tag per loaded node).
+
+        A node of two elements is reached by the interior facet measure :attr:`dS`; one of
+        one element (a free end) or of three or more (a junction) is not, as no facet of
+        two cells lies there: its point terms are integrated over one adjacent element
+        against a nodal weight instead (:meth:`_nodal_weights`, :meth:`point_work`)."""
         self.damper_nodes = [self.geometry.node_at(s) for s in getattr(self, "damper_s", ())]
         nodes = sorted({k for item in list(self.case.point_masses) + list(self.case.point_loads)
                         for k in self._item_nodes(item)} | set(self.damper_nodes))
         self._node_tag = {k: i + 1 for i, k in enumerate(nodes)}
         self.dS = ufl.Measure("dS", domain=self.mesh,
                               subdomain_data=self._vertex_tags(self._node_tag))
+        degree = np.bincount(np.asarray(self.geometry.cells).ravel(),
+                             minlength=len(self.geometry.points))
+        self._one_sided = [k for k in nodes if degree[k] != 2]
+        if self._one_sided:
+            self._nodal_weights()
+
+    def _nodal_weights(self) -> None:
+        """For every loaded node of other than two elements (:attr:`_one_sided`): one of its
+        elements, tagged with the node's tag in :attr:`dx_nodes`, and the weight
+        :attr:`_delta` = (9 - 36 t + 30 t^2)/h on it, t the position along the element from
+        the node (0) to its other end (1), h the element's length. Its integral against any
+        polynomial of degree two in t is the polynomial's value at the node, so against the
+        product of two linear fields (a load or an acceleration times a test function) it is
+        the nodal value exactly: the weight is the node's Dirac delta for these products.
+
+        The element is chosen on the global cell list (the same on every rank): free ends
+        first, then junctions, each taking an element no other node has taken."""
+        from scipy.spatial import cKDTree
+
+        geo = self.geometry
+        cells, pts = np.asarray(geo.cells), np.asarray(geo.points)
+        degree = np.bincount(cells.ravel(), minlength=len(pts))
+        taken: dict[int, int] = {}  # reference cell -> node
+        for k in sorted(self._one_sided, key=lambda k: (degree[k], k)):
+            free = [int(c) for c in np.nonzero(np.any(cells == k, axis=1))[0]
+                    if int(c) not in taken]
+            if not free:
+                raise RuntimeError(f"node {k}: every element next to it carries another "
+                                   "node's point terms")
+            taken[free[0]] = k
+        imap = self.mesh.topology.index_map(1)
+        local = np.arange(imap.size_local, dtype=np.int32)  # owned cells: each counted once
+        mid = dmesh.compute_midpoints(self.mesh, 1, local)
+        ref_mid = 0.5 * (pts[cells[:, 0]] + pts[cells[:, 1]])
+        dist, idx = cKDTree(ref_mid).query(mid) if local.size else (np.zeros(0), local)
+        if dist.size and dist.max() > 1e-8 * max(1.0, float(np.max(np.abs(pts)))):
+            raise RuntimeError("could not map mesh cells to the reference cells")
+        with quiet_compiler():
+            space = fem.VectorFunctionSpace(self.mesh, ("DG", 0), dim=3)
+        X, D = fem.Function(space, name="node_position"), fem.Function(space, name="node_dir")
+        inv_h = fem.Function(self.W, name="node_inv_h")
+        ents, vals = [], []
+        for i, c in zip(local, idx):
+            k = taken.get(int(c))
+            if k is None:
+                continue
+            a, b = cells[c]
+            other = pts[b] if a == k else pts[a]
+            d = other - pts[k]
+            h = float(np.linalg.norm(d))
+            X.x.array[3 * i:3 * i + 3] = pts[k]
+            D.x.array[3 * i:3 * i + 3] = d / h ** 2
+            inv_h.x.array[i] = 1.0 / h
+            ents.append(i)
+            vals.append(self._node_tag[k])
+        order = np.argsort(ents)
+        tags = dmesh.meshtags(self.mesh, 1, np.asarray(ents, np.int32)[order],
+                              np.asarray(vals, np.int32)[order])
+        self.dx_nodes = ufl.Measure("dx", domain=self.mesh, subdomain_data=tags)
+        t = ufl.dot(ufl.SpatialCoordinate(self.mesh) - X, D)
+        self._delta = (9.0 - 36.0 * t + 30.0 * t ** 2) * inv_h
+
+    def point_work(self, k: int, integrand):
+        """The virtual work of a point term at reference node ``k`` (a loaded node):
+        ``integrand(r)`` is the term's UFL scalar with ``r`` applied to every field in it
+        (a restriction on the interior facet of a node of two elements, nothing on the
+        element that carries the nodal weight of any other node)."""
+        tag = self._node_tag[k]
+        if k in self._one_sided:
+            return integrand(lambda f: f) * self._delta * self.dx_nodes(tag)
+        return integrand(lambda f: f("+")) * self.dS(tag)
 
     ramp_weight = False  #: statics ramps the weight with the extra loads (networks)
 
@@ -380,9 +456,6 @@ class CableModel:
     def _item_nodes(self, item) -> list[int]:
         """Nodes of a point mass or point load (a single cable: the node at ``item.s``)."""
         return [self.geometry.node_at(item.s)]
-
-    def _item_tags(self, item) -> list[int]:
-        return sorted({self._node_tag[k] for k in self._item_nodes(item)})
 
     # ------------------------------------------------------------------ forms
     def build_forms(self) -> None:
@@ -459,10 +532,11 @@ class CableModel:
         u, v, a, dw = self.u, self.v, self.a, self.dw
         case, cc = self.case, self.c
         extra = [forms.load_work(q, du_t, dx=dx, c=cc) for q, _ in self.loads]
-        extra += [pm.mass * ufl.inner(self.gravity, du_t("+")) * self.dS(tag)
-                  for pm in case.point_masses for tag in self._item_tags(pm)]
-        extra += [ufl.inner(q, du_t("+")) * self.dS(tag)
-                  for q, pl in self.point_loads for tag in self._item_tags(pl)]
+        extra += [self.point_work(k, lambda r, pm=pm: pm.mass * ufl.inner(self.gravity,
+                                                                          r(du_t)))
+                  for pm in case.point_masses for k in sorted(set(self._item_nodes(pm)))]
+        extra += [self.point_work(k, lambda r, q=q: ufl.inner(q, r(du_t)))
+                  for q, pl in self.point_loads for k in sorted(set(self._item_nodes(pl)))]
         F_ext = F_weight
         if self.ramp_weight:  # networks: statics ramps the weight too (from the pretension)
             F_ext = self.load_factor * sum(extra, F_weight)
@@ -470,8 +544,9 @@ class CableModel:
             F_ext = F_weight + self.load_factor * sum(extra[1:], extra[0])
 
         for pm in case.point_masses:
-            for tag in self._item_tags(pm):
-                F_inertia = F_inertia + pm.mass * ufl.inner(a_t("+"), du_t("+")) * self.dS(tag)
+            for k in sorted(set(self._item_nodes(pm))):
+                F_inertia = F_inertia + self.point_work(
+                    k, lambda r, pm=pm: pm.mass * ufl.inner(r(a_t), r(du_t)))
 
         damp = case.damping
         # Constants, not floats: one compiled form serves every value (FFCx caches by code)

@@ -223,3 +223,84 @@ def test_point_load_on_vertex_group(mpi_tmp_path):
     u = model.gather_nodal(model.u)
     if comm.rank == 0:
         assert u[5, 2] == pytest.approx(-dd, rel=1e-9)
+
+
+def cross_mesh(path, n: int = 10):
+    """Two cables of 10 m crossing at their middles (groups "a" along x, "b" along y, 2n
+    elements each, sharing the middle node: a junction of four elements), anchored at the
+    four ends ("ends"); the junction is the 0D group "hub"."""
+    x = np.linspace(0, 10.0, 2 * n + 1)
+    pa = np.column_stack([x, np.zeros_like(x), np.zeros_like(x)])
+    pb = np.delete(np.column_stack([np.full_like(x, 5.0), x - 5.0, np.zeros_like(x)]), n,
+                   axis=0)
+    ia = np.arange(2 * n + 1)
+    ib = np.concatenate([2 * n + 1 + np.arange(n), [n], 3 * n + 1 + np.arange(n)])
+    cells = np.vstack([np.column_stack([ia[:-1], ia[1:]]),
+                       np.column_stack([ib[:-1], ib[1:]])])
+    return write_mesh(path, np.vstack([pa, pb]), cells, ["a"] * (2 * n) + ["b"] * (2 * n),
+                      {"ends": [0, 2 * n, int(ib[0]), int(ib[-1])], "hub": [n]})
+
+
+def cross_case(mesh, mass: float = 1.0, **extra) -> dict:
+    return case_dict(mesh, [{"group": "a", "section": "s", "pretension": 1e4},
+                            {"group": "b", "section": "s", "pretension": 1e4}], ["ends"],
+                     sections=[{"name": "s", "EA": 1e6, "EI": 1.0, "mass": mass}], **extra)
+
+
+def test_point_load_at_a_junction(mpi_tmp_path):
+    """A point load P = 4 kN down on the junction of two crossing cables (four elements
+    meet there: no interior facet of two cells, which the point terms were integrated on,
+    so the load was silently left out): by symmetry each anchor is pulled down by P/4,
+    and the junction sinks as a single cable of the same length under P/2 at its middle
+    (the closed form of test_point_load_on_vertex_group), to Newton's tolerance."""
+    from scipy.optimize import brentq
+
+    mesh = cross_mesh(str(mpi_tmp_path / "cross.msh"))
+    model = NetworkModel(comm, parse_case(cross_case(
+        mesh, point_loads=[{"group": "hub", "value": [0.0, 0.0, -4e3]}])))
+    st = solve_static(model)
+    np.testing.assert_allclose(st.anchor_forces[:, 2], [-1e3] * 4, rtol=1e-9)  # pulled down
+    c, P, EA = 1 / (1 + 1e4 / 1e6), 2e3, 1e6
+    dd = brentq(lambda dd: 2 * EA * (np.hypot(5.0, dd) / (c * 5.0) - 1) * dd
+                / np.hypot(5.0, dd) - P, 1e-9, 5.0, xtol=1e-15)
+    u = model.gather_nodal(model.u)
+    if comm.rank == 0:
+        assert u[10, 2] == pytest.approx(-dd, rel=1e-9)
+
+
+def test_point_mass_at_a_junction(mpi_tmp_path):
+    """A point mass M = 10 kg on the junction of two crossing taut cables of nearly no mass
+    (1e-3 kg/m): the vertical mode is the mass on four taut halves, ω = sqrt(8 T/(L M)),
+    T = 1e4 N, L = 10 m (28.28 rad/s); the cables' 0.02 kg lower it by about
+    (m L/3)/(2 M) = 3e-4 relative; 1e-3 allowed. The mass was left out at such a node (the
+    mode was then the cables' own, 3000 rad/s)."""
+    mesh = cross_mesh(str(mpi_tmp_path / "cross.msh"))
+    model = NetworkModel(comm, parse_case(cross_case(
+        mesh, mass=1e-3, point_masses=[{"group": "hub", "mass": 10.0}])))
+    solve_static(model)
+    om = solve_modes(model, 1).omegas
+    assert om[0] == pytest.approx(np.sqrt(8 * 1e4 / (10.0 * 10.0)), rel=1e-3)
+
+
+def test_point_mass_at_a_free_end(mpi_tmp_path):
+    """A 10 m cable of nearly no mass (1e-3 kg/m) hanging from one anchor with M = 10 kg at
+    its free end (a node of one element, which no interior facet reaches either): the
+    anchor carries (M + m L) g, and the first mode is the pendulum, w = sqrt(g/L) with L the
+    hanging length (the mesh is stress-free at the pretension M g, so L = 10 m to the
+    cable's own weight, 5e-6 relative); the cable's 0.01 kg shifts it by about (m L/3)/M =
+    3e-4 relative: 1e-3 allowed."""
+    n, g, M, m = 10, 9.81, 10.0, 1e-3
+    z = np.linspace(0.0, -10.0, n + 1)
+    pts = np.column_stack([np.zeros_like(z), np.zeros_like(z), z])
+    cells = np.column_stack([np.arange(n), np.arange(1, n + 1)])
+    mesh = write_mesh(str(mpi_tmp_path / "hang.msh"), pts, cells, ["c"] * n,
+                      {"top": [0], "tip": [n]})
+    d = case_dict(mesh, [{"group": "c", "section": "s", "pretension": M * g}], ["top"],
+                  sections=[{"name": "s", "EA": 1e6, "EI": 1.0, "mass": m}], g=g,
+                  point_masses=[{"group": "tip", "mass": M}])
+    model = NetworkModel(comm, parse_case(d))
+    st = solve_static(model)
+    np.testing.assert_allclose(st.anchor_forces[0], [0.0, 0.0, -(M + m * 10.0) * g],
+                               rtol=1e-6, atol=1e-9)  # Newton's tolerance
+    om = solve_modes(model, 1).omegas
+    assert om[0] == pytest.approx(np.sqrt(g / 10.0), rel=1e-3)
