@@ -234,6 +234,9 @@ class NetworkSpec:
     mesh: Path
     sections: dict[str, Section]
     cables: list[CableSpec]
+    #: the interior kinks reported (:func:`cablefem.kinks.network_kinks`): "all" (loaded
+    #: nodes and junctions), "loaded" (nodes with point loads or point masses) or "none"
+    kinks: str = "all"
 
 
 @dataclass(kw_only=True)

@@ -118,6 +118,7 @@ class _Hinge:
         self.anchor = anc
         self.s = s  # stress-free lengths of the elements from the anchor on (all ranks), m
         self.cells = cells  # local cell of each of those elements (-1: not on this rank)
+        self.elements = np.zeros(0, np.int64)  # their numbers in the geometry (all ranks)
         self.nodes = nodes  # first element: (anchor node, other node, X_other - X_anchor)
         self.n = 0  # elements the layer's length is taken from
         self.p = np.zeros(0)  # their shares of it
@@ -166,12 +167,13 @@ class VirtualHinges:
                                  "the end of one cable")
             order = np.arange(n_el) if k0 == 0 else np.arange(n_el)[::-1]
             order = order[:max(1, n_el // 2)]  # a region never reaches past mid-cable
-            self._add(i, anc, s_all[order], cell_of[order], X)
+            self._add(i, anc, s_all[order], cell_of[order], X, order)
         self.g_vec = np.asarray(model.g_vec, float)
 
-    def _add(self, i, anc, s, cells, X) -> None:
+    def _add(self, i, anc, s, cells, X, elements) -> None:
         """A hinge at anchor ``i`` whose region may take the elements of stress-free lengths
-        ``s`` (from the anchor on) on the local ``cells`` (-1: not on this rank)."""
+        ``s`` (from the anchor on) on the local ``cells`` (-1: not on this rank);
+        ``elements``: their numbers in the geometry (all ranks)."""
         model = self.model
         nodes = None
         if cells[0] >= 0:  # the first element's two nodes, the anchor's first
@@ -180,6 +182,7 @@ class VirtualHinges:
             a, b = dofs[np.argmin(at_anchor)], dofs[np.argmax(at_anchor)]
             nodes = (a, b, X[b] - X[a])  # and the element in the reference geometry
         hg = _Hinge(i, anc, np.asarray(s, float), np.asarray(cells, np.int64), nodes)
+        hg.elements = np.asarray(elements, np.int64)
         hg.EA0 = float(anc.section.EA)
         # stress-free length per mesh length without the hinge (1 on a single cable; a
         # network's mesh is the pretensioned geometry)
@@ -235,7 +238,7 @@ class VirtualHinges:
             chain = np.asarray(chain, np.int64)
             if node in anchored:  # the other anchor's layer takes the other half
                 chain = chain[:max(1, chain.size // 2)]
-            self._add(i, anc, length[chain], cell_of[chain], X)
+            self._add(i, anc, length[chain], cell_of[chain], X, chain)
 
     def __bool__(self) -> bool:
         return bool(self.items)

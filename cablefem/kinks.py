@@ -28,12 +28,13 @@ the rod's mesh is graded towards kinks as towards clamps), the two sides average
 from __future__ import annotations
 
 from dataclasses import dataclass
+from types import SimpleNamespace
 
 import numpy as np
 
 from cablefem import asymptotics
 
-__all__ = ["KINK_COLUMNS", "MIN_SPACING", "Kink", "KinkMoments", "kink_points"]
+__all__ = ["KINK_COLUMNS", "MIN_SPACING", "Kink", "KinkMoments", "kink_points", "network_kinks"]
 
 #: the columns of ``kinks.csv``
 KINK_COLUMNS = ["time", "kink", "s", "tension", "delta", "moment", "Mx", "My", "Mz",
@@ -45,29 +46,106 @@ MIN_SPACING = 3.0
 
 @dataclass
 class Kink:
-    """An interior node where a concentrated force acts: ``name`` (``point_load0``,
-    ``point_mass1``, ``damper0``), the node and its stress-free arc length ``s``."""
+    """An interior node where a concentrated force acts or a cable passes through a
+    junction: ``name`` (``point_load0``, ``point_mass1``, ``damper0``; in a network
+    ``<where>/<cable group>``), the node, its stress-free arc length ``s`` (NaN in a
+    network), the nodes before and after it along the cable (``nodes`` = (before, node,
+    after)), the stress-free lengths of the two elements ``h``, the stress-free distance
+    to the nearest other kink or anchor along the cable ``spacing``, the section's name
+    (a network's; None for a single cable) and the two elements (``cells``, network cell
+    indices; a single cable's element numbers)."""
 
     name: str
     node: int
     s: float
+    nodes: tuple = ()
+    h: tuple = ()
+    spacing: float = np.inf
+    section: str | None = None
+    cells: tuple = ()
 
 
 def kink_points(model) -> list[Kink]:
-    """The kinks of a single cable (none for a network: its junctions are not covered)."""
+    """The kinks of a single cable or of a network (:func:`network_kinks`)."""
     if getattr(model, "is_network", False):
-        return []
+        return network_kinks(model)
     case, geo = model.case, model.geometry
+    st = geo.stations
     out, seen = [], set()
     items = ([(f"point_load{i}", pl.s) for i, pl in enumerate(case.point_loads)]
              + [(f"point_mass{i}", pm.s) for i, pm in enumerate(case.point_masses)]
              + [(f"damper{i}", s) for i, s in enumerate(getattr(model, "damper_s", ()))])
     for name, s in items:
         k = geo.node_at(s)
-        if k in seen or k == 0 or k == len(geo.stations) - 1:
+        if k in seen or k == 0 or k == len(st) - 1:
             continue  # one kink per node (a mass with a load: the first item names it)
         seen.add(k)
-        out.append(Kink(name, k, float(geo.stations[k])))
+        out.append(Kink(name, k, float(st[k]), (k - 1, k, k + 1),
+                        (float(st[k] - st[k - 1]), float(st[k + 1] - st[k])),
+                        cells=(k - 1, k)))
+    # the distance from each kink to its nearest other kink or anchor
+    marks = np.array(sorted({0.0, float(st[-1])} | {k.s for k in out}))
+    for k in out:
+        k.spacing = float(np.min(np.abs(marks[marks != k.s] - k.s)))
+    return out
+
+
+def network_kinks(model) -> list[Kink]:
+    """The kinks of a network (:class:`cablefem.network.NetworkModel`): at every node that
+    is not an anchor, where a point load or a point mass acts or several cables meet (a
+    junction), each cable group with exactly two elements at the node passes through it
+    and kinks there. A group with one element there ends at the node (a pin: no moment);
+    with more than two, its path through the node is ambiguous: not covered. Named
+    ``<vertex group>:<i>/<group>`` when the node is the i-th of a 0D group (a load's, a
+    mass's), else ``node<k>/<group>``; ``spacing`` runs along the group's elements to the
+    nearest other kink of the group, anchor, junction or end. ``network.kinks`` of the case
+    chooses: "all" (loaded nodes and junctions), "loaded" or "none"."""
+    geo = model.geometry
+    net, case = geo.net, model.case
+    cells = np.asarray(geo.cells, np.int64)
+    n = len(geo.points)
+    h = np.asarray(geo.cell_c, float) * np.linalg.norm(
+        geo.points[cells[:, 1]] - geo.points[cells[:, 0]], axis=1)
+    at_node: list[list[int]] = [[] for _ in range(n)]
+    for e, (a, b) in enumerate(cells):
+        at_node[a].append(e)
+        at_node[b].append(e)
+    anchored = {int(k) for k in geo.anchor_nodes.values()}
+    label = {}
+    for item in list(case.point_loads) + list(case.point_masses):
+        for i, k in enumerate(net.vertex_groups[item.s]):
+            label.setdefault(int(k), f"{item.s}:{i}")
+    junctions = {int(k) for k in net.junctions}
+    which = getattr(case.network, "kinks", "all")
+    if which == "none":
+        return []
+    candidates = sorted((set(label) | (junctions if which == "all" else set())) - anchored)
+    out = []
+    for k in candidates:
+        for g in sorted({int(net.cell_group[e]) for e in at_node[k]}):
+            es = [e for e in at_node[k] if net.cell_group[e] == g]
+            if len(es) != 2:
+                continue
+            before, after = (int(cells[e][cells[e] != k][0]) for e in es)
+            name = f"{label.get(k, f'node{k}')}/{net.groups[g]}"
+            out.append(Kink(name, k, np.nan, (before, k, after),
+                            (float(h[es[0]]), float(h[es[1]])),
+                            section=geo.cell_section[es[0]], cells=tuple(es)))
+    stops = anchored | junctions | {k.node for k in out}
+    for kink in out:  # walk each way along the group until a stop or a branch
+        g = net.cell_group[kink.cells[0]]
+        dist = []
+        for e, node in zip(kink.cells, (kink.nodes[0], kink.nodes[2])):
+            d = h[e]
+            while node not in stops:
+                nxt = [c for c in at_node[node] if c != e and net.cell_group[c] == g]
+                if len(nxt) != 1:
+                    break  # the cable's free end (or a branch)
+                e = nxt[0]
+                d += h[e]
+                node = int(cells[e][cells[e] != node][0])
+            dist.append(d)
+        kink.spacing = float(min(dist))
     return out
 
 
@@ -80,16 +158,18 @@ class KinkMoments:
         self.model = model
         self.kinks = kink_points(model)
         self.omega = omega
-        sec = model.case.section
-        self.EI, self.EA, self.m = sec.EI, sec.EA, sec.mass
-        st = model.geometry.stations
-        self.nodes = np.array([[k.node - 1, k.node, k.node + 1] for k in self.kinks],
-                              dtype=np.int64).reshape(-1, 3)
-        self.h = np.diff(st[self.nodes], axis=1) if self.kinks else np.zeros((0, 2))
-        # the distance from each kink to its nearest other kink or anchor
-        marks = np.array(sorted({0.0, float(st[-1])} | {k.s for k in self.kinks}))
-        self.spacing = np.array([np.min(np.abs(marks[marks != k.s] - k.s))
-                                 for k in self.kinks])
+        n = len(self.kinks)
+        if getattr(model, "is_network", False):
+            secs = [model.case.network.sections[k.section] for k in self.kinks]
+        else:
+            secs = [model.case.section] * n
+        self.EI = np.array([sec.EI for sec in secs], float)
+        self.EA = np.array([sec.EA for sec in secs], float)
+        self.m = np.array([sec.mass for sec in secs], float)
+        self.nodes = np.array([k.nodes for k in self.kinks], dtype=np.int64).reshape(-1, 3)
+        self.h = np.array([k.h for k in self.kinks], float).reshape(-1, 2)
+        self.spacing = np.array([k.spacing for k in self.kinks], float)
+        self._local = None
 
     @property
     def names(self) -> list[str]:
@@ -102,13 +182,10 @@ class KinkMoments:
         hinges = getattr(self.model, "hinges", None)
         if not hinges:
             return out
-        st = self.model.geometry.stations
+        cells = np.array([k.cells for k in self.kinks], np.int64).reshape(-1, 2)
         for hg in hinges.items:
-            extent = float(np.sum(hg.s[:hg.touched]))
-            if hg.anchor.node == 0:
-                out |= st[self.nodes[:, 0]] < extent * (1 - 1e-12)
-            else:
-                out |= st[self.nodes[:, 2]] > st[-1] - extent * (1 - 1e-12)
+            region = np.asarray(hg.elements[:hg.touched], np.int64)
+            out |= np.isin(cells, region).any(axis=1)
         return out
 
     def positions(self) -> np.ndarray:
@@ -117,12 +194,13 @@ class KinkMoments:
         bs = m.bs
         n_owned = m.V.dofmap.index_map.size_local
         u = m.u.x.array[: bs * n_owned].reshape(-1, bs)[:, :3]
+        if self._local is None:  # each kink node's owned dof block here (-1: elsewhere)
+            where = np.full(len(m.geometry.points), -1, np.int64)
+            where[m._owned_nodes] = np.arange(m._owned_nodes.size)
+            self._local = where[self.nodes]
         out = np.zeros(self.nodes.shape + (3,))
-        for j in range(3):
-            hit = np.nonzero(np.isin(m._owned_nodes, self.nodes[:, j]))[0]
-            for i in hit:
-                rows = np.nonzero(self.nodes[:, j] == m._owned_nodes[i])[0]
-                out[rows, j] = u[i]
+        mine = self._local >= 0
+        out[mine] = u[self._local[mine]]
         out = m.comm.allreduce(out)
         return out + m.geometry.points[self.nodes]
 
@@ -137,13 +215,27 @@ class KinkMoments:
         length = np.linalg.norm(d, axis=2)
         e = d / length[..., None]
         strain = length / self.h - 1.0
-        T2 = self.EA * (np.maximum(strain, 0.0) if self.model.tension_only else strain)
+        T2 = self.EA[:, None] * (np.maximum(strain, 0.0) if self.model.tension_only else strain)
         T = T2.mean(axis=1)
         bis = e[:, 0] + e[:, 1]
-        qs = (self.m, self.omega) if self.omega else None
-        with np.errstate(invalid="ignore", divide="ignore"):
-            lay = asymptotics.layer(T[:, None] * e[:, 1], bis, self.EI, self.EA,
-                                    quasi_static=qs, length=self.model.length)
+        network = getattr(self.model, "is_network", False)
+        lays = []
+        # one call per section (a network's kinks may have several)
+        for key in sorted(set(zip(self.EI, self.EA, self.m))):
+            rows = (self.EI == key[0]) & (self.EA == key[1]) & (self.m == key[2])
+            qs = (key[2], self.omega) if self.omega else None
+            with np.errstate(invalid="ignore", divide="ignore"):
+                lays.append((rows, asymptotics.layer(
+                    T[rows, None] * e[rows, 1], bis[rows], key[0], key[1], quasi_static=qs,
+                    length=None if network else self.model.length)))
+        n = len(self.kinks)
+        lay = SimpleNamespace(**{f: np.full(n, np.nan) for f in (
+            "delta", "moment", "layer_length")}, valid=np.zeros(n, bool),
+            moment_vector=np.full((n, 3), np.nan))
+        for rows, part in lays:
+            for f in ("delta", "moment", "layer_length", "valid", "moment_vector"):
+                getattr(lay, f)[rows] = getattr(part, f)
+        with np.errstate(invalid="ignore"):
             valid = (lay.valid & (self.spacing >= MIN_SPACING * lay.layer_length)
                      & ~self._in_hinge_region())
         Mv = np.nan_to_num(lay.moment_vector)

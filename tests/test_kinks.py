@@ -226,3 +226,111 @@ def test_composite_field_rounds_the_kink(mpi_tmp_path):
         err = np.max(np.linalg.norm(field - M_rod[near], axis=1))
         assert err < 1e-2 * np.linalg.norm(Mk), err / np.linalg.norm(Mk)
     comm.Barrier()
+
+
+def crossing(path, P: float, time: dict | None = None, diameter: float | None = None,
+             **extra):
+    """Two 10 m cables crossing at their middles (tests/test_network.py: groups "a" and
+    "b", 20 elements each, T0 = 1e4 N, EA = 1e6 N, EI = 1 N m^2), P down on the junction
+    ("hub", with the time function ``time``), g = 0."""
+    from test_network import cross_case, cross_mesh  # noqa: E402  (tests/ is on the path)
+
+    load = {"group": "hub", "value": [0.0, 0.0, -P]}
+    if time is not None:
+        load["time"] = time
+    d = cross_case(cross_mesh(str(path)), point_loads=[load], **extra)
+    if diameter is not None:
+        d["sections"][0]["diameter"] = diameter
+    return parse_case(d)
+
+
+def test_network_junction_kinks_are_the_single_cables(mpi_tmp_path):
+    """Each cable passing through a loaded junction of two crossing cables kinks there:
+    two kinks, hub:0/a and hub:0/b. By symmetry each carries P/2 and is the single cable of
+    the same mesh, section and pretension under P/2 at its middle: the same discrete
+    problem, so the same moment, tension and angle to Newton's tolerance (1e-9); valid,
+    5 m from the anchors."""
+    from cablefem.kinks import network_kinks
+    from cablefem.network import NetworkModel
+
+    P = 4e3
+    net = NetworkModel(comm, crossing(mpi_tmp_path / "cross.msh", P))
+    solve_static(net)
+    kinks = network_kinks(net)
+    assert [k.name for k in kinks] == ["hub:0/a", "hub:0/b"]
+    assert [k.spacing for k in kinks] == pytest.approx([5.0 / (1 + T0 / EA)] * 2, rel=1e-12)
+    c_net = KinkMoments(net).measure()
+    d = taut(P / 2, elements=20)
+    d["point_loads"][0]["s"] = 0.5 * L / (1 + T0 / EA)
+    single = CableModel(comm, parse_case(d))
+    solve_static(single)
+    c_one = KinkMoments(single).measure()
+    for key in ("moment", "tension", "delta", "layer_length"):
+        np.testing.assert_allclose(c_net[key], [c_one[key][0]] * 2, rtol=1e-9)
+    assert c_net["valid"].tolist() == [1, 1]
+    # the two moments' axes: about y for cable a (along x), about x for cable b
+    assert abs(c_net["My"][0]) == pytest.approx(c_net["moment"][0], rel=1e-12)
+    assert abs(c_net["Mx"][1]) == pytest.approx(c_net["moment"][1], rel=1e-12)
+
+
+
+def test_network_kinks_in_the_run_and_fatigue(mpi_tmp_path):
+    """A run of the crossing cables with a harmonic load on the junction: kinks.csv has a
+    row per kink and output time (its s cell empty: a network's kink is named by its node,
+    in summary.json with its section); its first row is the static state's moment; the
+    steady-state peaks of the two cables are equal by symmetry (Newton's tolerance, 1e-9)
+    and not zero; the fatigue report has an entry
+    per kink, stressed with the cable's section (a 2 cm solid circle), whose cycling moment
+    gives a positive damage."""
+    case = crossing(mpi_tmp_path / "cross.msh", 2e3, diameter=0.02,
+                    time={"type": "harmonic", "omega": 40.0},
+                    dynamics={"t_end": 0.1, "dt": 0.002},
+                    fatigue={"detail_category": 160e6, "m1": 4.0, "knee": False,
+                             "window": "all"})
+    out = mpi_tmp_path / "run"
+    res = run_case(case, out, comm, figures=False, progress=False, modes=0)
+    kinks = res.summary["kinks"]
+    assert set(kinks) == {"hub:0/a", "hub:0/b"}
+    assert kinks["hub:0/a"]["node"] == 10 and kinks["hub:0/a"]["section"] == "s"
+    peak = [kinks[k]["steady_state_moment"]["peak"] for k in ("hub:0/a", "hub:0/b")]
+    assert peak[0] > 0 and peak[0] == pytest.approx(peak[1], rel=1e-9)
+    fat = res.summary["fatigue"]
+    assert fat["kink:hub:0/a"]["damage"] > 0 and fat["kink:hub:0/b"]["damage"] > 0
+    if comm.rank == 0:
+        rows = list(csv.DictReader(open(out / "kinks.csv")))
+        assert len(rows) == 2 * 51
+        assert all(r["s"] == "" for r in rows)
+        first = [r for r in rows if r["kink"] == "hub:0/a"][0]
+        assert float(first["moment"]) == kinks["hub:0/a"]["static_moment"]
+
+
+def test_network_kinks_key(mpi_tmp_path):
+    """network.kinks chooses the kinks: 'all' (default) takes an unloaded junction of two
+    crossing cables (each cable passes through it: node10/a, node10/b), 'loaded' only
+    nodes with a point load or mass (none here), 'none' nothing; another value is refused
+    with the key named. A junction of two groups of one element each (the cables' ends:
+    a pin) has no kink."""
+    from test_network import cross_case, cross_mesh, write_mesh  # noqa: E402
+
+    from cablefem.case import CaseError
+    from cablefem.kinks import network_kinks
+    from cablefem.network import NetworkModel
+
+    mesh = cross_mesh(str(mpi_tmp_path / "cross.msh"))
+    names = {}
+    for which in ("all", "loaded", "none"):
+        d = cross_case(mesh)
+        d["network"]["kinks"] = which
+        names[which] = [k.name for k in network_kinks(NetworkModel(comm, parse_case(d)))]
+    assert names == {"all": ["node10/a", "node10/b"], "loaded": [], "none": []}
+    d = cross_case(mesh)
+    d["network"]["kinks"] = "junctions"
+    with pytest.raises(CaseError) as err:
+        parse_case(d)
+    assert "network.kinks" in str(err.value)
+    # two cables end to end at a right angle, each of its own group: no kink at the corner
+    pts = [[0, 0, 0], [1, 0, 0], [2, 0, 0], [2, 1, 0], [2, 2, 0]]
+    mesh = write_mesh(str(mpi_tmp_path / "corner.msh"), pts, [[0, 1], [1, 2], [2, 3], [3, 4]],
+                      ["a", "a", "b", "b"], {"ends": [0, 4]})
+    d = cross_case(mesh)
+    assert network_kinks(NetworkModel(comm, parse_case(d))) == []

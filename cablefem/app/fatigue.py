@@ -99,13 +99,25 @@ def fatigue_window(case: Case, rule: str) -> tuple[str | tuple[float, float] | N
                                                   "reason": why}
 
 
+def _kink_section(case: Case, name: str):
+    """The Section of a kink: the case's for a single cable; in a network that of the cable
+    group the kink's name ends with (``<where>/<group>``)."""
+    if case.network is None:
+        return case.section
+    group = name.rsplit("/", 1)[-1]
+    for c in case.network.cables:
+        if c.group == group:
+            return case.network.sections[c.section]
+    raise ValueError(f"kinks.csv: kink {name!r} names no cable group of the network")
+
+
 def run_fatigue(case: Case, rundir: Path, outdir: Path | None = None, *,
                 window: str | None = None, invalid: str = "raise",
                 comm: MPI.Comm = MPI.COMM_WORLD, sections: dict[str, str] | None = None
                 ) -> dict:
     """Fatigue reports of every clamped anchor in ``rundir/anchors.csv`` and of every
-    interior kink in ``rundir/kinks.csv`` (a single cable; ``kink:<name>``); rank 0 computes
-    and writes, the reports are returned on every rank. Raises CaseError without a
+    interior kink in ``rundir/kinks.csv`` (``kink:<name>``, with its cable's section);
+    rank 0 computes and writes, the reports are returned on every rank. Raises CaseError without a
     ``[fatigue]`` table and ValueError on bad data (invalid samples with
     ``invalid="raise"``: the message names the anchor and the first bad time).
 
@@ -151,17 +163,23 @@ def run_fatigue(case: Case, rundir: Path, outdir: Path | None = None, *,
                                                                             sections[name]),
                     curve, invalid=invalid, window=win, fibres=spec.fibres, anchor=name)
                 reports[name]["window_rule"] = rule
-            if case.network is None:  # the interior kinks (kinks.csv), as "kink:<name>"
-                for name, d in read_kinks(Path(rundir) / "kinks.csv").items():
-                    vec = d["moment_vector"]  # a rod's file has the magnitude only
-                    M = vec if np.any(np.isfinite(vec)) else d["moment"]
-                    reports[f"kink:{name}"] = fatigue_report(
-                        d["time"], d["tension"], M, d["valid"],
-                        _stress_section(spec, case.section), curve, invalid=invalid,
-                        window=win, fibres=spec.fibres, anchor=f"kink:{name}")
-                    reports[f"kink:{name}"]["window_rule"] = rule
+            kink_sections = {}
+            for name, d in read_kinks(Path(rundir) / "kinks.csv").items():
+                # the interior kinks (kinks.csv), as "kink:<name>"
+                vec = d["moment_vector"]  # a rod's file has the magnitude only
+                M = vec if np.any(np.isfinite(vec)) else d["moment"]
+                kink_sections[name] = _kink_section(case, name)
+                reports[f"kink:{name}"] = fatigue_report(
+                    d["time"], d["tension"], M, d["valid"],
+                    _stress_section(spec, kink_sections[name]), curve, invalid=invalid,
+                    window=win, fibres=spec.fibres, anchor=f"kink:{name}")
+                reports[f"kink:{name}"]["window_rule"] = rule
+            if not reports:
+                raise ValueError(f"{rundir}: no clamped anchor and no interior kink: no "
+                                 "bending moment to assess")
             outdir.mkdir(parents=True, exist_ok=True)
-            first = _stress_section(spec, sections[clamped[0]] if clamped else case.section)
+            first = _stress_section(spec, sections[clamped[0]] if clamped
+                                    else next(iter(kink_sections.values())))
             write_report(outdir, reports, curve, first, spec.units)
             tu = unit(case.units, "time")
             for name, rep in reports.items():

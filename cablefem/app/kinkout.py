@@ -98,13 +98,17 @@ class KinkOutput:
             self.csv.close()
 
     def summary(self) -> dict:
-        """Per kink: its station, the static moment, tension, angle and layer length, the
-        fraction of valid rows and the steady-state peak and RMS of the moment."""
+        """Per kink: its station (a network's: its node and section), the static moment,
+        tension, angle and layer length, the fraction of valid rows and the steady-state
+        peak and RMS of the moment."""
         out = {}
         times = np.array(self.times)
         for i, k in enumerate(self.kinks):
             rows = {c: np.array(v, float) for c, v in self.rows[k.name].items()}
-            entry = {"s": k.s, "static_valid": bool(self.static["valid"][i])}
+            # a single cable's kink by its station, a network's by its node and section
+            entry = ({"s": k.s} if k.section is None else {"node": k.node,
+                                                           "section": k.section})
+            entry["static_valid"] = bool(self.static["valid"][i])
             for key, col in (("static_moment", "moment"), ("static_tension", "tension"),
                              ("static_delta", "delta"), ("layer_length", "layer_length")):
                 if np.isfinite(self.static[col][i]):  # the rod has a moment only

@@ -337,7 +337,10 @@ def _network_keys() -> dict:
                 "mesh": KeyDoc("string", REQUIRED, "", "gmsh file (.msh) relative to the case "
                                "file: 1D physical groups for the cables, 0D groups for anchors "
                                "and point masses (meshes/README.md); its geometry is the "
-                               "pretensioned reference.")}),
+                               "pretensioned reference."),
+                "kinks": KeyDoc("string", "all", "", "Interior kinks reported (kinks.csv, "
+                                "docs/kinks.md): 'all' (nodes with point loads or masses "
+                                "and junctions), 'loaded' (the former only) or 'none'.")}),
             "sections": TableDoc("array of tables", REQUIRED, "", "Named cross-sections.", {
                 "name": KeyDoc("string", REQUIRED, "", "Section name, used by [[cables]]."),
                 **section_keys}),

@@ -486,8 +486,9 @@ def _parse_network_case(data: dict, base_dir: Path, source: str) -> Case:
     title = top.string("title")
     units = top.string("units", ("SI", "dimensionless"))
     net_r = top.table("network")
-    mesh_path = None
+    mesh_path, net_kinks = None, "all"
     if net_r is not None:
+        net_kinks = net_r.string("kinks", ("all", "loaded", "none")) or "all"
         name = net_r.string("mesh")
         if name is not None:
             mesh_path = base_dir / name
@@ -549,7 +550,8 @@ def _parse_network_case(data: dict, base_dir: Path, source: str) -> Case:
                         mesh=MeshSpec(1, 1.0), anchors=anchors, loads=loads,
                         point_masses=masses, point_loads=point_loads, damping=damping,
                         dynamics=dynamics, modal=modal, solver=solver, source=source,
-                        fatigue=fatigue, network=NetworkSpec(mesh_path, sections, cables),
+                        fatigue=fatigue, network=NetworkSpec(mesh_path, sections, cables,
+                                                             net_kinks),
                         units=units or "SI"))
 
 
