@@ -572,9 +572,14 @@ class CableModel:
         self.forms.set_model_terms(F_int, F_ext, F_inertia, F_damp, bilateral)
         if case.dampers:  # dynamic terms on the motion from the static state
             parts = (u, v, self.u_static) if u_t is None else (u_t, v_t, us_t)
-            self.forms.add("dampers", damper_work(
-                self.mesh, case.dampers, [self._node_tag[k] for k in self.damper_nodes],
-                *parts, du_t, self.t0, self.dS), kind="dynamic")
+            self.forms.add("dampers", self._damper_work(*parts, du_t), kind="dynamic")
+
+    def _damper_work(self, u_t, v_t, us_t, du_t):
+        """The dampers' virtual work (:func:`cablefem.dampers.damper_work`: each at its
+        node, from the ground)."""
+        return damper_work(self.mesh, self.case.dampers,
+                           [self._node_tag[k] for k in self.damper_nodes],
+                           u_t, v_t, us_t, du_t, self.t0, self.dS)
 
     def compile(self) -> None:
         """Derive every residual, Jacobian and mass form from the terms of :attr:`forms`
@@ -649,7 +654,25 @@ class CableModel:
         """Number of elements that carry no tension (strain <= 0), over all ranks."""
         e = self.strain_field()
         n_owned = self.mesh.topology.index_map(1).size_local
-        return self.comm.allreduce(int(np.count_nonzero(e.x.array[:n_owned] <= 0.0)))
+        slack = (e.x.array[:n_owned] <= 0.0) & self.cable_cells()
+        return self.comm.allreduce(int(np.count_nonzero(slack)))
+
+    def residual_floor(self) -> float:
+        """The round-off floor of the residual's norm (N): the tension ``EA (λ/c − 1)`` is
+        computed from a stretch known to the machine precision ε, so each nodal force
+        carries a round-off of about ε EA, and the norm over the N unknowns
+        ε EA_max sqrt(N). Newton cannot go below it: its absolute tolerances stay 10 times
+        above (a stiff cable, EA/T = 1e4, moving by millimetres stalled at it, and its time
+        steps were cut over and over)."""
+        EA = self.EA.x.array if isinstance(self.EA, fem.Function) else \
+            np.atleast_1d(self.EA.value)
+        EA_max = self.comm.allreduce(float(np.max(np.abs(EA), initial=0.0)), op=MPI.MAX)
+        n = self.bs * self.V.dofmap.index_map.size_global
+        return float(np.finfo(float).eps * EA_max * np.sqrt(n))
+
+    def cable_cells(self) -> np.ndarray:
+        """Which owned cells are a cable's (all of them; a network's dampers' are not)."""
+        return np.ones(self.mesh.topology.index_map(1).size_local, dtype=bool)
 
     def energies(self) -> dict[str, float]:
         """Kinetic, strain and gravity potential energy (J), summed over ranks."""

@@ -1,4 +1,6 @@
-"""External dampers on a single cable (``[[dampers]]``, ``docs/dampers.md``).
+"""External dampers (``[[dampers]]``, ``docs/dampers.md``): from the ground to a point of a
+single cable (:func:`damper_work`), or a network's dampers between two nodes
+(:func:`link_work`).
 
 A damper is a viscous dashpot of coefficient ``c`` with a spring ``k`` in parallel, from the
 ground to the cable node at a stress-free distance from one anchor. It is installed on the
@@ -24,7 +26,7 @@ from petsc4py import PETSc
 
 from cablefem import forms
 
-__all__ = ["damper_stations", "damper_work"]
+__all__ = ["damper_stations", "damper_work", "link_work"]
 
 
 def damper_stations(description, length: float) -> list[float]:
@@ -71,5 +73,30 @@ def damper_work(mesh, dampers, tags, u_t, v_t, us_t, du_t, t0, dS):
             k = fem.Constant(mesh, PETSc.ScalarType(d.stiffness))
             f = f + k * ufl.dot(P, u_t("+") - us_t("+"))
         term = ufl.inner(f, du_t("+")) * dS(tag)
+        work = term if work is None else work + term
+    return work
+
+
+def link_work(mesh, dampers, dx, h, u, v, us, du, t0):
+    """A network's dampers (:class:`cablefem.description.DamperLink`): each cell of the
+    measure ``dx(i + 1)`` is the dashpot and spring of ``dampers[i]`` between its two nodes,
+    along the line between them, installed at rest. With ``h`` the cell's mesh length, ``g``
+    the stretch vector (the chord over ``h``, exact for P1) and ``λ = |g|``, the damper's
+    extension from the static state is ``h (λ − λ_s)``, its rate ``h ∂λ/∂t = h e·∂s v``
+    (``e = g/λ``), so its force ``N = c h e·∂s v + k h (λ − λ_s)`` does the virtual work
+    ``N e·(δu_b − δu_a) = ∫ N e·∂s δu dx`` over the cell; None without dampers. Jacobians
+    (in ``u`` through ``e``, and in ``v``) are derived by UFL."""
+    g = forms.stretch_vector(u, t0)
+    lam = ufl.sqrt(ufl.dot(g, g))
+    e = g / lam
+    lam_s = forms.stretch(us, t0)
+    work = None
+    for i, d in enumerate(dampers):
+        c = fem.Constant(mesh, PETSc.ScalarType(d.coefficient))
+        N = c * h * ufl.dot(e, forms.ds_(v, t0))
+        if d.stiffness > 0:
+            k = fem.Constant(mesh, PETSc.ScalarType(d.stiffness))
+            N = N + k * h * (lam - lam_s)
+        term = N * ufl.dot(e, forms.ds_(du, t0)) * dx(i + 1)
         work = term if work is None else work + term
     return work

@@ -25,7 +25,7 @@ from cablefem.motion import DEFAULT_RAMP_PERIODS, TimeFunction
 from cablefem.properties import Section
 
 __all__ = ["Gravity", "Geometry", "MeshSpec", "DistributedLoad", "PointMass", "PointLoad",
-           "Damper", "Fluid", "Seabed", "AiryWave", "Profile", "VelocitySeries",
+           "Damper", "DamperLink", "Fluid", "Seabed", "AiryWave", "Profile", "VelocitySeries",
            "Damping", "SolverSpec", "BeamSpec", "CableSpec", "NetworkSpec", "CableDescription",
            "rayleigh_coefficients", "stress_free_length", "GEOMETRY_KINDS", "GEOMETRY_BOUNDS",
            "BEAM_BOUNDS", "DAMPING_MODELS", "OUTER_CORRECTIONS", "MAX_ELEMENTS"]
@@ -123,6 +123,18 @@ class Damper:
     coefficient: float
     stiffness: float = 0.0
     direction: np.ndarray | None = None
+
+
+@dataclass
+class DamperLink:
+    """A damper of a network (``docs/dampers.md``): every cell of the mesh's 1D group
+    ``group`` is a dashpot of ``coefficient`` c (N s/m), with a spring of ``stiffness`` k
+    (N/m) in parallel, between its two nodes (cable nodes, or a cable node and an anchor),
+    acting along the line between them. Installed at rest, like :class:`Damper`."""
+
+    group: str
+    coefficient: float
+    stiffness: float = 0.0
 
 
 @dataclass

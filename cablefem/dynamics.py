@@ -102,7 +102,8 @@ def _make_ts(model, dt: float, rho_inf: float, history: SNESHistory,
     defaults = {"ts_type": "alpha2", "ts_alpha_radius": rho_inf, "ts_max_reject": 0,
                 "ts_max_snes_failures": -1, "snes_type": "newtonls",
                 "snes_linesearch_type": "basic", "snes_rtol": 1e-9,
-                "snes_atol": 1e-11 * scale, "snes_max_it": 25,
+                "snes_atol": max(1e-11 * scale, 10.0 * model.residual_floor()),
+                "snes_max_it": 25,
                 # large networks: the residual's round-off floor (stiffness x position
                 # round-off, summed over the dofs) can exceed atol; a relative update of
                 # 1e-13 is converged

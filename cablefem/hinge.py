@@ -208,11 +208,14 @@ class VirtualHinges:
         X = model.V.tabulate_dof_coordinates()
         cells_g = np.asarray(geo.cells, np.int64)
         n_nodes = len(geo.points)
-        degree = np.bincount(cells_g.ravel(), minlength=n_nodes)
+        cable = np.asarray(geo.cell_damper) < 0 if len(geo.cell_damper) else \
+            np.ones(len(cells_g), bool)  # the dampers' cells are no part of a chain
+        degree = np.bincount(cells_g[cable].ravel(), minlength=n_nodes)
         at_node: list[list[int]] = [[] for _ in range(n_nodes)]
-        for e, (a, b) in enumerate(cells_g):
-            at_node[a].append(e)
-            at_node[b].append(e)
+        for e in np.nonzero(cable)[0]:
+            a, b = cells_g[e]
+            at_node[a].append(int(e))
+            at_node[b].append(int(e))
         anchored = {int(k) for k in geo.anchor_nodes.values()}
         length = np.asarray(geo.cell_c, float) * np.linalg.norm(
             geo.points[cells_g[:, 1]] - geo.points[cells_g[:, 0]], axis=1)

@@ -92,14 +92,16 @@ def kink_points(model) -> list[Kink]:
 
 def network_kinks(model) -> list[Kink]:
     """The kinks of a network (:class:`cablefem.network.NetworkModel`): at every node that
-    is not an anchor, where a point load or a point mass acts or several cables meet (a
-    junction), each cable group with exactly two elements at the node passes through it
-    and kinks there. A group with one element there ends at the node (a pin: no moment);
-    with more than two, its path through the node is ambiguous: not covered. Named
-    ``<vertex group>:<i>/<group>`` when the node is the i-th of a 0D group (a load's, a
-    mass's), else ``node<k>/<group>``; ``spacing`` runs along the group's elements to the
-    nearest other kink of the group, anchor, junction or end. ``network.kinks`` of the case
-    chooses: "all" (loaded nodes and junctions), "loaded" or "none"."""
+    is not an anchor, where a point load, a point mass or a damper acts or several cables
+    meet (a junction), each cable group with exactly two elements at the node passes
+    through it and kinks there. A group with one element there ends at the node (a pin: no
+    moment); with more than two, its path through the node is ambiguous: not covered.
+    Named ``<vertex group>:<i>/<group>`` when the node is the i-th of a 0D group (a load's,
+    a mass's), ``<damper group>:<j>.<end>/<group>`` at an end (0 or 1, the cell's node
+    order) of the j-th cell of a damper's group, else ``node<k>/<group>``; ``spacing`` runs
+    along the group's elements to the nearest other kink of the group, anchor, junction or
+    end. ``network.kinks`` of the case chooses: "all" (loaded nodes and junctions),
+    "loaded" (nodes with point loads, point masses or dampers) or "none"."""
     geo = model.geometry
     net, case = geo.net, model.case
     cells = np.asarray(geo.cells, np.int64)
@@ -115,6 +117,14 @@ def network_kinks(model) -> list[Kink]:
     for item in list(case.point_loads) + list(case.point_masses):
         for i, k in enumerate(net.vertex_groups[item.s]):
             label.setdefault(int(k), f"{item.s}:{i}")
+    damper_cell = (np.asarray(geo.cell_damper) >= 0 if len(geo.cell_damper)
+                   else np.zeros(len(cells), bool))
+    count: dict[int, int] = {}
+    for e in np.nonzero(damper_cell)[0]:  # a damper cell's ends: <damper group>:<j>.<0|1>
+        i = int(geo.cell_damper[e])
+        j = count[i] = count.get(i, -1) + 1
+        for end, k in enumerate(cells[e]):
+            label.setdefault(int(k), f"{case.dampers[i].group}:{j}.{end}")
     junctions = {int(k) for k in net.junctions}
     which = getattr(case.network, "kinks", "all")
     if which == "none":
@@ -122,7 +132,8 @@ def network_kinks(model) -> list[Kink]:
     candidates = sorted((set(label) | (junctions if which == "all" else set())) - anchored)
     out = []
     for k in candidates:
-        for g in sorted({int(net.cell_group[e]) for e in at_node[k]}):
+        # a damper's cells are no cable: a cable kinks where a damper pulls at it
+        for g in sorted({int(net.cell_group[e]) for e in at_node[k] if not damper_cell[e]}):
             es = [e for e in at_node[k] if net.cell_group[e] == g]
             if len(es) != 2:
                 continue

@@ -15,6 +15,7 @@ import logging
 from dataclasses import dataclass, field
 
 import numpy as np
+import ufl
 from dolfinx import fem
 from dolfinx import mesh as dmesh
 from petsc4py import PETSc
@@ -39,8 +40,15 @@ class NetworkGeometry:
     cell_EA: np.ndarray
     cell_m: np.ndarray
     cell_c: np.ndarray  #: stress-free length / mesh length per cell
-    cell_section: list[str]
+    cell_section: list[str | None]  #: the section of each cell (None: a damper's cell)
     anchor_nodes: dict[str, int] = field(default_factory=dict)
+    #: the [[dampers]] entry of each cell (-1: a cable's cell)
+    cell_damper: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
+
+    @property
+    def cable_cells(self) -> np.ndarray:
+        """The cells of the cables (the dampers' cells left out)."""
+        return self.cells[self.cell_damper < 0] if self.cell_damper.size else self.cells
 
     @property
     def stations(self) -> np.ndarray:  # node numbering, for gathers
@@ -62,14 +70,19 @@ class NetworkModel(CableModel):
             raise CaseError(err.problems, case.source) from None
         problems = []
         by_group = {c.group: c for c in spec.cables}
+        links = {d.group: i for i, d in enumerate(case.dampers)}
         for g in net.groups:
-            if g not in by_group:
-                problems.append(("cables", f"the mesh's cable group {g!r} has no [[cables]] "
-                                           "entry"))
+            if g not in by_group and g not in links:
+                problems.append(("cables", f"the mesh's 1D group {g!r} has no [[cables]] "
+                                           "(or [[dampers]]) entry"))
         for g in by_group:
             if g not in net.groups:
                 problems.append(("cables", f"group {g!r} is not a 1D group of the mesh "
                                            f"(its groups: {net.groups})"))
+        for g, i in links.items():
+            if g not in net.groups:
+                problems.append((f"dampers[{i}].group", f"{g!r} is not a 1D group of the "
+                                                        f"mesh (its groups: {net.groups})"))
         for a in case.anchors:
             if a.name not in net.vertex_groups:
                 problems.append(("anchors", f"group {a.name!r} is not a 0D group of the mesh "
@@ -82,7 +95,25 @@ class NetworkModel(CableModel):
         for a in case.anchors:
             if a.name in net.vertex_groups:
                 anchored[net.vertex_groups[a.name]] = True
-        comp = connected_components(len(net.points), net.cells)
+        cell_damper = np.array([links.get(net.groups[g], -1) for g in net.cell_group],
+                               np.int64).reshape(-1)
+        on_cable = np.zeros(len(net.points), dtype=bool)
+        on_cable[net.cells[cell_damper < 0].ravel()] = True
+        for e in np.nonzero(cell_damper >= 0)[0]:
+            a, b = (int(k) for k in net.cells[e])
+            i = int(cell_damper[e])
+            lost = [k for k in (a, b) if not (on_cable[k] or anchored[k])]
+            if lost or not (on_cable[a] or on_cable[b]):
+                k = lost[0] if lost else a
+                problems.append((f"dampers[{i}].group", (
+                    f"a cell of {case.dampers[i].group!r} ends at node {k} at "
+                    f"{net.points[k].tolist()}, " + ("on no cable and no anchor" if lost
+                                                     else "and joins no cable") +
+                    ": a damper joins two cable nodes, or a cable node and an anchor "
+                    "(one cell each)")))
+                break
+        # the dampers carry nothing in statics: a part held only through them is free
+        comp = connected_components(len(net.points), net.cells[cell_damper < 0])
         free = sorted(set(comp.tolist()) - set(comp[anchored].tolist()))
         if free:
             k = int(np.nonzero(comp == free[0])[0][0])
@@ -99,16 +130,22 @@ class NetworkModel(CableModel):
                     f"pretension / EA is a strain of {100 * strain:.3g} %, above the "
                     f"{100 * MAX_PLAUSIBLE_STRAIN:g} % that any cable material stays linear "
                     "to: check the value and the section")))
-        cell_section = [by_group[net.groups[g]].section for g in net.cell_group]
-        EA = np.array([secs[n].EA for n in cell_section])
-        m = np.array([secs[n].mass for n in cell_section])
-        T0 = np.array([by_group[net.groups[g]].pretension for g in net.cell_group])
-        c = 1.0 / (1.0 + T0 / EA)
+        cable = cell_damper < 0
+        cell_section = [by_group[net.groups[g]].section if net.groups[g] in by_group else None
+                        for g in net.cell_group]
+        # a damper's cell: no axial stiffness, no mass, stress-free at its mesh length
+        EA = np.array([secs[n].EA if n is not None else 0.0 for n in cell_section])
+        m = np.array([secs[n].mass if n is not None else 0.0 for n in cell_section])
+        T0 = np.array([by_group[net.groups[g]].pretension if net.groups[g] in by_group
+                       else 0.0 for g in net.cell_group])
+        c = np.ones(len(EA))
+        c[cable] = 1.0 / (1.0 + T0[cable] / EA[cable])
         h = np.linalg.norm(net.points[net.cells[:, 1]] - net.points[net.cells[:, 0]], axis=1)
-        length = float(np.sum(c * h))
-        geo = NetworkGeometry(net.points, net.cells, length, net, EA, m, c, cell_section)
+        length = float(np.sum((c * h)[cable]))
+        geo = NetworkGeometry(net.points, net.cells, length, net, EA, m, c, cell_section,
+                              cell_damper=cell_damper)
         self.force_scale = float(max(np.max(T0, initial=0.0),
-                                     np.max(m) * case.gravity.g * length, 1e-300))
+                                     np.max(m, initial=0.0) * case.gravity.g * length, 1e-300))
         log.info("network %s: %d nodes, %d cells, %d cable groups, %d junctions, %d anchor "
                  "groups, stress-free length %.6g m", spec.mesh.name, len(net.points),
                  len(net.cells), len(net.groups), len(net.junctions), len(case.anchors),
@@ -131,6 +168,26 @@ class NetworkModel(CableModel):
         for f, arr in ((self.EA, geo.cell_EA), (self.m, geo.cell_m), (self.c, geo.cell_c)):
             f.x.array[:] = arr[idx].astype(PETSc.ScalarType)
 
+    def cable_cells(self) -> np.ndarray:
+        n_owned = self.mesh.topology.index_map(1).size_local
+        return np.asarray(self.geometry.cell_damper)[self._cell_index[:n_owned]] < 0
+
+    def _damper_work(self, u_t, v_t, us_t, du_t):
+        """The dampers' virtual work: each cell of a damper's group a dashpot (and spring)
+        between its nodes (:func:`cablefem.dampers.link_work`), on the owned cells."""
+        from cablefem.dampers import link_work
+
+        n_owned = self.mesh.topology.index_map(1).size_local
+        which = np.asarray(self.geometry.cell_damper)[self._cell_index[:n_owned]]
+        ents = np.nonzero(which >= 0)[0].astype(np.int32)
+        tags = dmesh.meshtags(self.mesh, 1, ents, (which[ents] + 1).astype(np.int32))
+        h = fem.Function(self.W, name="damper_length")  # each cell's mesh length
+        pts, cells = self.geometry.points, self.geometry.cells
+        ref = cells[self._cell_index]
+        h.x.array[:] = np.linalg.norm(pts[ref[:, 1]] - pts[ref[:, 0]], axis=1)
+        dx = ufl.Measure("dx", domain=self.mesh, subdomain_data=tags)
+        return link_work(self.mesh, self.case.dampers, dx, h, u_t, v_t, us_t, du_t, self.t0)
+
     def _build_anchors(self) -> list[AnchorBC]:
         geo = self.geometry
         net = geo.net
@@ -142,7 +199,8 @@ class NetworkModel(CableModel):
                 k = int(k)
                 name = f"{spec.name}:{i}"
                 geo.anchor_nodes[name] = k
-                at = np.nonzero((net.cells[:, 0] == k) | (net.cells[:, 1] == k))[0]
+                at = np.nonzero(((net.cells[:, 0] == k) | (net.cells[:, 1] == k))
+                                & (geo.cell_damper < 0))[0]  # its cables' cells
                 direction = None
                 if spec.kind == "clamped":
                     direction = spec.direction

@@ -59,7 +59,8 @@ def _make_snes(model, history: SNESHistory, bilateral: bool = False, prefix: str
     # absolute tolerance: round-off of the residual grows with the tension (EA v3), so
     # scale it with the larger of the cable's weight and its catenary tension
     defaults = {"snes_type": "newtonls", "snes_linesearch_type": "bt", "snes_max_it": 50,
-                "snes_rtol": 1e-10, "snes_atol": 1e-10 * model.force_scale,
+                "snes_rtol": 1e-10,
+                "snes_atol": max(1e-10 * model.force_scale, 10.0 * model.residual_floor()),
                 "snes_stol": 1e-14,
                 **lu_options(model.comm.size), **getattr(model, "static_options", {})}
     f_form = model.f_static_bilateral if bilateral else model.f_static
@@ -343,10 +344,9 @@ class StaticProblem:
         model.u_static.x.array[:] = model.u.x.array
         T = model.tension_field()
         n_owned = model.mesh.topology.index_map(1).size_local
-        tmax = model.comm.allreduce(float(np.max(T.x.array[:n_owned], initial=-np.inf)),
-                                    op=MPI.MAX)
-        tmin = model.comm.allreduce(float(np.min(T.x.array[:n_owned], initial=np.inf)),
-                                    op=MPI.MIN)
+        T_cab = T.x.array[:n_owned][model.cable_cells()]  # a network's dampers: no tension
+        tmax = model.comm.allreduce(float(np.max(T_cab, initial=-np.inf)), op=MPI.MAX)
+        tmin = model.comm.allreduce(float(np.min(T_cab, initial=np.inf)), op=MPI.MIN)
         slack = model.slack_elements()
         if slack:
             log.warning("statics: %d slack element(s) carry no tension", slack)

@@ -166,7 +166,7 @@ def test_network_parallel_equals_serial_and_xdmf(mpi_tmp_path):
 
 @pytest.mark.parametrize("defect,key", [
     ("duplicate", "duplicate node"), ("zero", "zero-length"), ("floating", "held by no anchor"),
-    ("offcable", "on no cable"), ("nogroup", "no [[cables]] entry")])
+    ("offcable", "on no cable"), ("nogroup", "has no [[cables]]")])
 def test_bad_meshes_rejected(mpi_tmp_path, defect, key):
     """Bad meshes end in a CaseError naming network.mesh (or the table) and the defect."""
     pts = [[0, 0, 0], [1, 0, 0], [2, 0, 0], [3, 0, 0]]

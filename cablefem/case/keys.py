@@ -365,7 +365,17 @@ def _network_keys() -> dict:
             "point_loads": TableDoc("array of tables", None, "", "Point loads on 0D groups.", {
                 "group": KeyDoc("string", REQUIRED, "", "0D physical group name in the mesh."),
                 "value": c["point_loads"].keys["value"],
-                "time": c["point_loads"].keys["time"]})}
+                "time": c["point_loads"].keys["time"]}),
+            "dampers": TableDoc("array of tables", None, "", "Dampers between two nodes of "
+                                "the mesh: every cell of a 1D group that is no cable is a "
+                                "dashpot (and spring) along the line between its nodes, "
+                                "installed at rest (dynamics, modal analysis; not statics; "
+                                "docs/dampers.md).", {
+                "group": KeyDoc("string", REQUIRED, "", "1D physical group name in the mesh "
+                                "(not a [[cables]] group); each cell joins two cable nodes, "
+                                "or a cable node and an anchor (grounded)."),
+                "coefficient": c["dampers"].keys["coefficient"],
+                "stiffness": c["dampers"].keys["stiffness"]})}
     for name in ("damping", "dynamics", "fatigue", "modal", "solver"):
         keys[name] = c[name]
     return keys

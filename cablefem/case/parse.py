@@ -43,6 +43,7 @@ from cablefem.description import (
     NAME,
     AiryWave,
     Damper,
+    DamperLink,
     Fluid,
     Profile,
     Seabed,
@@ -532,6 +533,16 @@ def _parse_network_case(data: dict, base_dir: Path, source: str) -> Case:
     point_loads = [PointLoad(r.string("group"), r.vector("value"),
                              _parse_time(r.table("time"), base_dir))
                    for r in top.tables("point_loads")]
+    links = []
+    for r in top.tables("dampers"):
+        group = r.string("group")
+        if group is not None and group in {c.group for c in cables}:
+            r.add("group", f"{group!r} is a [[cables]] group: a damper's group holds its own "
+                           "cells")
+        elif group is not None and group in {d.group for d in links}:
+            r.add("group", f"duplicate damper group {group!r}")
+        links.append(DamperLink(group, r.number("coefficient", ge=0),
+                                r.number("stiffness", ge=0)))
     damping = _parse_damping(top.table("damping"))
     dynamics = _parse_dynamics(top.table("dynamics"))
     modal = ModalSpec(table("modal").integer("modes"))
@@ -550,8 +561,8 @@ def _parse_network_case(data: dict, base_dir: Path, source: str) -> Case:
                         mesh=MeshSpec(1, 1.0), anchors=anchors, loads=loads,
                         point_masses=masses, point_loads=point_loads, damping=damping,
                         dynamics=dynamics, modal=modal, solver=solver, source=source,
-                        fatigue=fatigue, network=NetworkSpec(mesh_path, sections, cables,
-                                                             net_kinks),
+                        dampers=links, fatigue=fatigue,
+                        network=NetworkSpec(mesh_path, sections, cables, net_kinks),
                         units=units or "SI"))
 
 
