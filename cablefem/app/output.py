@@ -100,7 +100,9 @@ class RunOutput:
         self.stations = None
         #: a single string's interior kinks: their layers join the composite field
         self.kinked = bool(self.kinkout.kinks) and not (self.beam or self.network)
-        if self.clamped and self.network:
+        #: a network's kinks: each a segment of its own in the composite field
+        self.net_kinks = bool(self.kinkout.kinks) and self.network and not self.beam
+        if (self.clamped or self.net_kinks) and self.network:
             self._segments_setup(static_forces)
         elif (self.clamped or self.kinked) and not self.beam:
             idx = {a.name: i for i, a in enumerate(model.anchors)}
@@ -121,7 +123,7 @@ class RunOutput:
             self.points0 = model.comm.bcast(pts, root=0)
         if self.stations is not None:
             cells = None
-            if self.network:  # one polyline per clamped anchor
+            if self.network:  # one polyline per clamped anchor and per kink
                 offs = np.cumsum([0] + [s.size for s in self.sigmas[:-1]])
                 cells = np.concatenate([np.column_stack([np.arange(s.size - 1),
                                                          np.arange(1, s.size)]) + off
@@ -180,6 +182,13 @@ class RunOutput:
             ell = ell if np.isfinite(ell) else 1e-3 * self.model.length
             self.sigmas.append(asymptotics.graded_stations(10 * ell, [0.0], [0.5 * ell],
                                                            n_span=5))
+        if self.net_kinks:  # model.u is the static state here
+            # a kink's segment: 10 static layer lengths each side of the node, graded
+            # towards it, signed (< 0 back along the element before)
+            for ell in self.kinkout.static["layer_length"]:
+                ell = ell if np.isfinite(ell) and ell > 0 else 1e-3 * self.model.length
+                half = asymptotics.graded_stations(10 * ell, [0.0], [0.5 * ell], n_span=5)
+                self.sigmas.append(np.concatenate([-half[:0:-1], half]))
         self.points0 = self._segments(0.0, static_forces, None)[0]
         self.stations = np.concatenate(self.sigmas)
 
@@ -202,10 +211,36 @@ class RunOutput:
                                                   )[:, None] * np.nan_to_num(lay["normal"][0])
             kap.append(k)
             mom.append(c.section.EI * k)
+        if self.net_kinks:
+            self._kink_segments(pts, kap, mom, layers is not None)
         out = [np.concatenate(pts)]
         if layers is not None:
             out += [np.concatenate(kap), np.concatenate(mom)]
         return out
+
+    def _kink_segments(self, pts: list, kap: list, mom: list, fields: bool) -> None:
+        """Append each network kink's segment at the current state (collective): the
+        polyline from the node back along the element before and on along the one after,
+        with the clamped layer of half the kink angle on each side about e- x e+
+        (docs/kinks.md)."""
+        km = self.kinkout.moments
+        r = km.positions()
+        c = km.columns(r) if fields else None
+        d = np.diff(r, axis=1)
+        e = d / np.linalg.norm(d, axis=2)[..., None]
+        for i, sig in enumerate(self.sigmas[len(self.clamped):]):
+            side = np.where(sig[:, None] < 0, e[i, 0][None, :], e[i, 1][None, :])
+            pts.append(r[i, 1][None, :] + sig[:, None] * side)
+            if not fields:
+                continue
+            ell, delta = c["layer_length"][i], c["delta"][i]
+            if np.isfinite(ell) and ell > 0 and np.isfinite(delta):
+                k = asymptotics.curvature_profile(np.abs(sig), 0.5 * delta, ell
+                                                  )[:, None] * c["normal"][i][None, :]
+            else:  # slack: no layer
+                k = np.zeros((sig.size, 3))
+            kap.append(k)
+            mom.append(km.EI[i] * k)
 
     def add(self, t: float, forces: np.ndarray) -> None:
         """Record the anchor forces at ``t`` (written in batches)."""
