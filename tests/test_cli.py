@@ -148,6 +148,11 @@ def test_modes_command_and_keys(tmp_path):
     assert len(s["modes"]) == 3 and s["modes"][0]["omega"] > 0
     res = cablefem("keys")
     assert res.returncode == 0 and "sag_ratio" in res.stdout and "fields_every" in res.stdout
+    # a network's keys: its own tables, its dampers by group, no single-cable geometry
+    res = cablefem("keys", "--network")
+    assert res.returncode == 0, res.stderr
+    assert "network.kinks" in res.stdout and "dampers.group" in res.stdout
+    assert "sag_ratio" not in res.stdout
 
 
 def test_fatigue_after_run_and_command(tmp_path):

@@ -152,7 +152,9 @@ def _parser() -> argparse.ArgumentParser:
     cmp_.add_argument("--quiet", "-q", action="store_true",
                       help="no table on stdout; warnings and errors only")
 
-    sub.add_parser("keys", help="print every case-file key with its unit and range")
+    keys_ = sub.add_parser("keys", help="print every case-file key with its unit and range")
+    keys_.add_argument("--network", action="store_true",
+                       help="the keys of a network case ([network], [[cables]], ...)")
     return p
 
 
@@ -248,7 +250,7 @@ def _main(argv: list[str] | None = None) -> int:
     if args.command == "keys":
         from cablefem.case import format_case_reference
 
-        print(format_case_reference())
+        print(format_case_reference(network=args.network))
         return EXIT_OK
     if extra and args.command in ("post", "fatigue", "compare"):
         return _input_error(f"unexpected arguments {extra}")

@@ -141,7 +141,8 @@ CASE_KEYS: dict[str, KeyDoc | TableDoc] = {
     "dampers": TableDoc("array of tables", None, "", "External dampers from the ground to a "
                         "point of the cable, installed on the cable at rest: they act on the "
                         "motion from the static state (dynamics, modal analysis), not in "
-                        "statics (docs/dampers.md). Single cables only.", {
+                        "statics (docs/dampers.md). A network's name a 1D group instead "
+                        "('cablefem keys --network').", {
         "anchor": KeyDoc("string", REQUIRED, "", "Name of the anchor the distance is "
                          "measured from."),
         "distance": KeyDoc("number", REQUIRED, "m", "Stress-free arc length from that "
