@@ -131,10 +131,15 @@ def network_kinks(model) -> list[Kink]:
         return []
     candidates = sorted((set(label) | (junctions if which == "all" else set())) - anchored)
     out = []
+    #: (node, cable group, elements) where a group meets itself with more than two
+    #: elements: no kink moment there (its path through the node is ambiguous)
+    model.kink_gaps = []
     for k in candidates:
         # a damper's cells are no cable: a cable kinks where a damper pulls at it
         for g in sorted({int(net.cell_group[e]) for e in at_node[k] if not damper_cell[e]}):
             es = [e for e in at_node[k] if net.cell_group[e] == g]
+            if len(es) > 2:
+                model.kink_gaps.append((k, net.groups[g], len(es)))
             if len(es) != 2:
                 continue
             before, after = (int(cells[e][cells[e] != k][0]) for e in es)

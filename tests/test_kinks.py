@@ -373,3 +373,28 @@ def test_network_kinks_in_the_composite_field(mpi_tmp_path):
             turn = np.trapz(f["curvature"][a:b], s[a:b], axis=0)
             assert np.linalg.norm(turn) == pytest.approx(
                 kinks[row["kink"]]["static_delta"], rel=1e-2)
+
+
+def test_a_branching_group_warns(mpi_tmp_path):
+    """Both crossing cables in one group: at the junction the group has four elements, no
+    path through the node, so no kink moment there; the run says so (summary warning
+    naming the node and the group) instead of leaving the crossing out in silence."""
+    import meshio
+    from test_network import case_dict, cross_mesh, write_mesh  # noqa: E402
+
+    mesh = cross_mesh(str(mpi_tmp_path / "cross.msh"))
+    if comm.rank == 0:
+        m = meshio.read(mesh)
+        pts, lines = m.points, m.cells_dict["line"]
+    else:
+        pts = lines = None
+    pts, lines = comm.bcast((pts, lines), root=0)
+    one = write_mesh(str(mpi_tmp_path / "one.msh"), pts, lines, ["a"] * len(lines),
+                     {"ends": [0, 20, 21, 40], "hub": [10]})
+    d = case_dict(one, [{"group": "a", "section": "s", "pretension": 1e4}], ["ends"],
+                  point_loads=[{"group": "hub", "value": [0.0, 0.0, -4e3]}])
+    res = run_case(parse_case(d), mpi_tmp_path / "run", comm, figures=False,
+                   progress=False, modes=0)
+    assert "kinks" not in res.summary
+    msgs = [w["message"] for w in res.summary.get("warnings", []) if w["key"] == "kinks"]
+    assert len(msgs) == 1 and "node 10" in msgs[0] and "'a'" in msgs[0]

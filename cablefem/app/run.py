@@ -487,6 +487,12 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
                 warn(summary, f"kinks.{name}", f"{100 * (1 - frac):.3g} % of the rows are "
                      "invalid (the layer at this kink is slack, not quasi-static, or overlaps "
                      "a neighbouring kink or anchor): see valid in kinks.csv")
+    gaps = getattr(model, "kink_gaps", [])
+    if gaps:  # a network node where a cable group branches: no kink moment there
+        k, group, n = gaps[0]
+        warn(summary, "kinks", f"{len(gaps)} node(s) where a cable group meets itself with "
+             f"more than two elements have no kink moment (e.g. node {k}, group {group!r}, "
+             f"{n} elements): give each cable through the node its own group")
     if summary["status"] == "running":
         summary["status"] = "completed"
     if figures and len(times) > 1 and moments:
