@@ -356,8 +356,6 @@ class CableModel:
 
         The element is chosen on the global cell list (the same on every rank): free ends
         first, then junctions, each taking an element no other node has taken."""
-        from scipy.spatial import cKDTree
-
         geo = self.geometry
         cells, pts = np.asarray(geo.cells), np.asarray(geo.points)
         degree = np.bincount(cells.ravel(), minlength=len(pts))
@@ -369,13 +367,9 @@ class CableModel:
                 raise RuntimeError(f"node {k}: every element next to it carries another "
                                    "node's point terms")
             taken[free[0]] = k
-        imap = self.mesh.topology.index_map(1)
-        local = np.arange(imap.size_local, dtype=np.int32)  # owned cells: each counted once
-        mid = dmesh.compute_midpoints(self.mesh, 1, local)
-        ref_mid = 0.5 * (pts[cells[:, 0]] + pts[cells[:, 1]])
-        dist, idx = cKDTree(ref_mid).query(mid) if local.size else (np.zeros(0), local)
-        if dist.size and dist.max() > 1e-8 * max(1.0, float(np.max(np.abs(pts)))):
-            raise RuntimeError("could not map mesh cells to the reference cells")
+        n_owned = self.mesh.topology.index_map(1).size_local  # owned: each counted once
+        local = np.arange(n_owned, dtype=np.int32)
+        idx = self._reference_cells()[:n_owned]
         with quiet_compiler():
             space = fem.VectorFunctionSpace(self.mesh, ("DG", 0), dim=3)
         X, D = fem.Function(space, name="node_position"), fem.Function(space, name="node_dir")
@@ -400,6 +394,23 @@ class CableModel:
         self.dx_nodes = ufl.Measure("dx", domain=self.mesh, subdomain_data=tags)
         t = ufl.dot(ufl.SpatialCoordinate(self.mesh) - X, D)
         self._delta = (9.0 - 36.0 * t + 30.0 * t ** 2) * inv_h
+
+    def _reference_cells(self) -> np.ndarray:
+        """The reference cell (a row of ``geometry.cells``) of every local cell, owned then
+        ghosts, matched by midpoints (the partitioner reorders the cells)."""
+        from scipy.spatial import cKDTree
+
+        geo = self.geometry
+        imap = self.mesh.topology.index_map(1)
+        local = np.arange(imap.size_local + imap.num_ghosts, dtype=np.int32)
+        pts, cells = np.asarray(geo.points), np.asarray(geo.cells)
+        if not local.size:
+            return np.zeros(0, np.int64)
+        mid = dmesh.compute_midpoints(self.mesh, 1, local)
+        dist, idx = cKDTree(0.5 * (pts[cells[:, 0]] + pts[cells[:, 1]])).query(mid)
+        if dist.max() > 1e-8 * max(1.0, float(np.max(np.abs(pts)))):
+            raise RuntimeError("could not map mesh cells to the reference cells")
+        return idx
 
     def point_work(self, k: int, integrand):
         """The virtual work of a point term at reference node ``k`` (a loaded node):

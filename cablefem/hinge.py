@@ -208,8 +208,7 @@ class VirtualHinges:
         X = model.V.tabulate_dof_coordinates()
         cells_g = np.asarray(geo.cells, np.int64)
         n_nodes = len(geo.points)
-        cable = np.asarray(geo.cell_damper) < 0 if len(geo.cell_damper) else \
-            np.ones(len(cells_g), bool)  # the dampers' cells are no part of a chain
+        cable = geo.is_cable  # the dampers' cells are no part of a chain
         degree = np.bincount(cells_g[cable].ravel(), minlength=n_nodes)
         at_node: list[list[int]] = [[] for _ in range(n_nodes)]
         for e in np.nonzero(cable)[0]:

@@ -117,8 +117,7 @@ def network_kinks(model) -> list[Kink]:
     for item in list(case.point_loads) + list(case.point_masses):
         for i, k in enumerate(net.vertex_groups[item.s]):
             label.setdefault(int(k), f"{item.s}:{i}")
-    damper_cell = (np.asarray(geo.cell_damper) >= 0 if len(geo.cell_damper)
-                   else np.zeros(len(cells), bool))
+    damper_cell = ~geo.is_cable
     count: dict[int, int] = {}
     for e in np.nonzero(damper_cell)[0]:  # a damper cell's ends: <damper group>:<j>.<0|1>
         i = int(geo.cell_damper[e])

@@ -46,9 +46,11 @@ class NetworkGeometry:
     cell_damper: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
 
     @property
-    def cable_cells(self) -> np.ndarray:
-        """The cells of the cables (the dampers' cells left out)."""
-        return self.cells[self.cell_damper < 0] if self.cell_damper.size else self.cells
+    def is_cable(self) -> np.ndarray:
+        """Which cells are a cable's (a damper's are not)."""
+        if not len(self.cell_damper):
+            return np.ones(len(self.cells), dtype=bool)
+        return np.asarray(self.cell_damper) < 0
 
     @property
     def stations(self) -> np.ndarray:  # node numbering, for gathers
@@ -154,23 +156,14 @@ class NetworkModel(CableModel):
 
     def _coefficients(self) -> None:
         geo = self.geometry
-        cells = np.arange(self.mesh.topology.index_map(1).size_local
-                          + self.mesh.topology.index_map(1).num_ghosts, dtype=np.int32)
-        mid = dmesh.compute_midpoints(self.mesh, 1, cells)
-        from scipy.spatial import cKDTree
-
-        ref_mid = 0.5 * (geo.points[geo.cells[:, 0]] + geo.points[geo.cells[:, 1]])
-        dist, idx = cKDTree(ref_mid).query(mid)
-        if dist.size and dist.max() > 1e-8 * max(1.0, float(np.max(np.abs(geo.points)))):
-            raise RuntimeError("could not map mesh cells to network cells")
-        self._cell_index = idx
+        idx = self._cell_index = self._reference_cells()
         self.EA, self.m, self.c = (fem.Function(self.W, name=n) for n in ("EA", "m", "c"))
         for f, arr in ((self.EA, geo.cell_EA), (self.m, geo.cell_m), (self.c, geo.cell_c)):
             f.x.array[:] = arr[idx].astype(PETSc.ScalarType)
 
     def cable_cells(self) -> np.ndarray:
         n_owned = self.mesh.topology.index_map(1).size_local
-        return np.asarray(self.geometry.cell_damper)[self._cell_index[:n_owned]] < 0
+        return self.geometry.is_cable[self._cell_index[:n_owned]]
 
     def _damper_work(self, u_t, v_t, us_t, du_t):
         """The dampers' virtual work: each cell of a damper's group a dashpot (and spring)
@@ -200,7 +193,7 @@ class NetworkModel(CableModel):
                 name = f"{spec.name}:{i}"
                 geo.anchor_nodes[name] = k
                 at = np.nonzero(((net.cells[:, 0] == k) | (net.cells[:, 1] == k))
-                                & (geo.cell_damper < 0))[0]  # its cables' cells
+                                & geo.is_cable)[0]  # its cables' cells
                 direction = None
                 if spec.kind == "clamped":
                     direction = spec.direction
