@@ -247,7 +247,7 @@ class NetworkSpec:
     sections: dict[str, Section]
     cables: list[CableSpec]
     #: the interior kinks reported (:func:`cablefem.kinks.network_kinks`): "all" (loaded
-    #: nodes and junctions), "loaded" (nodes with point loads or point masses) or "none"
+    #: nodes and junctions), "loaded" (point loads, masses, dampers) or "none"
     kinks: str = "all"
 
 

@@ -340,8 +340,8 @@ def _network_keys() -> dict:
                                "and point masses (meshes/README.md); its geometry is the "
                                "pretensioned reference."),
                 "kinks": KeyDoc("string", "all", "", "Interior kinks reported (kinks.csv, "
-                                "docs/kinks.md): 'all' (nodes with point loads or masses "
-                                "and junctions), 'loaded' (the former only) or 'none'.")}),
+                                "docs/kinks.md): 'all' (nodes with point loads, masses or "
+                                "dampers, and junctions), 'loaded' (the former only) or 'none'.")}),
             "sections": TableDoc("array of tables", REQUIRED, "", "Named cross-sections.", {
                 "name": KeyDoc("string", REQUIRED, "", "Section name, used by [[cables]]."),
                 **section_keys}),
