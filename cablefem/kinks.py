@@ -13,12 +13,28 @@ the same tension ``T`` on both sides its tangent at the node is the bisector
 about the axis ``b × e+`` (the kink's normal), decaying away from the node over
 ``ℓ = sqrt(EI/(T (1 + T/EA)))``. For a small angle, ``Δ_k = P/T`` for a transverse force
 ``P`` and ``M_k = P ℓ/2``: the tensioned beam's moment under a point load. ``T`` is the mean
-of the two elements' tensions (they differ by a tangential force component).
+of the two sides' tensions (they differ by a tangential force component). The reported
+moment adds, as at the anchors, the string's own curvature at the node, ``EI κ_s`` with
+``κ_s = t × (m a - q)/T`` (``moment_layer``: the layer's alone).
 
 Each row is ``valid`` when the layer fits: the slack and quasi-static checks of the
 anchors, the nearest other kink or anchor at least :data:`MIN_SPACING` layer lengths away
 (the layers would overlap), and neither element in a virtual hinge's region (whose
 stress-free length the hinge changed).
+
+The force on each side at the node is the element's ``T e`` (away from the node) plus the
+load on the half element next to the node, ``(h/2) (q - m (2 a_node + a_other)/3)`` with
+``q`` the distributed load (weight included) and ``a`` the nodes' accelerations: the force
+the element transmits to the node in the finite element equations (consistent mass), so a
+kink sees the same force as a clamp at that node would (the element's midpoint force would
+be off by the half element's load, O(h)).
+
+Supports a cable passes through (networks): a pinned anchor on a node with two elements of
+a cable group is a kink of that group, its reaction the concentrated force. A clamped anchor
+on a node with more than one cable element (``clamped-through``) holds each element's
+tangent: each side is a clamped layer of its own, a kink row with ``clamp`` the direction
+into that element (``direction`` given: +d into the element it points into, -d into the
+other; else each element's mesh direction).
 
 The rod (``cablefem.rod``) resolves the kink: its moment at the node is extrapolated from
 its element moments on each side (quadratic, from the three elements nearest the node;
@@ -33,6 +49,7 @@ from types import SimpleNamespace
 import numpy as np
 
 from cablefem import asymptotics
+from cablefem.anchor import CLAMPED_THROUGH
 
 __all__ = ["KINK_COLUMNS", "MIN_SPACING", "Kink", "KinkMoments", "kink_points", "network_kinks"]
 
@@ -53,7 +70,8 @@ class Kink:
     after)), the stress-free lengths of the two elements ``h``, the stress-free distance
     to the nearest other kink or anchor along the cable ``spacing``, the section's name
     (a network's; None for a single cable) and the two elements (``cells``, network cell
-    indices; a single cable's element numbers)."""
+    indices; a single cable's element numbers). A side of a clamp along the cable has one
+    element and its ``clamp`` direction."""
 
     name: str
     node: int
@@ -63,6 +81,11 @@ class Kink:
     spacing: float = np.inf
     section: str | None = None
     cells: tuple = ()
+    #: a side of a clamp along the cable: the unit clamp direction into its element (then
+    #: ``nodes`` = (other, node, other), ``cells`` = (e, e)); None for a kink
+    clamp: np.ndarray | None = None
+    #: the anchor of a clamp's side or of a pinned support's kink (its ``<group>:<i>``)
+    anchor: str | None = None
 
 
 def kink_points(model) -> list[Kink]:
@@ -90,18 +113,74 @@ def kink_points(model) -> list[Kink]:
     return out
 
 
+def _side_sign_direction(e0: np.ndarray, e1: np.ndarray) -> np.ndarray:
+    """The tangent a through-clamp's sides are signed by when it has no ``direction``: the
+    mesh's tangent through the node, ``e1 - e0`` (the unit mesh directions of its two
+    elements away from the node), oriented so that the first of x, y, z along which it
+    has a component (above 1e-6) is positive (mesh independent)."""
+    d = e1 - e0
+    n = np.linalg.norm(d)
+    d = d / n if n > 1e-12 else e1
+    for comp in d:
+        if abs(comp) > 1e-6:
+            return d if comp > 0 else -d
+    return d
+
+
+def _clamp_sides(model, at_node, h) -> list[Kink]:
+    """The sides of every clamp a network's cables pass through (an anchor of kind
+    ``clamped-through``): one :class:`Kink` per cable element at its node, with the clamp
+    direction into that element. Named ``<anchor>+/<group>`` and ``<anchor>-/<group>`` at
+    a node of two elements (+: the side the clamp's ``direction`` points into, or by
+    default the mesh's tangent through the node, oriented towards +x, else +y, +z), else
+    ``<anchor>@<other node>/<group>``."""
+    geo = model.geometry
+    net = geo.net
+    cells = np.asarray(geo.cells, np.int64)
+    out = []
+    for anc in model.anchors:
+        if anc.kind != CLAMPED_THROUGH:
+            continue
+        k = int(anc.node)
+        es = [e for e in at_node[k] if geo.is_cable[e]]
+        other = [int(cells[e][cells[e] != k][0]) for e in es]
+        mesh_dir = [(geo.points[o] - geo.points[k]) / np.linalg.norm(geo.points[o]
+                                                                     - geo.points[k])
+                    for o in other]
+        if len(es) == 2:
+            d = (anc.direction if anc.direction is not None
+                 else _side_sign_direction(mesh_dir[0], mesh_dir[1]))
+            plus = int(np.argmax([np.dot(d, m) for m in mesh_dir]))
+            signs = ["+" if j == plus else "-" for j in range(2)]
+            clamps = ([d if j == plus else -d for j in range(2)]
+                      if anc.direction is not None else mesh_dir)
+            tags = signs
+        else:
+            clamps = mesh_dir
+            tags = [f"@{o}" for o in other]
+        for e, o, c, tag in zip(es, other, clamps, tags):
+            out.append(Kink(f"{anc.name}{tag}/{net.groups[int(net.cell_group[e])]}", k,
+                            np.nan, (o, k, o), (float(h[e]), float(h[e])),
+                            section=geo.cell_section[e], cells=(e, e),
+                            clamp=np.asarray(c, float) / np.linalg.norm(c), anchor=anc.name))
+    return out
+
+
 def network_kinks(model) -> list[Kink]:
     """The kinks of a network (:class:`cablefem.network.NetworkModel`): at every node that
-    is not an anchor, where a point load, a point mass or a damper acts or several cables
-    meet (a junction), each cable group with exactly two elements at the node passes
-    through it and kinks there. A group with one element there ends at the node (a pin: no
-    moment); with more than two, its path through the node is ambiguous: not covered.
-    Named ``<vertex group>:<i>/<group>`` when the node is the i-th of a 0D group (a load's,
-    a mass's), ``<damper group>:<j>.<end>/<group>`` at an end (0 or 1, the cell's node
-    order) of the j-th cell of a damper's group, else ``node<k>/<group>``; ``spacing`` runs
-    along the group's elements to the nearest other kink of the group, anchor, junction or
-    end. ``network.kinks`` of the case chooses: "all" (loaded nodes and junctions),
-    "loaded" (nodes with point loads, point masses or dampers) or "none"."""
+    is not a clamped anchor, where a point load, a point mass, a damper or a pinned anchor
+    acts or several cables meet (a junction), each cable group with exactly two elements
+    at the node passes through it and kinks there. A group with one element there ends at
+    the node (a pin: no moment); with more than two, its path through the node is
+    ambiguous: not covered. Named ``<vertex group>:<i>/<group>`` when the node is the i-th
+    of a 0D group (a pinned anchor's, a load's, a mass's), ``<damper group>:<j>.<end>/
+    <group>`` at an end (0 or 1, the cell's node order) of the j-th cell of a damper's
+    group, else ``node<k>/<group>``; ``spacing`` runs along the group's elements to the
+    nearest other kink of the group, anchor, junction or end. ``network.kinks`` of the
+    case chooses: "all" (loaded nodes, supports and junctions), "loaded" (nodes with point
+    loads, point masses, dampers or pinned anchors) or "none". The sides of the clamps the
+    cables pass through (:func:`_clamp_sides`) are there whatever ``network.kinks`` says:
+    they are the anchors' moments."""
     geo = model.geometry
     net, case = geo.net, model.case
     cells = np.asarray(geo.cells, np.int64)
@@ -113,7 +192,8 @@ def network_kinks(model) -> list[Kink]:
         at_node[a].append(e)
         at_node[b].append(e)
     anchored = {int(k) for k in geo.anchor_nodes.values()}
-    label = {}
+    clamped = {int(a.node) for a in model.anchors if a.kind != "pinned"}
+    label = {int(a.node): a.name for a in model.anchors if a.kind == "pinned"}
     for item in list(case.point_loads) + list(case.point_masses):
         for i, k in enumerate(net.vertex_groups[item.s]):
             label.setdefault(int(k), f"{item.s}:{i}")
@@ -126,13 +206,12 @@ def network_kinks(model) -> list[Kink]:
             label.setdefault(int(k), f"{case.dampers[i].group}:{j}.{end}")
     junctions = {int(k) for k in net.junctions}
     which = getattr(case.network, "kinks", "all")
-    if which == "none":
-        return []
-    candidates = sorted((set(label) | (junctions if which == "all" else set())) - anchored)
     out = []
     #: (node, cable group, elements) where a group meets itself with more than two
     #: elements: no kink moment there (its path through the node is ambiguous)
     model.kink_gaps = []
+    candidates = [] if which == "none" else sorted(
+        (set(label) | (junctions if which == "all" else set())) - clamped)
     for k in candidates:
         # a damper's cells are no cable: a cable kinks where a damper pulls at it
         for g in sorted({int(net.cell_group[e]) for e in at_node[k] if not damper_cell[e]}):
@@ -145,12 +224,16 @@ def network_kinks(model) -> list[Kink]:
             name = f"{label.get(k, f'node{k}')}/{net.groups[g]}"
             out.append(Kink(name, k, np.nan, (before, k, after),
                             (float(h[es[0]]), float(h[es[1]])),
-                            section=geo.cell_section[es[0]], cells=tuple(es)))
+                            section=geo.cell_section[es[0]], cells=tuple(es),
+                            anchor=label[k] if k in anchored else None))
+    out += _clamp_sides(model, at_node, h)
     stops = anchored | junctions | {k.node for k in out}
     for kink in out:  # walk each way along the group until a stop or a branch
         g = net.cell_group[kink.cells[0]]
         dist = []
-        for e, node in zip(kink.cells, (kink.nodes[0], kink.nodes[2])):
+        ways = (((kink.cells[0], kink.nodes[2]),) if kink.clamp is not None
+                else zip(kink.cells, (kink.nodes[0], kink.nodes[2])))
+        for e, node in ways:
             d = h[e]
             while node not in stops:
                 nxt = [c for c in at_node[node] if c != e and net.cell_group[c] == g]
@@ -166,10 +249,13 @@ def network_kinks(model) -> list[Kink]:
 
 class KinkMoments:
     """The kinks' moment columns from the model's current state (collective):
-    :meth:`measure` reads the positions of each kink's node and its two neighbours (a
-    small all-reduce) and returns the columns of :data:`KINK_COLUMNS` but time."""
+    :meth:`measure` reads the positions and accelerations of each kink's node and its two
+    neighbours (a small all-reduce) and returns the columns of :data:`KINK_COLUMNS` but
+    time."""
 
     def __init__(self, model, omega: float | None = None):
+        from cablefem.moments import AnchorMoments
+
         self.model = model
         self.kinks = kink_points(model)
         self.omega = omega
@@ -184,6 +270,12 @@ class KinkMoments:
         self.nodes = np.array([k.nodes for k in self.kinks], dtype=np.int64).reshape(-1, 3)
         self.h = np.array([k.h for k in self.kinks], float).reshape(-1, 2)
         self.spacing = np.array([k.spacing for k in self.kinks], float)
+        #: the sides of clamps along the cable, and their clamp directions (NaN elsewhere)
+        self.is_clamp = np.array([k.clamp is not None for k in self.kinks], bool)
+        self.clamp = np.array([k.clamp if k.clamp is not None else np.full(3, np.nan)
+                               for k in self.kinks], float).reshape(-1, 3)
+        #: the distributed load at a time (weight, loads, buoyancy), as at the anchors
+        self._loads = AnchorMoments.from_model(model, omega) if n else None
         self._local = None
 
     @property
@@ -203,62 +295,110 @@ class KinkMoments:
             out |= np.isin(cells, region).any(axis=1)
         return out
 
-    def positions(self) -> np.ndarray:
-        """(n_kinks, 3, 3) current positions of each kink's three nodes, on every rank."""
+    def _nodal(self, f) -> np.ndarray:
+        """(n_kinks, 3, 3) the translational part of the function ``f`` at each kink's
+        three nodes, on every rank (an all-reduce)."""
         m = self.model
         bs = m.bs
         n_owned = m.V.dofmap.index_map.size_local
-        u = m.u.x.array[: bs * n_owned].reshape(-1, bs)[:, :3]
+        vals = f.x.array[: bs * n_owned].reshape(-1, bs)[:, :3]
         if self._local is None:  # each kink node's owned dof block here (-1: elsewhere)
             where = np.full(len(m.geometry.points), -1, np.int64)
             where[m._owned_nodes] = np.arange(m._owned_nodes.size)
             self._local = where[self.nodes]
         out = np.zeros(self.nodes.shape + (3,))
         mine = self._local >= 0
-        out[mine] = u[self._local[mine]]
-        out = m.comm.allreduce(out)
-        return out + m.geometry.points[self.nodes]
+        out[mine] = vals[self._local[mine]]
+        return m.comm.allreduce(out)
 
-    def measure(self) -> dict[str, np.ndarray]:
-        """The columns (one row per kink) at the model's current state, and ``normal``
-        (n_kinks, 3), the unit axis ``e- × e+`` of the turn (zero without one)."""
-        return self.columns(self.positions())
+    def positions(self) -> np.ndarray:
+        """(n_kinks, 3, 3) current positions of each kink's three nodes, on every rank."""
+        return self._nodal(self.model.u) + self.model.geometry.points[self.nodes]
 
-    def columns(self, r: np.ndarray) -> dict[str, np.ndarray]:
-        """The columns for positions ``r`` (n_kinks, 3, 3) of each kink's three nodes."""
+    def measure(self, t: float = 0.0) -> dict[str, np.ndarray]:
+        """The columns (one row per kink) at the model's current state, time ``t`` (for
+        the loads), and ``normal`` (n_kinks, 3), the unit axis ``e- × e+`` of the turn
+        (zero without one; a clamp's side: its layer's)."""
+        if not self.kinks:
+            return self.columns(np.zeros((0, 3, 3)))
+        load = np.array([self._loads.load_at(t, m) for m in self.m]).reshape(-1, 3)
+        return self.columns(self.positions(), self._nodal(self.model.a), load)
+
+    def side_forces(self, r: np.ndarray, a: np.ndarray | None = None,
+                    load: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """The force each of a kink's two elements transmits at its node, pointing away
+        from the node into the element (n_kinks, 2, 3): ``T e`` plus the load on the half
+        element next to the node, ``(h/2) (q - m (2 a_node + a_other)/3)`` (the element's
+        share of the nodal equation, consistent mass); zero on a slack element. Also the
+        elements' unit vectors ``e`` (n_kinks, 2, 3), along the cable (before -> node ->
+        after)."""
         d = np.diff(r, axis=1)  # (n, 2, 3): the two elements
         length = np.linalg.norm(d, axis=2)
         e = d / length[..., None]
         strain = length / self.h - 1.0
         T2 = self.EA[:, None] * (np.maximum(strain, 0.0) if self.model.tension_only else strain)
-        T = T2.mean(axis=1)
-        bis = e[:, 0] + e[:, 1]
+        away = np.stack([-e[:, 0], e[:, 1]], axis=1)
+        F = T2[..., None] * away
+        if a is not None or load is not None:
+            q = np.zeros((len(r), 3)) if load is None else np.asarray(load, float)
+            acc = np.zeros_like(r) if a is None else np.asarray(a, float)
+            near = (2.0 * acc[:, 1][:, None] + acc[:, [0, 2]]) / 3.0  # (n, 2, 3)
+            half = 0.5 * self.h[..., None] * (q[:, None, :] - self.m[:, None, None] * near)
+            F = np.where((T2 > 0.0)[..., None], F + half, 0.0)
+        return F, e
+
+    def columns(self, r: np.ndarray, a: np.ndarray | None = None,
+                load: np.ndarray | None = None) -> dict[str, np.ndarray]:
+        """The columns for positions ``r`` (n_kinks, 3, 3) of each kink's three nodes,
+        their accelerations ``a`` (same shape) and the distributed load ``load`` (n_kinks,
+        3) (both None: the elements' own forces, no half-element load)."""
+        n = len(self.kinks)
+        F, e = self.side_forces(r, a, load)
+        size = np.linalg.norm(F, axis=2)  # (n, 2) the tension at the node on each side
+        away = np.stack([-e[:, 0], e[:, 1]], axis=1)
+        with np.errstate(invalid="ignore", divide="ignore"):  # slack: the element's
+            f = np.where(size[..., None] > 0, F / size[..., None], away)
+        # a kink: from e- = -f0 into the node to e+ = f1 out of it, with the mean tension,
+        # the clamp along the bisector; a clamp's side: its force against its direction
+        T = np.where(self.is_clamp, size[:, 1], size.mean(axis=1))
+        bis = np.where(self.is_clamp[:, None], self.clamp, f[:, 1] - f[:, 0])
         network = getattr(self.model, "is_network", False)
-        lays = []
+        lay = SimpleNamespace(**{k: np.full(n, np.nan) for k in (
+            "delta", "moment", "layer_length", "tension")}, valid=np.zeros(n, bool),
+            moment_vector=np.full((n, 3), np.nan), normal=np.zeros((n, 3)),
+            tangent=np.full((n, 3), np.nan))
         # one call per section (a network's kinks may have several)
         for key in sorted(set(zip(self.EI, self.EA, self.m))):
             rows = (self.EI == key[0]) & (self.EA == key[1]) & (self.m == key[2])
             qs = (key[2], self.omega) if self.omega else None
             with np.errstate(invalid="ignore", divide="ignore"):
-                lays.append((rows, asymptotics.layer(
-                    T[rows, None] * e[rows, 1], bis[rows], key[0], key[1], quasi_static=qs,
-                    length=None if network else self.model.length)))
-        n = len(self.kinks)
-        lay = SimpleNamespace(**{f: np.full(n, np.nan) for f in (
-            "delta", "moment", "layer_length")}, valid=np.zeros(n, bool),
-            moment_vector=np.full((n, 3), np.nan))
-        for rows, part in lays:
-            for f in ("delta", "moment", "layer_length", "valid", "moment_vector"):
-                getattr(lay, f)[rows] = getattr(part, f)
+                part = asymptotics.layer(
+                    T[rows, None] * f[rows, 1], bis[rows], key[0], key[1], quasi_static=qs,
+                    length=None if network else self.model.length)
+            for k in ("delta", "moment", "layer_length", "valid", "moment_vector",
+                      "tension", "tangent"):
+                getattr(lay, k)[rows] = getattr(part, k)
+            lay.normal[rows] = np.nan_to_num(part.normal)
         with np.errstate(invalid="ignore"):
             valid = (lay.valid & (self.spacing >= MIN_SPACING * lay.layer_length)
                      & ~self._in_hinge_region())
-        Mv = np.nan_to_num(lay.moment_vector)
-        turn = np.cross(e[:, 0], e[:, 1])  # the axis the tangent turns about, e- × e+
-        size = np.linalg.norm(turn, axis=1)
-        normal = np.where(size[:, None] > 1e-14, turn / np.maximum(size, 1e-300)[:, None],
-                          0.0)
-        return {"tension": T, "delta": 2.0 * lay.delta, "moment": lay.moment,
+        Mv = lay.moment_vector
+        if a is not None or load is not None:  # the string's own curvature at the node
+            # (as at the anchors: the composite moment there is the layer's plus EI kappa_s)
+            q = np.zeros((n, 3)) if load is None else np.asarray(load, float)
+            acc = np.zeros((n, 3)) if a is None else np.asarray(a, float)[:, 1]
+            with np.errstate(invalid="ignore"):
+                Mv = Mv + self.EI[:, None] * asymptotics.string_curvature(
+                    lay.tangent, lay.tension, self.m, acc, q)
+        moment = np.where(np.isfinite(lay.moment), np.linalg.norm(Mv, axis=1), np.nan)
+        Mv = np.nan_to_num(Mv)
+        turn = np.cross(-f[:, 0], f[:, 1])  # the axis the tangent turns about, e- × e+
+        tsize = np.linalg.norm(turn, axis=1)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            normal = np.where(tsize[:, None] > 1e-14, turn / tsize[:, None], 0.0)
+        normal = np.where(self.is_clamp[:, None], lay.normal, np.nan_to_num(normal))
+        return {"tension": T, "delta": np.where(self.is_clamp, 1.0, 2.0) * lay.delta,
+                "moment": moment, "moment_layer": lay.moment,
                 "Mx": Mv[:, 0], "My": Mv[:, 1], "Mz": Mv[:, 2],
                 "layer_length": lay.layer_length, "valid": valid.astype(int),
                 "normal": normal}

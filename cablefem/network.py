@@ -20,6 +20,7 @@ from dolfinx import fem
 from dolfinx import mesh as dmesh
 from petsc4py import PETSc
 
+from cablefem.anchor import CLAMPED_THROUGH
 from cablefem.cable import MAX_PLAUSIBLE_STRAIN, AnchorBC, CableModel
 from cablefem.errors import CaseError
 from cablefem.geometry import MeshError, NetworkMesh, connected_components, read_network_mesh
@@ -194,14 +195,29 @@ class NetworkModel(CableModel):
                 geo.anchor_nodes[name] = k
                 at = np.nonzero(((net.cells[:, 0] == k) | (net.cells[:, 1] == k))
                                 & geo.is_cable)[0]  # its cables' cells
-                direction = None
-                if spec.kind == "clamped":
+                direction, kind = None, spec.kind
+                if spec.kind == "clamped" and at.size > 1:
+                    # a clamp the cable runs through, or several cables clamped at one
+                    # node: each element's side is a layer of its own (cablefem.kinks)
+                    kind = CLAMPED_THROUGH
+                    if spec.direction is not None:
+                        if at.size != 2:
+                            raise CaseError([(f"anchors[{spec.name}].direction",
+                                              f"anchor {name} at node {k} is on {at.size} "
+                                              "cable elements: a direction is the tangent "
+                                              "of one cable running through a clamp (two "
+                                              "elements); leave it out and each element is "
+                                              "clamped along its mesh direction")],
+                                            self.case.source)
+                        direction = (np.asarray(spec.direction, float)
+                                     / np.linalg.norm(spec.direction))
+                elif spec.kind == "clamped":
+                    if at.size == 0:  # only dampers end there
+                        raise CaseError([(f"anchors[{spec.name}].type", f"anchor {name} at "
+                                          f"node {k} holds no cable element, nothing to "
+                                          "clamp: make it 'pinned'")], self.case.source)
                     direction = spec.direction
                     if direction is None:
-                        if at.size != 1:
-                            raise CaseError([(f"anchors[{spec.name}]", f"anchor {name} at node "
-                                              f"{k} is on {at.size} cells: give its direction")],
-                                            self.case.source)
                         other = net.cells[at[0]][net.cells[at[0]] != k][0]
                         d = net.points[other] - net.points[k]
                         direction = d / np.linalg.norm(d)
@@ -211,7 +227,7 @@ class NetworkModel(CableModel):
                 owned = bool(np.any(dofs < imap.size_local))
                 section = secs[geo.cell_section[at[0]]] if at.size else None
                 out.append(AnchorBC(name, k, net.points[k].copy(), net.points[k].copy(),
-                                    spec.kind, direction, spec.motion, dofs, owned, section))
+                                    kind, direction, spec.motion, dofs, owned, section))
         owners = self.comm.allreduce(np.array([int(a.owned) for a in out]))
         if np.any(owners != 1):
             raise RuntimeError("anchor ownership is not unique across ranks")

@@ -107,7 +107,7 @@ for k in s["kinks"].values():
     T, delta = k["static_tension"], k["static_delta"]
     M = 2 * np.sqrt(sec.EI * T) * np.sin(delta / 4) * np.sqrt(
         1 + T / sec.EA * np.cos(delta / 4) ** 2)
-    err_k = max(err_k, abs(M / k["static_moment"] - 1))
+    err_k = max(err_k, abs(M / k["static_moment_layer"] - 1))
 ok_k = err_k < 1e-10 and len(s["kinks"]) == 18  # 9 junctions, two cables through each
 peak = max(a["steady_state_moment"]["peak"] for a in s["anchors"].values())
 peak_k = max(k["steady_state_moment"]["peak"] for k in s["kinks"].values())

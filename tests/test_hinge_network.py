@@ -154,10 +154,10 @@ def test_network_hinges_resume_from_a_checkpoint_exactly(mpi_tmp_path):
 
 
 def test_network_hinge_refusals_name_the_key(mpi_tmp_path):
-    """A clamped anchor on a junction (no single chain) and one whose chain to a junction
-    is too short for the layer (0.01 m to the junction, sigma_h ~ ell = sqrt(EI/T) ~ 0.01
-    m > 0.25 x 0.01 m) are refused as input errors naming solver.outer_correction; without
-    the hinge both cases are accepted."""
+    """A clamped anchor whose chain to a junction is too short for the layer (0.01 m to
+    the junction, sigma_h ~ ell = sqrt(EI/T) ~ 0.01 m > 0.25 x 0.01 m) is refused as an
+    input error naming solver.outer_correction; without the hinge it is accepted. A clamped
+    junction (below) has no hinge: its elements' sides are kinks."""
     # a T: arms from the junction J (node 1) to anchors at nodes 0 (0.01 m away), 2 and 3
     pts = [[-0.01, 0, 0], [0, 0, 0], [10, 0, 0], [0, 0, -10]]
 
@@ -174,15 +174,25 @@ def test_network_hinge_refusals_name_the_key(mpi_tmp_path):
              "solver": {"outer_correction": corr}}
         return parse_case(d)
 
-    # the junction itself clamped (with a direction, as a junction anchor needs)
-    on_junction = ({"p": [1], "q": [2], "r": [3]}, {"p": [1, 0, 0]})
     too_short = ({"p": [0], "q": [2], "r": [3]}, None)
-    for groups, dirs in (on_junction, too_short):
+    for groups, dirs in (too_short,):
         m = NetworkModel(comm, case(groups, "none", dirs))
         solve_static(m)
         with pytest.raises(CaseError) as err:
             solve_static(NetworkModel(comm, case(groups, "hinge", dirs)))
         assert "solver.outer_correction" in str(err.value), str(err.value)
+    # the junction itself clamped: a direction (one cable's tangent through a clamp) is
+    # refused for three elements, naming the key; without one each element is clamped
+    # along its mesh direction, a side of its own (cablefem.kinks), with no hinge
+    on_junction = {"p": [1], "q": [2], "r": [3]}
+    with pytest.raises(CaseError) as err:
+        NetworkModel(comm, case(on_junction, "hinge", {"p": [1, 0, 0]}))
+    assert "anchors[p].direction" in str(err.value), str(err.value)
+    m = NetworkModel(comm, case(on_junction, "none"))
+    solve_static(m)
+    assert [a.kind for a in m.anchors] == ["clamped-through", "clamped", "clamped"]
+    # (with the hinge, the two end clamps would have one, the junction none)
+    assert len(NetworkModel(comm, case(on_junction, "hinge")).hinges.items) == 2
 
 
 @pytest.mark.parametrize("direction", ["chord", "segment"])

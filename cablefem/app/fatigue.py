@@ -59,6 +59,24 @@ def _stress_section(spec, section) -> StressSection:
     return StressSection.solid_circle(section.diameter)
 
 
+def _network_sections(rundir: Path, given: dict | None) -> dict:
+    """A network's anchor -> section name: ``given`` (a run that is still writing its
+    summary passes them), or from the run's summary.json, of the anchors whose kind is
+    "clamped" there (a clamp the cable runs through has its moments in kinks.csv)."""
+    if given is not None:
+        return given
+    import json
+
+    path = rundir / "summary.json"
+    try:
+        return {n: e.get("section") for n, e in
+                json.loads(path.read_text()).get("anchors", {}).items()
+                if e.get("kind", "clamped") == "clamped"}
+    except (OSError, ValueError) as err:
+        raise ValueError(f"{path}: cannot read the anchors' sections of the network "
+                         f"run ({err})") from None
+
+
 def _anchor_sections(case: Case, rundir: Path, names: list[str],
                      given: dict[str, str] | None = None) -> dict:
     """The Section of every anchor: the case's for a single cable; for a network the one
@@ -66,16 +84,7 @@ def _anchor_sections(case: Case, rundir: Path, names: list[str],
     its summary passes them) or else by the run's summary.json."""
     if case.network is None:
         return {n: case.section for n in names}
-    if given is None:
-        import json
-
-        path = rundir / "summary.json"
-        try:
-            given = {n: e.get("section") for n, e in
-                     json.loads(path.read_text()).get("anchors", {}).items()}
-        except (OSError, ValueError) as err:
-            raise ValueError(f"{path}: cannot read the anchors' sections of the network "
-                             f"run ({err})") from None
+    given = _network_sections(rundir, given)
     out = {}
     for n in names:
         sec = given.get(n)
@@ -144,8 +153,9 @@ def run_fatigue(case: Case, rundir: Path, outdir: Path | None = None, *,
                 if missing:
                     raise ValueError(f"{rundir}/anchors.csv has no rows for the clamped "
                                      f"anchors {missing}")
-            else:  # network anchors are "group:k"
-                clamped = [n for n in data if n.split(":")[0] in groups]
+            else:  # network anchors are "group:k"; not those a cable runs through
+                given = _network_sections(Path(rundir), sections) if data else {}
+                clamped = [n for n in data if n.split(":")[0] in groups and n in given]
             sections = _anchor_sections(case, Path(rundir), clamped, sections)
             win, rule = fatigue_window(case, window or spec.window)
             t_last = max((float(data[n]["time"][-1]) for n in clamped), default=0.0)

@@ -43,8 +43,8 @@ class KinkOutput:
             self._load(path)
         self.csv = AnchorCSV(path, KINK_COLUMNS, model.comm, append=resume_after is not None)
 
-    def _columns(self) -> dict[str, np.ndarray]:
-        cols = self.moments.measure()
+    def _columns(self, t: float = 0.0) -> dict[str, np.ndarray]:
+        cols = self.moments.measure(t)
         if self.beam:  # the rod resolves the kink: its own moment at the node
             cols = {k: np.full(len(self.kinks), np.nan) for k in cols}
             cols["moment"] = rod_kink_moments(self.model, self.kinks)
@@ -71,7 +71,7 @@ class KinkOutput:
     def add(self, t: float) -> None:
         if not self.kinks:
             return
-        cols = self._columns()
+        cols = self._columns(t)
         self.times.append(t)
         for i, k in enumerate(self.kinks):
             for c in KINK_COLUMNS[3:]:
@@ -108,8 +108,14 @@ class KinkOutput:
             # a single cable's kink by its station, a network's by its node and section
             entry = ({"s": k.s} if k.section is None else {"node": k.node,
                                                            "section": k.section})
+            if k.anchor is not None:  # at a support: a pinned anchor's, a clamp's side
+                entry["anchor"] = k.anchor
+            if k.clamp is not None:
+                entry["clamp_direction"] = k.clamp.tolist()
             entry["static_valid"] = bool(self.static["valid"][i])
-            for key, col in (("static_moment", "moment"), ("static_tension", "tension"),
+            for key, col in (("static_moment", "moment"),
+                             ("static_moment_layer", "moment_layer"),
+                             ("static_tension", "tension"),
                              ("static_delta", "delta"), ("layer_length", "layer_length")):
                 if np.isfinite(self.static[col][i]):  # the rod has a moment only
                     entry[key] = float(self.static[col][i])

@@ -184,11 +184,13 @@ class RunOutput:
                                                            n_span=5))
         if self.net_kinks:  # model.u is the static state here
             # a kink's segment: 10 static layer lengths each side of the node, graded
-            # towards it, signed (< 0 back along the element before)
-            for ell in self.kinkout.static["layer_length"]:
+            # towards it, signed (< 0 back along the element before); a clamp's side:
+            # along its element only
+            sides = self.kinkout.moments.is_clamp
+            for ell, side in zip(self.kinkout.static["layer_length"], sides):
                 ell = ell if np.isfinite(ell) and ell > 0 else 1e-3 * self.model.length
                 half = asymptotics.graded_stations(10 * ell, [0.0], [0.5 * ell], n_span=5)
-                self.sigmas.append(np.concatenate([-half[:0:-1], half]))
+                self.sigmas.append(half if side else np.concatenate([-half[:0:-1], half]))
         self.points0 = self._segments(0.0, static_forces, None)[0]
         self.stations = np.concatenate(self.sigmas)
 
@@ -212,20 +214,22 @@ class RunOutput:
             kap.append(k)
             mom.append(c.section.EI * k)
         if self.net_kinks:
-            self._kink_segments(pts, kap, mom, layers is not None)
+            self._kink_segments(t, pts, kap, mom, layers is not None)
         out = [np.concatenate(pts)]
         if layers is not None:
             out += [np.concatenate(kap), np.concatenate(mom)]
         return out
 
-    def _kink_segments(self, pts: list, kap: list, mom: list, fields: bool) -> None:
-        """Append each network kink's segment at the current state (collective): the
-        polyline from the node back along the element before and on along the one after,
-        with the clamped layer of half the kink angle on each side about e- x e+
+    def _kink_segments(self, t: float, pts: list, kap: list, mom: list,
+                       fields: bool) -> None:
+        """Append each network kink's segment at time ``t``, the current state
+        (collective): the polyline from the node back along the element before and on
+        along the one after, with the clamped layer of half the kink angle on each side
+        about e- x e+; a clamp's side: along its element, the layer of its angle
         (docs/kinks.md)."""
         km = self.kinkout.moments
         r = km.positions()
-        c = km.columns(r) if fields else None
+        c = km.measure(t) if fields else None
         d = np.diff(r, axis=1)
         e = d / np.linalg.norm(d, axis=2)[..., None]
         for i, sig in enumerate(self.sigmas[len(self.clamped):]):
@@ -234,8 +238,9 @@ class RunOutput:
             if not fields:
                 continue
             ell, delta = c["layer_length"][i], c["delta"][i]
+            angle = delta if km.is_clamp[i] else 0.5 * delta
             if np.isfinite(ell) and ell > 0 and np.isfinite(delta):
-                k = asymptotics.curvature_profile(np.abs(sig), 0.5 * delta, ell
+                k = asymptotics.curvature_profile(np.abs(sig), angle, ell
                                                   )[:, None] * c["normal"][i][None, :]
             else:  # slack: no layer
                 k = np.zeros((sig.size, 3))
@@ -313,7 +318,7 @@ class RunOutput:
         s_a = [m.geometry.stations[c.node] for c in self.clamped]
         r = self._nodal_positions()
         a = m.gather_nodal(m.a)
-        kinks = self._kink_layers()
+        kinks = self._kink_layers(t)
         pos = kap = None
         if m.comm.rank == 0:
             get = lambda k: np.array([layers[c.name][k][0] for c in self.clamped])  # noqa
@@ -326,13 +331,13 @@ class RunOutput:
         self.moments.write(t, pos, kap, None if kap is None else self.EI * kap,
                            self.stations)
 
-    def _kink_layers(self) -> tuple | None:
-        """The interior kinks' ``(s, delta, ell, normal)`` in the current state for
-        :func:`composite_field` (collective; None without kinks). A kink without a layer
-        (slack: no tension, no length) adds nothing (NaN angle)."""
+    def _kink_layers(self, t: float) -> tuple | None:
+        """The interior kinks' ``(s, delta, ell, normal)`` in the current state, time
+        ``t``, for :func:`composite_field` (collective; None without kinks). A kink
+        without a layer (slack: no tension, no length) adds nothing (NaN angle)."""
         if not self.kinked:
             return None
-        c = self.kinkout.moments.measure()
+        c = self.kinkout.moments.measure(t)
         ell = c["layer_length"]
         ok = np.isfinite(ell) & (ell > 0) & np.isfinite(c["delta"])
         return (np.array([k.s for k in self.kinkout.kinks]), np.where(ok, c["delta"], np.nan),

@@ -17,6 +17,7 @@ import numpy as np
 from mpi4py import MPI
 
 from cablefem import __version__
+from cablefem.anchor import CLAMPED_THROUGH
 from cablefem.app.log import Progress, quiet_compiler
 from cablefem.app.output import RunOutput, rod_moment_columns
 from cablefem.app.report import (
@@ -430,6 +431,9 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
                  "direction": a.direction if a.direction is not None else None,
                  "static_tension": float(np.linalg.norm(static.anchor_forces[
                      model.anchors.index(a)][:3]))}
+        if a.kind == CLAMPED_THROUGH:  # its moments: a row of kinks.csv per side
+            entry["kinks"] = [k.name for k in emitter.kinkout.kinks if k.clamp is not None
+                              and k.anchor == a.name]
         if a.kind == "clamped":
             F_static = static.anchor_forces[model.anchors.index(a)]
             st = anchor_moments(F_static[None, :3], a.direction, a.section.EI, a.section.EA,
@@ -517,7 +521,8 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
             # the anchors' sections from this summary: summary.json is not written yet
             reps = run_fatigue(case, outdir, invalid="drop", comm=comm,
                                sections={n: e.get("section")
-                                         for n, e in summary["anchors"].items()})
+                                         for n, e in summary["anchors"].items()
+                                         if e["kind"] == "clamped"})
             summary["fatigue"] = {n: {k: r.get(k) for k in (
                 "damage", "time_to_failure", "equivalent_range_N_C", "max_range",
                 "dropped_invalid_samples")} for n, r in reps.items()}

@@ -340,8 +340,10 @@ def _network_keys() -> dict:
                                "and point masses (meshes/README.md); its geometry is the "
                                "pretensioned reference."),
                 "kinks": KeyDoc("string", "all", "", "Interior kinks reported (kinks.csv, "
-                                "docs/kinks.md): 'all' (nodes with point loads, masses or "
-                                "dampers, and junctions), 'loaded' (the former only) or 'none'.")}),
+                                "docs/kinks.md): 'all' (nodes with point loads, masses, "
+                                "dampers or pinned anchors a cable passes through, and "
+                                "junctions), 'loaded' (the former only) or 'none'. The sides "
+                                "of a clamp a cable runs through are always reported.")}),
             "sections": TableDoc("array of tables", REQUIRED, "", "Named cross-sections.", {
                 "name": KeyDoc("string", REQUIRED, "", "Section name, used by [[cables]]."),
                 **section_keys}),
@@ -357,7 +359,12 @@ def _network_keys() -> dict:
                 "name": KeyDoc("string", REQUIRED, "", "0D physical group name in the mesh."),
                 "type": anchors.keys["type"],
                 "direction": KeyDoc("3-vector", None, "-", "Clamp direction into the cable "
-                                    "(clamped only); default: along the anchor's cell."),
+                                    "(clamped only); default: along the anchor's cell. At a "
+                                    "node of two cable elements (a cable running through the "
+                                    "clamp) the tangent the clamp holds: +d into one side, "
+                                    "-d into the other; default: each element's own "
+                                    "direction. Not allowed at a node of more than two "
+                                    "(each element is clamped along its own)."),
                 "motion": anchors.keys["motion"]}),
             "loads": c["loads"],
             "point_masses": TableDoc("array of tables", None, "", "Lumped masses on 0D groups.", {
