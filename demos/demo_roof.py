@@ -80,8 +80,10 @@ for cab in case.network.cables:
 # 3. At each of the 9 junctions both cables kink (`kinks.csv`, `summary.json`'s `kinks`):
 #    each side of the node carries the clamped layer about the bisector, half the kink
 #    angle $\Delta$: $M = 2\sqrt{EI\,T}\,\sin(\Delta/4)\sqrt{1 + (T/EA)\cos^2(\Delta/4)}$;
-#    tolerance $10^{-10}$. These moments (about 700 N m) exceed the anchors': the
-#    crossings' clamps, not the edge anchors, are where this net's strands bend most.
+#    tolerance $10^{-10}$ (`static_moment_layer`: the layer's part; the reported moment
+#    adds the string's own curvature, as at the anchors). These moments (peaks of about
+#    840 N m) exceed the anchors' (about 240 N m): the crossings' clamps, not the edge
+#    anchors, are where this net's strands bend most.
 
 # %%
 forces = s["static"]["anchor_forces"]
