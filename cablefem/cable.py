@@ -424,6 +424,11 @@ class CableModel:
 
     ramp_weight = False  #: statics ramps the weight with the extra loads (networks)
 
+    def section_field(self, name: str, value):
+        """UFL: ``value(section)`` of the cable's section, a Constant (a network's: a cell
+        field, each cell its cable's section's, 0 on a damper's cells)."""
+        return fem.Constant(self.mesh, PETSc.ScalarType(value(self.case.section)))
+
     def _coefficients(self) -> None:
         """Section coefficients of the forms: EA, m and c (stress-free length per mesh
         length, 1 for a single cable whose mesh is stress-free)."""

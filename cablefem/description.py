@@ -150,7 +150,7 @@ class Fluid:
     longest wave), and a uniform ``velocity`` history (dynamics only)."""
 
     density: float
-    diameter: float
+    diameter: float | None  #: None: each cable's section's (a network's)
     current: np.ndarray = field(default_factory=lambda: np.zeros(3))
     surface: float | None = None
     cd_normal: float = 1.2
@@ -163,6 +163,11 @@ class Fluid:
     depth: float | None = None
     wave_ramp: float | None = None
     velocity: VelocitySeries | None = None
+
+    def diameter_on(self, section) -> float:
+        """The hydrodynamic diameter on a cable of ``section`` (m): ``diameter``, or (a
+        network's fluid without one) the section's."""
+        return float(self.diameter if self.diameter is not None else section.diameter)
 
     def ramp(self) -> float:
         """The waves' build-up time (s): ``wave_ramp``, or 3 periods of the longest wave."""

@@ -1,4 +1,4 @@
-"""Water and wind on a single cable: Morison's drag, added mass, fluid inertia and
+"""Water and wind on a cable or a network: Morison's drag, added mass, fluid inertia and
 buoyancy (``[fluid]``, ``docs/fluid.md``).
 
 The fluid's velocity is ``u_f = f_t(t) f_z(z) U + u_w(x, t) + u_s(t)``: the current ``U``
@@ -57,9 +57,10 @@ def _drag(rho, k, t, vr):
     return 0.5 * rho * (k.cdn_D * _norm(vn) * vn + k.cdt_piD * _norm(vt) * vt)
 
 
-def submerged_weight(fluid, mass: float, g: float) -> float:
-    """Weight per stress-free length less the buoyancy of a fully immersed cable (N/m)."""
-    A = np.pi * fluid.diameter**2 / 4
+def submerged_weight(fluid, mass: float, g: float, diameter: float | None = None) -> float:
+    """Weight per stress-free length less the buoyancy of a fully immersed cable (N/m) of
+    ``diameter`` (default the fluid's)."""
+    A = np.pi * (fluid.diameter if diameter is None else diameter)**2 / 4
     return mass * g - (fluid.density * g * A if fluid.buoyancy else 0.0)
 
 
@@ -172,17 +173,19 @@ def add_fluid_terms(model) -> None:
         return fem.Constant(mesh, PETSc.ScalarType(x))
 
     rho = const(fl.density)
-    k = SimpleNamespace(cdn_D=const(fl.cd_normal * fl.diameter),
-                        cdt_piD=const(fl.cd_tangential * np.pi * fl.diameter),
-                        ma=const(fl.ca_normal * fl.density * np.pi * fl.diameter**2 / 4),
-                        mi=const((1.0 + fl.ca_normal) * fl.density * np.pi
-                                 * fl.diameter**2 / 4))
+    # the diameter of each cable's section (a network's DG0 field: zero on a damper's
+    # cells, which the fluid does not see; a single cable's: a Constant)
+    D = model.section_field("fluid_diameter", fl.diameter_on)
+    A = (np.pi / 4) * D**2
+    k = SimpleNamespace(cdn_D=const(fl.cd_normal) * D,
+                        cdt_piD=const(fl.cd_tangential * np.pi) * D,
+                        ma=const(fl.ca_normal * fl.density) * A,
+                        mi=const((1.0 + fl.ca_normal) * fl.density) * A)
     model.fluid_factor = fem.Constant(mesh, PETSc.ScalarType(fl.time.value(0.0)))
     model.fluid_motion = motion = FluidMotion(model)
     g = forms.stretch_vector(u, t0)
     lam = ufl.sqrt(ufl.dot(g, g))
     t = g / lam
-    A = np.pi * fl.diameter**2 / 4
     up = fem.Constant(mesh, np.asarray(motion.up, dtype=PETSc.ScalarType))
     z = ufl.dot(up, ufl.SpatialCoordinate(mesh) + u)  # elevation of the current position
     uf = fem.Constant(mesh, np.asarray(fl.current, dtype=PETSc.ScalarType)) \
@@ -192,8 +195,9 @@ def add_fluid_terms(model) -> None:
         wet = ufl.conditional(ufl.lt(z, fl.surface), 1.0, 0.0)
     # the current's drag is an extra load of statics: the load continuation ramps it
     static = -wet * model.load_factor * ufl.inner(_drag(rho, k, t, uf), du) * lam * ufl.dx
-    if fl.buoyancy:
-        static += ufl.inner(wet * rho * A * model.gravity, du) * lam * ufl.dx
+    if fl.buoyancy:  # ramped with the weight where statics ramps it (a network)
+        ramp = model.load_factor if model.ramp_weight else 1.0
+        static += ramp * ufl.inner(wet * rho * A * model.gravity, du) * lam * ufl.dx
     model.forms.add("fluid_static", static, kind="static")
     u_fluid = model.fluid_factor * uf + motion.velocity()
     drag_change = _drag(rho, k, t, u_fluid - v) - _drag(rho, k, t, uf)

@@ -267,6 +267,9 @@ class KinkMoments:
         self.EI = np.array([sec.EI for sec in secs], float)
         self.EA = np.array([sec.EA for sec in secs], float)
         self.m = np.array([sec.mass for sec in secs], float)
+        fluid = getattr(model.case, "fluid", None)
+        #: the fluid's diameter at each kink (its buoyancy), None without a fluid
+        self.D = [None if fluid is None else fluid.diameter_on(sec) for sec in secs]
         self.nodes = np.array([k.nodes for k in self.kinks], dtype=np.int64).reshape(-1, 3)
         self.h = np.array([k.h for k in self.kinks], float).reshape(-1, 2)
         self.spacing = np.array([k.spacing for k in self.kinks], float)
@@ -321,7 +324,8 @@ class KinkMoments:
         (zero without one; a clamp's side: its layer's)."""
         if not self.kinks:
             return self.columns(np.zeros((0, 3, 3)))
-        load = np.array([self._loads.load_at(t, m) for m in self.m]).reshape(-1, 3)
+        load = np.array([self._loads.load_at(t, m, d) for m, d in zip(self.m, self.D)]
+                        ).reshape(-1, 3)
         return self.columns(self.positions(), self._nodal(self.model.a), load)
 
     def side_forces(self, r: np.ndarray, a: np.ndarray | None = None,

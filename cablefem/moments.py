@@ -241,6 +241,7 @@ class ClampedAnchor:
     EA: float
     mass: float  #: kg/m, of the cable's section at the anchor
     motion: object = None  #: a :class:`cablefem.motion.Motion` (``acceleration(t)``) or None
+    diameter: float | None = None  #: m, the fluid's diameter there (buoyancy; None: none)
 
     def acceleration(self, times: np.ndarray) -> np.ndarray:
         """(n, 3) acceleration of the anchor at ``times``, m/s²."""
@@ -268,13 +269,17 @@ class AnchorMoments:
 
     def __init__(self, anchors: list[ClampedAnchor], gravity: np.ndarray, length: float,
                  loads: list[tuple[np.ndarray, object]] = (), omega: float | None = None,
-                 form: str = "exact", outer_order: int = 0) -> None:
+                 form: str = "exact", outer_order: int = 0,
+                 buoyancy: np.ndarray | None = None) -> None:
         """``gravity``: (3,) acceleration of gravity, m/s²; ``loads``: (value (3,) N/m,
-        time function with ``value(t)``) of each distributed load."""
+        time function with ``value(t)``) of each distributed load; ``buoyancy``: (3,) the
+        buoyancy per length and per m² of section, ``-rho g`` (None: none), times the area
+        of the diameter :meth:`load_at` is given."""
         self.anchors = list(anchors)
         self.gravity = np.asarray(gravity, float)
         self.length = float(length)
         self.loads = [(np.asarray(v, float), tf) for v, tf in loads]
+        self.buoyancy = None if buoyancy is None else np.asarray(buoyancy, float)
         self.omega, self.form, self.outer_order = omega, form, outer_order
         #: resonance factor of the error estimate and static moment per anchor
         #: (:meth:`set_resonance`)
@@ -286,19 +291,18 @@ class AnchorMoments:
     def from_model(cls, model, omega: float | None = None, form: str = "exact"
                    ) -> AnchorMoments:
         """The clamped anchors of a model (a string, a network or a rod)."""
+        fluid = getattr(model.case, "fluid", None)
+        buoyancy = None
+        if fluid is not None and fluid.buoyancy:  # the submerged weight at the anchors
+            # (anchors below the surface), on each anchor's section's diameter
+            buoyancy = -fluid.density * np.asarray(model.g_vec, float)
         clamped = [ClampedAnchor(a.name, i, np.asarray(a.direction, float), a.section.EI,
-                                 a.section.EA, a.section.mass, a.motion)
+                                 a.section.EA, a.section.mass, a.motion,
+                                 None if fluid is None else fluid.diameter_on(a.section))
                    for i, a in enumerate(model.anchors) if a.kind == "clamped"]
         loads = [(np.asarray(ld.value, float), ld.time) for _, ld in model.loads]
-        fluid = getattr(model.case, "fluid", None)
-        if fluid is not None and fluid.buoyancy:  # the submerged weight at the anchors
-            from cablefem.motion import TimeFunction  # (anchors below the surface)
-
-            area = np.pi * fluid.diameter**2 / 4
-            loads.append((-fluid.density * area * np.asarray(model.g_vec, float),
-                          TimeFunction.constant()))
         order = 1 if getattr(model, "hinges", None) else 0
-        return cls(clamped, model.g_vec, model.length, loads, omega, form, order)
+        return cls(clamped, model.g_vec, model.length, loads, omega, form, order, buoyancy)
 
     def set_resonance(self, amplification: float, static_forces,
                       resonant_omega: float | None = None) -> None:
@@ -318,12 +322,17 @@ class AnchorMoments:
     def names(self) -> list[str]:
         return [a.name for a in self.anchors]
 
-    def load_at(self, t: float, mass: float) -> np.ndarray:
+    def load_at(self, t: float, mass: float, diameter: float | None = None) -> np.ndarray:
         """(3,) distributed load per stress-free length at ``t`` on a cable of ``mass``
-        (kg/m), weight included, N/m."""
+        (kg/m) and, in a fluid with buoyancy, of ``diameter`` (m), weight and buoyancy
+        included, N/m."""
         f = mass * self.gravity
         for value, tf in self.loads:
             f = f + value * tf.value(t)
+        if self.buoyancy is not None:
+            if diameter is None:
+                raise ValueError("load_at: the buoyancy needs the cable's diameter")
+            f = f + self.buoyancy * (np.pi * diameter**2 / 4)
         return f
 
     def anchor(self, name: str, times: np.ndarray, forces: np.ndarray) -> dict:
@@ -331,7 +340,7 @@ class AnchorMoments:
         forces (n, 3) at ``times`` (n,)."""
         a = self._by_name[name]
         times = np.atleast_1d(np.asarray(times, float))
-        load = np.array([self.load_at(t, a.mass) for t in times]).reshape(-1, 3)
+        load = np.array([self.load_at(t, a.mass, a.diameter) for t in times]).reshape(-1, 3)
         return anchor_moments(np.asarray(forces, float)[:, :3], a.direction, a.EI, a.EA,
                               a.mass, a.acceleration(times), load, self.length, self.omega,
                               self.form, self.outer_order, self.amplification,

@@ -23,6 +23,7 @@ from petsc4py import PETSc
 from cablefem.anchor import CLAMPED_THROUGH
 from cablefem.cable import MAX_PLAUSIBLE_STRAIN, AnchorBC, CableModel
 from cablefem.errors import CaseError
+from cablefem.fluid import submerged_weight
 from cablefem.geometry import MeshError, NetworkMesh, connected_components, read_network_mesh
 
 __all__ = ["NetworkModel", "NetworkGeometry"]
@@ -147,6 +148,13 @@ class NetworkModel(CableModel):
         length = float(np.sum((c * h)[cable]))
         geo = NetworkGeometry(net.points, net.cells, length, net, EA, m, c, cell_section,
                               cell_damper=cell_damper)
+        # the seabed's contact law is smoothed over a fraction of the lightest cable's
+        # penetration (cablefem.seabed): the least submerged weight of the sections used
+        fl, g = getattr(case, "fluid", None), case.gravity.g
+        used = [secs[n] for n in sorted({n for n in cell_section if n is not None})]
+        w = [submerged_weight(fl, sec.mass, g, fl.diameter_on(sec)) if fl is not None
+             else sec.mass * g for sec in used]
+        self.submerged_weight = float(min([x for x in w if x > 0], default=max(w)))
         self.force_scale = float(max(np.max(T0, initial=0.0),
                                      np.max(m, initial=0.0) * case.gravity.g * length, 1e-300))
         log.info("network %s: %d nodes, %d cells, %d cable groups, %d junctions, %d anchor "
@@ -161,6 +169,16 @@ class NetworkModel(CableModel):
         self.EA, self.m, self.c = (fem.Function(self.W, name=n) for n in ("EA", "m", "c"))
         for f, arr in ((self.EA, geo.cell_EA), (self.m, geo.cell_m), (self.c, geo.cell_c)):
             f.x.array[:] = arr[idx].astype(PETSc.ScalarType)
+
+    def section_field(self, name: str, value):
+        """A cell field (DG0) of ``value(section)`` of each cell's cable section, 0 on a
+        damper's cells (which carry no section)."""
+        secs = self.case.network.sections
+        per_cell = np.array([0.0 if n is None else float(value(secs[n]))
+                             for n in self.geometry.cell_section])
+        f = fem.Function(self.W, name=name)
+        f.x.array[:] = per_cell[self._cell_index].astype(PETSc.ScalarType)
+        return f
 
     def cable_cells(self) -> np.ndarray:
         n_owned = self.mesh.topology.index_map(1).size_local

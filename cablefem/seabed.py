@@ -1,4 +1,4 @@
-"""A flat seabed under a single cable (``[seabed]``, ``docs/seabed.md``).
+"""A flat seabed under a cable or a network (``[seabed]``, ``docs/seabed.md``).
 
 The seabed is the plane at elevation ``z`` (along −gravity). Where the cable's current
 position is below it by the penetration ``p``, the seabed pushes back per unit stress-free
@@ -27,8 +27,8 @@ from dolfinx import fem
 from petsc4py import PETSc
 from scipy.optimize import brentq
 
-__all__ = ["PENETRATION_BLEND", "GroundedCatenary", "add_seabed_terms", "touchdown",
-           "without_friction"]
+__all__ = ["PENETRATION_BLEND", "GroundedCatenary", "add_seabed_terms", "network_contact",
+           "touchdown", "without_friction"]
 
 #: the smoothing length of the contact law as a fraction of the static penetration w/k
 PENETRATION_BLEND = 0.1
@@ -136,7 +136,8 @@ def add_seabed_terms(model, w: float) -> None:
     p = sb.z - ufl.dot(up, x)  # penetration
     smooth = ufl.conditional(ufl.gt(p, b), p - b / 2,
                              ufl.conditional(ufl.gt(p, 0.0), p * p / (2 * b), 0.0))
-    cc = model.c
+    # per stress-free length of cable (a network's damper cells: none)
+    cc = model.c * model.section_field("on_cable", lambda sec: 1.0)
     model.forms.add("seabed", -k * smooth * ufl.dot(up, du) * cc * ufl.dx, kind="static")
     touching = ufl.conditional(ufl.gt(p, 0.0), 1.0, 0.0)
     vn = ufl.dot(v, up)
@@ -182,14 +183,8 @@ def touchdown(model) -> dict | None:
         on = pen > 0.0
         if np.any(on):
             # grounded length: each element's share in contact (linear in penetration)
-            grounded = 0.0
-            for i in range(st.size - 1):
-                a, b_ = pen[i], pen[i + 1]
-                h = st[i + 1] - st[i]
-                if a > 0 and b_ > 0:
-                    grounded += h
-                elif a > 0 or b_ > 0:
-                    grounded += h * max(a, b_) / (abs(a) + abs(b_))
+            grounded = sum((st[i + 1] - st[i]) * _grounded_share(pen[i], pen[i + 1])
+                           for i in range(st.size - 1))
             # towards the fairlead (the higher end): the last node in contact, and where
             # the penetration crosses zero between it and the next node
             up_end = -1 if r[-1] @ up >= r[0] @ up else 0
@@ -203,4 +198,46 @@ def touchdown(model) -> dict | None:
                 x_td = r[k] + f * (r[n] - r[k])
             out = {"s": s_td, "position": np.asarray(x_td).tolist(), "node": k,
                    "grounded_length": float(grounded)}
+    return model.comm.bcast(out, root=0)
+
+
+def _grounded_share(a: float, b: float) -> float:
+    """The share of an element in contact, from its end penetrations (linear)."""
+    if a > 0 and b > 0:
+        return 1.0
+    if a > 0 or b > 0:
+        return max(a, b) / (abs(a) + abs(b))
+    return 0.0
+
+
+def network_contact(model) -> dict | None:
+    """A network's contact with the seabed at the model's current state (collective;
+    every rank gets it): per cable group that touches, its grounded stress-free length and
+    its touchdown points, where the penetration crosses zero along an element (positions,
+    linear between the element's nodes). None when nothing touches."""
+    sb = model.case.seabed
+    r = model.gather_nodal(model.u)
+    out = None
+    if model.comm.rank == 0:
+        geo = model.geometry
+        net = geo.net
+        r = r + geo.points
+        g = np.asarray(model.g_vec, float)
+        pen = sb.z - r @ (-g / np.linalg.norm(g))
+        cells = np.asarray(geo.cells, np.int64)
+        h = np.asarray(geo.cell_c, float) * np.linalg.norm(
+            geo.points[cells[:, 1]] - geo.points[cells[:, 0]], axis=1)
+        out = {}
+        for e in np.nonzero(geo.is_cable)[0]:
+            a, b = (int(k) for k in cells[e])
+            share = _grounded_share(pen[a], pen[b])
+            if share == 0.0:
+                continue
+            entry = out.setdefault(net.groups[int(net.cell_group[e])],
+                                   {"grounded_length": 0.0, "touchdown": []})
+            entry["grounded_length"] += float(h[e] * share)
+            if (pen[a] > 0) != (pen[b] > 0):
+                f = pen[a] / (pen[a] - pen[b])
+                entry["touchdown"].append((r[a] + f * (r[b] - r[a])).tolist())
+        out = out or None
     return model.comm.bcast(out, root=0)

@@ -11,6 +11,7 @@ import pytest
 from mpi4py import MPI
 
 from cablefem.app.run import run_case
+from cablefem.cable import CableModel
 from cablefem.case import CaseError, parse_case
 from cablefem.dynamics import integrate
 from cablefem.modal import solve_modes
@@ -304,3 +305,29 @@ def test_point_mass_at_a_free_end(mpi_tmp_path):
                                rtol=1e-6, atol=1e-9)  # Newton's tolerance
     om = solve_modes(model, 1).omegas
     assert om[0] == pytest.approx(np.sqrt(g / 10.0), rel=1e-3)
+
+
+def test_a_slack_network_from_a_rough_mesh(mpi_tmp_path):
+    """A chain of 12 m hanging between anchors 10 m apart, meshed as a stress-free U (1 m
+    down, 10 m across, 1 m up; 24 elements of 0.5 m, pretension 0): the unloaded mesh has
+    no stiffness to start the load continuation from (it stalled at load factor 0 before);
+    statics relaxes to the equilibrium instead, which is the single cable's of the same
+    elements (from its catenary) to Newton's tolerance (1e-8 of the anchor force)."""
+    pts = ([[0.0, 0.0, -0.5 * i] for i in range(3)] + [[0.5 * i, 0.0, -1.0]
+                                                        for i in range(1, 20)]
+           + [[10.0, 0.0, -1.0 + 0.5 * i] for i in range(3)])
+    cells = np.column_stack([np.arange(24), np.arange(1, 25)])
+    mesh = write_mesh(str(mpi_tmp_path / "u.msh"), pts, cells, ["c"] * 24,
+                      {"ends": [0, 24]})
+    sec = {"name": "s", "EA": 1.0e7, "EI": 1.0, "mass": 5.0}
+    net = NetworkModel(comm, parse_case(case_dict(
+        mesh, [{"group": "c", "section": "s", "pretension": 0.0}], ["ends"],
+        sections=[sec], g=9.81)))
+    single = CableModel(comm, parse_case({
+        "title": "chain", "section": {k: v for k, v in sec.items() if k != "name"},
+        "gravity": {"g": 9.81}, "geometry": {"length": 12.0}, "mesh": {"elements": 24},
+        "anchors": [{"name": "p", "position": [0.0, 0, 0]},
+                    {"name": "q", "position": [10.0, 0, 0]}],
+        "solver": {"outer_correction": "none"}}))
+    F = [solve_static(m).anchor_forces[:, :3] for m in (single, net)]
+    np.testing.assert_allclose(F[1], F[0], rtol=0, atol=1e-8 * np.abs(F[0]).max())

@@ -162,11 +162,14 @@ class RunOutput:
             if name in self.columns:
                 self.columns[name] = {k: d[k].tolist() for k in MOMENT_COLUMNS}
 
-    def load_at(self, t: float, mass: float | None = None) -> np.ndarray:
-        """Distributed load per stress-free length at ``t``, weight included
-        (:meth:`cablefem.moments.AnchorMoments.load_at`; the single cable's mass by
-        default)."""
-        return self.moment_columns.load_at(t, self.m if mass is None else mass)
+    def load_at(self, t: float, section=None) -> np.ndarray:
+        """Distributed load per stress-free length at ``t`` on a cable of ``section`` (the
+        single cable's by default), weight and buoyancy included
+        (:meth:`cablefem.moments.AnchorMoments.load_at`)."""
+        section = self.model.case.section if section is None else section
+        fluid = getattr(self.model.case, "fluid", None)
+        D = None if fluid is None else fluid.diameter_on(section)
+        return self.moment_columns.load_at(t, section.mass, D)
 
     def _moments(self, anc, times: np.ndarray, N: np.ndarray) -> dict:
         """The moment columns of clamped anchor ``anc`` (:class:`AnchorMoments`)."""

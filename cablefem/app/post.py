@@ -78,8 +78,11 @@ def run_post(case: Case, forces_csv: Path, outdir: Path, form: str = "exact",
         if a.name not in hist.forces or a.kind != "clamped":
             continue
         acc = np.array([a.motion.acceleration(t) if a.motion else np.zeros(3) for t in times])
-        load = np.array([sec.mass * g_vec + sum((np.asarray(ld.value) * ld.time.value(t)
-                                                 for ld in case.loads), np.zeros(3))
+        fluid = getattr(case, "fluid", None)
+        buoy = (-fluid.density * g_vec * np.pi * fluid.diameter_on(sec)**2 / 4
+                if fluid is not None and fluid.buoyancy else np.zeros(3))
+        load = np.array([sec.mass * g_vec + buoy + sum((np.asarray(ld.value) * ld.time.value(t)
+                                                        for ld in case.loads), np.zeros(3))
                          for t in times])
         res = anchor_moments(hist.forces[a.name], a.direction, sec.EI, sec.EA, sec.mass, acc,
                              load, length, omega, form, order)

@@ -252,7 +252,18 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
     summary["outer_correction"] = "none" if kind == "beam" else case.solver.outer_correction
     if model.hinges:
         summary["static"]["virtual_hinges"] = model.hinges.report()
-    if getattr(case, "seabed", None) is not None:  # where the line leaves the seabed
+    if getattr(case, "seabed", None) is not None and getattr(model, "is_network", False):
+        from cablefem.seabed import network_contact  # per cable group
+
+        contact = network_contact(model)
+        if contact is None:
+            warn(summary, "seabed", "no cable touches the seabed in the static state")
+        else:
+            summary["static"]["seabed_contact"] = contact
+            for group, c in contact.items():
+                log.info("seabed: cable %s grounded over %.6g m, %d touchdown point(s)",
+                         group, c["grounded_length"], len(c["touchdown"]))
+    elif getattr(case, "seabed", None) is not None:  # where the line leaves the seabed
         from cablefem.seabed import touchdown
 
         td = touchdown(model)
@@ -438,7 +449,7 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
             F_static = static.anchor_forces[model.anchors.index(a)]
             st = anchor_moments(F_static[None, :3], a.direction, a.section.EI, a.section.EA,
                                 a.section.mass, np.zeros((1, 3)),
-                                emitter.load_at(0.0, a.section.mass), model.length, None, form,
+                                emitter.load_at(0.0, a.section), model.length, None, form,
                                 1 if getattr(model, "hinges", None) else 0)
             if kind == "beam":  # the rod's own; the composite with the beam's force beside
                 entry["static_moment_composite"] = float(st["moment"][0])

@@ -155,8 +155,7 @@ CASE_KEYS: dict[str, KeyDoc | TableDoc] = {
                             "dashpot force -c (v - (v.t) t), t the cable's current tangent)."),
     }),
     "fluid": TableDoc("table", None, "", "Water or air around the cable: Morison drag on "
-                      "the relative velocity, added mass and buoyancy (docs/fluid.md). "
-                      "Single cables only.", {
+                      "the relative velocity, added mass and buoyancy (docs/fluid.md).", {
         "density": KeyDoc("number", REQUIRED, "kg/m^3", "Fluid density, > 0 (sea water "
                           "1025, air 1.225)."),
         "diameter": KeyDoc("number", None, "m", "Hydrodynamic diameter D, > 0; default "
@@ -218,7 +217,7 @@ CASE_KEYS: dict[str, KeyDoc | TableDoc] = {
     }),
     "seabed": TableDoc("table", None, "", "A flat seabed normal to gravity: penalty contact, "
                        "damping and friction; statics starts from the catenary with its "
-                       "grounded part (docs/seabed.md). Single cables only.", {
+                       "grounded part (a network: from its mesh; docs/seabed.md).", {
         "z": KeyDoc("number", REQUIRED, "m", "Elevation of the seabed along -gravity."),
         "stiffness": KeyDoc("number", REQUIRED, "N/m^2", "Contact stiffness per length of "
                             "cable, > 0 (the lying cable sinks in by its submerged weight / "
@@ -384,6 +383,11 @@ def _network_keys() -> dict:
                                 "or a cable node and an anchor (grounded)."),
                 "coefficient": c["dampers"].keys["coefficient"],
                 "stiffness": c["dampers"].keys["stiffness"]})}
+    fluid = c["fluid"]
+    keys["fluid"] = fluid._replace(keys={**fluid.keys, "diameter": KeyDoc(
+        "number", None, "m", "Hydrodynamic diameter D of every cable, > 0; default: each "
+        "cable's sections.diameter (required then for every section a cable uses).")})
+    keys["seabed"] = c["seabed"]
     for name in ("damping", "dynamics", "fatigue", "modal", "solver"):
         keys[name] = c[name]
     return keys

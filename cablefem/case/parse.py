@@ -286,8 +286,15 @@ def _parse_dampers(readers: list[_Reader], anchors: list, length: float | None
     return out
 
 
+def _parse_seabed(r: _Reader | None) -> Seabed | None:
+    return None if r is None else Seabed(
+        r.number("z"), r.number("stiffness", gt=0), r.number("damping", ge=0),
+        r.number("friction", ge=0), r.number("friction_velocity", gt=0))
+
+
 def _parse_fluid(r: _Reader | None, section, base_dir: Path) -> Fluid | None:
-    """``[fluid]``: the diameter defaults to the section's."""
+    """``[fluid]``: the diameter defaults to the section's (``section`` None, a network's:
+    to each cable's section's, checked by the caller; the diameter stays None)."""
     if r is None:
         return None
     D = r.number("diameter", gt=0)
@@ -439,11 +446,7 @@ def parse_case(data: dict, base_dir: str | os.PathLike = Path("."),
     if fluid is not None:
         problems += [p for p in flow_problems(fluid, gravity)
                      if p[0] != "fluid.waves" or "surface" not in p[1]]  # reported already
-    seabed_r = top.table("seabed")
-    seabed = None if seabed_r is None else Seabed(
-        seabed_r.number("z"), seabed_r.number("stiffness", gt=0),
-        seabed_r.number("damping", ge=0), seabed_r.number("friction", ge=0),
-        seabed_r.number("friction_velocity", gt=0))
+    seabed = _parse_seabed(top.table("seabed"))
     damping = _parse_damping(top.table("damping"))
     dynamics = _parse_dynamics(top.table("dynamics"))
     modal = ModalSpec(table("modal").integer("modes"))
@@ -553,6 +556,18 @@ def _parse_network_case(data: dict, base_dir: Path, source: str) -> Case:
         solver_r.add("span_bending", "a network has no span bending yet (single cables only)")
     first = sections.get(cables[0].section) if cables else None
     fatigue = _parse_fatigue(top.table("fatigue"), first)
+    fluid_r = top.table("fluid")
+    fluid = _parse_fluid(fluid_r, None, base_dir)
+    if fluid is not None:
+        if fluid.diameter is None:  # each cable's section's
+            bare = sorted({c.section for c in cables if c.section in sections
+                           and sections[c.section].diameter is None})
+            if bare:
+                fluid_r.add("diameter", "required: give fluid.diameter, or a diameter to "
+                            f"the sections {bare} (sections.diameter)")
+        problems += [p for p in flow_problems(fluid, gravity)
+                     if p[0] != "fluid.waves" or "surface" not in p[1]]  # reported already
+    seabed = _parse_seabed(top.table("seabed"))
     if problems:
         raise CaseError(problems, source)
     if _missing(title, gravity, mesh_path, first, damping, modal.modes, solver.tension_only):
@@ -561,7 +576,7 @@ def _parse_network_case(data: dict, base_dir: Path, source: str) -> Case:
                         mesh=MeshSpec(1, 1.0), anchors=anchors, loads=loads,
                         point_masses=masses, point_loads=point_loads, damping=damping,
                         dynamics=dynamics, modal=modal, solver=solver, source=source,
-                        dampers=links, fatigue=fatigue,
+                        dampers=links, fatigue=fatigue, fluid=fluid, seabed=seabed,
                         network=NetworkSpec(mesh_path, sections, cables, net_kinks),
                         units=units or "SI"))
 
