@@ -236,7 +236,7 @@ def network_contact(model) -> dict | None:
             entry = out.setdefault(net.groups[int(net.cell_group[e])],
                                    {"grounded_length": 0.0, "touchdown": []})
             entry["grounded_length"] += float(h[e] * share)
-            if (pen[a] > 0) != (pen[b] > 0):
+            if (pen[a] >= 0) != (pen[b] >= 0):  # a node on the plane (an anchor) touches
                 f = pen[a] / (pen[a] - pen[b])
                 entry["touchdown"].append((r[a] + f * (r[b] - r[a])).tolist())
         out = out or None

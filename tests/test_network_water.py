@@ -136,3 +136,33 @@ def test_a_network_fluid_needs_a_diameter(mpi_tmp_path):
         parse_case(d)
     d["fluid"] = {**FLUID, "diameter": 0.076}
     parse_case(d)
+
+
+def test_network_touchdown_history_equals_the_single_cable(mpi_tmp_path):
+    """touchdown.csv of the mooring line run as a network (rows named by the cable group)
+    and as the single cable: the same touchdown point and grounded length at every output
+    time over 1 s (the same discrete equations: 1e-6 m, the interpolation of the crossing
+    amplifying Newton's tolerance by the slope of the penetration), and the summary's
+    grounded-length range per line."""
+    from cablefem.app.run import run_case
+
+    out = {}
+    for name, d in (("single", mooring_single()), ("net", mooring_network(mpi_tmp_path))):
+        d["dynamics"] = {"t_end": 1.0, "dt": 0.05}
+        res = run_case(parse_case(d), mpi_tmp_path / name, comm, figures=False,
+                       progress=False, modes=0)
+        rows = None
+        if comm.rank == 0:
+            import csv
+
+            with open(mpi_tmp_path / name / "touchdown.csv", newline="") as fh:
+                rows = list(csv.DictReader(fh))
+        rows = comm.bcast(rows, root=0)
+        out[name] = (np.array([[float(r[c]) for c in ("time", "x", "y", "z",
+                                                          "grounded_length")] for r in rows]),
+                     {r["line"] for r in rows}, res.summary["touchdown"])
+    (a, la, sa), (b, lb, sb) = out["single"], out["net"]
+    assert la == {"cable"} and lb == {"line"} and a.shape == b.shape == (21, 5)
+    np.testing.assert_allclose(b, a, rtol=0, atol=1e-6)
+    assert sb["line"]["grounded_length_max"] == pytest.approx(
+        sa["cable"]["grounded_length_max"], abs=1e-6)

@@ -11,6 +11,7 @@ import numpy as np
 
 from cablefem import asymptotics
 from cablefem.app.kinkout import KinkOutput
+from cablefem.app.touchdownout import TouchdownOutput
 from cablefem.cable import CableModel
 from cablefem.io import anchorcsv
 from cablefem.io.anchorcsv import FORCE_COLUMNS, AnchorCSV
@@ -87,6 +88,7 @@ class RunOutput:
             self._load_history(outdir / "anchors.csv")
         frames = frames or {}
         self.kinkout = KinkOutput(model, outdir, omega, resume_after)  # kinks.csv
+        self.touchdown = TouchdownOutput(model, outdir, resume_after)  # touchdown.csv
         self.string = StringWriter(model, outdir, resume_after, frames.get("string"))
         self.csv = AnchorCSV(outdir / "anchors.csv", anchorcsv.columns(bool(self.clamped)),
                              model.comm, append=resume_after is not None)
@@ -262,6 +264,7 @@ class RunOutput:
             if name in self.rod:
                 self.rod[name].append(N[3:6])
         self.kinkout.add(t)
+        self.touchdown.add(t)
         self._pending += 1
         if self._pending >= self.FLUSH_ROWS:
             self.flush()
@@ -270,6 +273,7 @@ class RunOutput:
         """Compute the moment columns of the pending rows (vectorised per anchor) and
         write them to anchors.csv as one block."""
         self.kinkout.flush()
+        self.touchdown.flush()
         n = self._pending
         if n == 0:
             return
@@ -365,6 +369,7 @@ class RunOutput:
             self.flush()
         finally:
             self.kinkout.close()
+            self.touchdown.close()
             self.string.close()
             self.csv.close()
             if self.moments is not None:

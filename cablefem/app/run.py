@@ -494,6 +494,8 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
             if len(times) > 1:
                 entry["steady_state_moment"] = steady_state_stats(times, mo["moment"])
         summary["anchors"][a.name] = entry
+    if emitter.touchdown.active and emitter.touchdown.rows:  # the touchdown's history
+        summary["touchdown"] = emitter.touchdown.summary()
     if emitter.kinkout.kinks:
         summary["kinks"] = emitter.kinkout.summary()
         for name, entry in summary["kinks"].items():

@@ -337,8 +337,9 @@ class MomentsWriter(_SeriesWriter):
 
 #: what a run writes into its folder, removed before a new (not resumed) run: the current
 #: layout and the one before it (string.pvd, one .pvtu/.vtu per frame, string.h5, ...)
-_RUN_OUTPUTS = ("summary.json", "anchors.csv", "kinks.csv", "string.xdmf", "string.h5",
-                "moments.xdmf", "moments.h5", "modes.xdmf", "modes.h5", "checkpoint.npz",
+_RUN_OUTPUTS = ("summary.json", "anchors.csv", "kinks.csv", "touchdown.csv", "string.xdmf",
+                "string.h5", "moments.xdmf", "moments.h5", "modes.xdmf", "modes.h5",
+                "checkpoint.npz",
                 "string.pvd", "string_restart.pvd", "anchor_moments.png", "anchor_polar.png",
                 "fatigue.json", "fatigue.md", "fatigue_histogram.png")
 _RUN_PATTERNS = (re.compile(r"string(_restart)?\d{6}\.pvtu"),

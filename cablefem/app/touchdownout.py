@@ -1,0 +1,113 @@
+"""``touchdown.csv`` and its summary: where a cable on the seabed leaves it, at every output
+time (a case with ``[seabed]``; docs/seabed.md). The touchdown moves with the floater and
+its excursion along the line is what the line's fatigue at the touchdown zone depends on."""
+
+from __future__ import annotations
+
+import csv
+from pathlib import Path
+
+import numpy as np
+
+from cablefem.io import anchorcsv
+from cablefem.io.anchorcsv import AnchorCSV
+
+__all__ = ["TOUCHDOWN_COLUMNS", "TouchdownOutput"]
+
+#: the columns of ``touchdown.csv``: a single cable's ``line`` is "cable" and ``s`` its
+#: touchdown's stress-free station; a network's rows name the cable group (``s`` empty),
+#: one row per touchdown point of the group (a group lying wholly on the seabed: one row
+#: without a point). A line that does not touch the seabed has a row with grounded length 0
+#: and no point (single cable) or no row (network).
+TOUCHDOWN_COLUMNS = ["time", "line", "s", "x", "y", "z", "grounded_length"]
+
+
+class TouchdownOutput:
+    """Records the touchdown at each output time (collective: :meth:`add` gathers the
+    nodes) and writes ``touchdown.csv`` in blocks; :meth:`summary` gives the range of the
+    touchdown's station and of the grounded length. Nothing without a seabed."""
+
+    FLUSH_ROWS = 256
+
+    def __init__(self, model, outdir: Path, resume_after: float | None = None):
+        self.model = model
+        self.active = getattr(model.case, "seabed", None) is not None
+        self.network = getattr(model, "is_network", False)
+        self.rows: list[tuple] = []  # (time, line, s, x, y, z, grounded length)
+        self._pending: list[tuple] = []
+        self.csv = None
+        if not self.active:
+            return
+        path = outdir / "touchdown.csv"
+        if resume_after is not None:
+            anchorcsv.truncate(model.comm, path, resume_after)
+            self._load(path)
+        self.csv = AnchorCSV(path, TOUCHDOWN_COLUMNS, model.comm,
+                             append=resume_after is not None)
+
+    def _load(self, path: Path) -> None:
+        """The rows written before a restart (every rank reads them: small)."""
+        data = None
+        if self.model.comm.rank == 0 and path.is_file():
+            with open(path, newline="") as fh:
+                data = [(float(r["time"]), r["line"]) + tuple(
+                    float(r[c]) if r[c] else np.nan for c in TOUCHDOWN_COLUMNS[2:])
+                    for r in csv.DictReader(fh)]
+        self.rows = self.model.comm.bcast(data, root=0) or []
+
+    def measure(self, t: float) -> list[tuple]:
+        """The rows at the model's current state, time ``t`` (collective)."""
+        from cablefem.seabed import network_contact, touchdown
+
+        nan3 = (np.nan, np.nan, np.nan)
+        if not self.network:
+            td = touchdown(self.model)
+            if td is None:
+                return [(t, "cable", np.nan) + nan3 + (0.0,)]
+            return [(t, "cable", td["s"]) + tuple(td["position"]) + (td["grounded_length"],)]
+        out = []
+        for group, c in (network_contact(self.model) or {}).items():
+            points = c["touchdown"] or [nan3]
+            out += [(t, group, np.nan) + tuple(p) + (c["grounded_length"],) for p in points]
+        return out
+
+    def add(self, t: float) -> None:
+        if not self.active:
+            return
+        rows = self.measure(t)
+        self.rows += rows
+        self._pending += rows
+        if len(self._pending) >= self.FLUSH_ROWS:
+            self.flush()
+
+    def flush(self) -> None:
+        if not self._pending or self.csv is None:
+            return
+        cols = list(zip(*self._pending))
+        self.csv.write({c: list(v) for c, v in zip(TOUCHDOWN_COLUMNS, cols)})
+        self._pending = []
+
+    def close(self) -> None:
+        self.flush()
+        if self.csv is not None:
+            self.csv.close()
+
+    def summary(self) -> dict:
+        """Per line: the range of its grounded length over the output times and, for a
+        single cable, of the touchdown's station ``s`` (its excursion along the line) and
+        the number of output times at which the line did not touch the seabed."""
+        out = {}
+        for line in dict.fromkeys(r[1] for r in self.rows):
+            rows = [r for r in self.rows if r[1] == line]
+            g = np.array([r[6] for r in rows], float)
+            entry = {"grounded_length_min": float(np.min(g)),
+                     "grounded_length_max": float(np.max(g))}
+            if not self.network:
+                s = np.array([r[2] for r in rows], float)
+                ok = np.isfinite(s)
+                entry["times_off_the_seabed"] = int(np.count_nonzero(g == 0.0))
+                if np.any(ok):
+                    entry.update({"s_min": float(np.min(s[ok])), "s_max": float(np.max(s[ok])),
+                                  "excursion": float(np.ptp(s[ok]))})
+            out[line] = entry
+        return out
