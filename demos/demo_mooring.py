@@ -104,7 +104,8 @@ lines = [
     f"{gc.H:.6g}), fairlead tension {F:.6g} N ({gc.fairlead_tension:.6g}), touchdown "
     f"at s = {td0['s']:.4g} m ({gc.grounded_length:.4g}): {'OK' if ok_cat else 'FAILED'}",
     f"in the current, clamped: touchdown at s = {td['s']:.4g} m, fairlead tension "
-    f"{fl['static_tension']:.6g} N",
+    f"{fl['static_tension']:.6g} N; in the swell the touchdown moves along the line by "
+    f"{s['touchdown']['cable'].get('excursion', float('nan')):.3g} m (touchdown.csv)",
     f"fairlead (bend stiffener): static moment {fl['static_moment']:.4g} N m, anchor angle "
     f"{fl['static_delta']:.4f} rad, layer length {fl['layer_length']:.3f} m; steady state "
     f"peak {ss.get('peak', float('nan')):.4g} N m, RMS {ss.get('rms', float('nan')):.4g} N m; "
