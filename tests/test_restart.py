@@ -338,3 +338,70 @@ def test_two_ranks_killed_then_restarted(case, reference, tmp_path):
             np.testing.assert_allclose(da[key], db[key], rtol=1e-9,
                                        atol=1e-9 * np.max(np.abs(db[key])))
     assert files(out) == files(reference)
+
+
+SEABED_CASE = """
+[section]
+EA = 1e10
+EI = 1e3
+mass = 50.0
+[gravity]
+g = 9.81
+[geometry]
+length = 150.0
+[mesh]
+elements = 30
+[[anchors]]
+name = "anchor"
+position = [0, 0, 0]
+type = "pinned"
+[[anchors]]
+name = "fairlead"
+position = [120.0, 0, 50.0]
+type = "pinned"
+[anchors.motion]
+type = "ellipse"
+axis_cos = [-1.0, 0, 0]
+omega = 1.0
+ramp = 0.0
+[seabed]
+z = 0.0
+stiffness = 1e6
+damping = 1e3
+[solver]
+outer_correction = "none"
+[dynamics]
+t_end = 3.0
+dt = 0.05
+checkpoint_every = 10
+"""
+
+
+def test_touchdown_history_survives_a_kill(tmp_path):
+    """A line on the seabed killed between checkpoints and restarted: touchdown.csv holds
+    the uninterrupted run's rows (the rows after the checkpoint dropped and written again:
+    equal to round-off), one per output time, and the summary's touchdown range is the
+    whole run's."""
+    case = tmp_path / "seabed.toml"
+    case.write_text(SEABED_CASE)
+    ref, out = tmp_path / "ref", tmp_path / "out"
+    assert cablefem("run", case, "--output", ref, "--no-figures", "-q").returncode == 0
+    res = cablefem("run", case, "--output", out, "--no-figures", "-q",
+                   env={"CABLEFEM_KILL_AT": "step:25"})
+    assert res.returncode == -signal.SIGKILL, res.stderr
+    res = cablefem("run", "--restart", out, "--no-figures", "-q")
+    assert res.returncode == 0, res.stderr
+
+    def table(path):
+        with open(path / "touchdown.csv", newline="") as fh:
+            return np.array([[float(r[k]) for k in ("time", "s", "x", "z", "grounded_length")]
+                             for r in csv.DictReader(fh)])
+
+    a, b = table(out), table(ref)
+    assert a.shape == b.shape == (61, 5)
+    np.testing.assert_allclose(a, b, rtol=1e-12, atol=1e-12)
+    sa = json.loads((out / "summary.json").read_text())["touchdown"]
+    sb = json.loads((ref / "summary.json").read_text())["touchdown"]
+    assert sa["cable"] == pytest.approx(sb["cable"], rel=1e-12)
+    assert sa["cable"]["excursion"] > 1.0  # the 2 m surge moves the touchdown
+    assert sa["cable"]["times_off_the_seabed"] == 0

@@ -162,3 +162,26 @@ def test_touchdown_history_follows_a_slow_surge(mpi_tmp_path):
     assert td["excursion"] == pytest.approx(near.grounded_length - far.grounded_length,
                                             abs=0.5 * h)
     assert td["times_off_the_seabed"] == 0
+
+
+def test_a_line_bouncing_off_the_seabed_warns(mpi_tmp_path):
+    """A 2 m surge started over 0.5 s (the ramp's jerk) makes the lying line bounce on the
+    contact's stiffness (sqrt(k/m) dt = 141 rad/s x 0.05 s = 7: not resolved): at some
+    output times no node touches and the grounded length is 0. The run says so (a
+    warning naming seabed) instead of leaving a touchdown history with holes in silence;
+    the same surge from rest to rest does not bounce (no warning)."""
+    def run(motion, name):
+        d = mooring(elements=30, dynamics={"t_end": 3.0, "dt": 0.05})
+        d["seabed"]["damping"] = 1e3
+        d["anchors"][1]["motion"] = motion
+        return run_case(parse_case(d), mpi_tmp_path / name, comm, figures=False,
+                        progress=False, modes=0).summary
+
+    jerk = run({"type": "harmonic", "amplitude": [2.0, 0, 0], "omega": 0.8,
+                "ramp": 0.5}, "jerk")
+    assert jerk["touchdown"]["cable"]["times_off_the_seabed"] > 0
+    assert any(w["key"] == "seabed" for w in jerk["warnings"]), jerk["warnings"]
+    smooth = run({"type": "ellipse", "axis_cos": [-1.0, 0, 0], "omega": 1.0, "ramp": 0.0},
+                 "smooth")
+    assert smooth["touchdown"]["cable"]["times_off_the_seabed"] == 0
+    assert not any(w["key"] == "seabed" for w in smooth["warnings"])

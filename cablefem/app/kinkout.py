@@ -3,7 +3,6 @@
 
 from __future__ import annotations
 
-import csv
 from pathlib import Path
 
 import numpy as np
@@ -53,13 +52,7 @@ class KinkOutput:
 
     def _load(self, path: Path) -> None:
         """The rows written before a restart (every rank reads them: small)."""
-        comm = self.model.comm
-        data = None
-        if comm.rank == 0 and path.is_file():
-            with open(path, newline="") as fh:
-                data = list(csv.DictReader(fh))
-        data = comm.bcast(data, root=0) or []
-        for row in data:
+        for row in anchorcsv.read_rows(self.model.comm, path):
             name = row["kink"]
             if name not in self.rows:
                 continue

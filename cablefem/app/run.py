@@ -496,6 +496,13 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
         summary["anchors"][a.name] = entry
     if emitter.touchdown.active and emitter.touchdown.rows:  # the touchdown's history
         summary["touchdown"] = emitter.touchdown.summary()
+        off = summary["touchdown"].get("cable", {}).get("times_off_the_seabed", 0)
+        if off and "touchdown" in summary["static"]:
+            warn(summary, "seabed", f"the line left the seabed altogether at {off} of "
+                 f"{len(times)} output times (touchdown.csv: grounded length 0): a bounce "
+                 "on the contact's stiffness, which the time step may not resolve "
+                 "(sqrt(stiffness/mass) dt > 1); more seabed.damping or a smaller "
+                 "dynamics.dt, or a smoother anchor motion (its ramp)")
     if emitter.kinkout.kinks:
         summary["kinks"] = emitter.kinkout.summary()
         for name, entry in summary["kinks"].items():

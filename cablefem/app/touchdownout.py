@@ -4,11 +4,11 @@ its excursion along the line is what the line's fatigue at the touchdown zone de
 
 from __future__ import annotations
 
-import csv
 from pathlib import Path
 
 import numpy as np
 
+from cablefem.app.kinkout import KinkOutput
 from cablefem.io import anchorcsv
 from cablefem.io.anchorcsv import AnchorCSV
 
@@ -47,13 +47,9 @@ class TouchdownOutput:
 
     def _load(self, path: Path) -> None:
         """The rows written before a restart (every rank reads them: small)."""
-        data = None
-        if self.model.comm.rank == 0 and path.is_file():
-            with open(path, newline="") as fh:
-                data = [(float(r["time"]), r["line"]) + tuple(
-                    float(r[c]) if r[c] else np.nan for c in TOUCHDOWN_COLUMNS[2:])
-                    for r in csv.DictReader(fh)]
-        self.rows = self.model.comm.bcast(data, root=0) or []
+        self.rows = [(float(r["time"]), r["line"]) + tuple(
+            float(r[c]) if r[c] else np.nan for c in TOUCHDOWN_COLUMNS[2:])
+            for r in anchorcsv.read_rows(self.model.comm, path)]
 
     def measure(self, t: float) -> list[tuple]:
         """The rows at the model's current state, time ``t`` (collective)."""
@@ -87,10 +83,7 @@ class TouchdownOutput:
         self.csv.write({c: list(v) for c, v in zip(TOUCHDOWN_COLUMNS, cols)})
         self._pending = []
 
-    def close(self) -> None:
-        self.flush()
-        if self.csv is not None:
-            self.csv.close()
+    close = KinkOutput.close  # flush, then close the file
 
     def summary(self) -> dict:
         """Per line: the range of its grounded length over the output times and, for a

@@ -273,6 +273,16 @@ def read_moments(path: str | Path) -> dict[str, dict[str, np.ndarray]]:
 
 
 # ---------------------------------------------------------------------------- truncation
+def read_rows(comm, path: str | Path) -> list[dict]:
+    """The rows of a CSV file as dicts of strings, on every rank (rank 0 reads; small
+    files: a restart's ``kinks.csv``, ``touchdown.csv``); none without the file."""
+    data = None
+    if _rank(comm) == 0 and Path(path).is_file():
+        with open(path, newline="") as fh:
+            data = list(csv.DictReader(fh))
+    return _comm(comm).bcast(data, root=0) or []
+
+
 def truncate(comm, path: str | Path, t_max: float) -> None:
     """Keep the header and the complete rows with ``time <= t_max`` (collective; rank 0
     rewrites the file atomically: a temporary file, then a rename). A row is complete when
