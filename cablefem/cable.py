@@ -675,16 +675,32 @@ class CableModel:
 
     def residual_floor(self) -> float:
         """The round-off floor of the residual's norm (N): the tension ``EA (λ/c − 1)`` is
-        computed from a stretch known to the machine precision ε, so each nodal force
-        carries a round-off of about ε EA, and the norm over the N unknowns
-        ε EA_max sqrt(N). Newton cannot go below it: its absolute tolerances stay 10 times
-        above (a stiff cable, EA/T = 1e4, moving by millimetres stalled at it, and its time
-        steps were cut over and over)."""
+        computed from a stretch whose round-off is about ε times the displacement over the
+        element length (``∂s u`` is a difference of nodal displacements over ``h``), at
+        least ε, so each nodal force carries a round-off of ε EA max(1, |u|/h), and the
+        norm over the N unknowns that times sqrt(N); ``|u|``: the larger of the current
+        displacement and the statics' initial guess (a sagging cable's is its sag from the
+        straight reference: 100 m over 5 m elements, 20 times ε EA). Newton cannot go
+        below it: its absolute tolerances stay 10 times above (a stiff cable, EA/T = 1e4,
+        moving by millimetres stalled at it and its time steps were cut over and over; a
+        mooring line's statics on 2 ranks failed at its catenary guess, 3 times above the
+        floor without the displacement's factor)."""
         EA = self.EA.x.array if isinstance(self.EA, fem.Function) else \
             np.atleast_1d(self.EA.value)
         EA_max = self.comm.allreduce(float(np.max(np.abs(EA), initial=0.0)), op=MPI.MAX)
         n = self.bs * self.V.dofmap.index_map.size_global
-        return float(np.finfo(float).eps * EA_max * np.sqrt(n))
+        u = self.u.x.array.reshape(-1, self.bs)[:, :3]
+        size = float(np.max(np.linalg.norm(u, axis=1), initial=0.0))
+        size = self.comm.allreduce(size, op=MPI.MAX)
+        size = max(size, float(np.max(np.linalg.norm(self.initial_guess()[:, :3], axis=1),
+                                      initial=0.0)))
+        ratio = max(1.0, size / self.min_element_length())
+        return float(np.finfo(float).eps * EA_max * np.sqrt(n) * ratio)
+
+    def min_element_length(self) -> float:
+        """The shortest element's mesh length (m)."""
+        pts, cells = self.geometry.points, np.asarray(self.geometry.cells)
+        return float(np.min(np.linalg.norm(pts[cells[:, 1]] - pts[cells[:, 0]], axis=1)))
 
     def cable_cells(self) -> np.ndarray:
         """Which owned cells are a cable's (all of them; a network's dampers' are not)."""
