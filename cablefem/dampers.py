@@ -84,7 +84,9 @@ def link_work(mesh, dampers, dx, h, u, v, us, du, t0):
     the stretch vector (the chord over ``h``, exact for P1) and ``λ = |g|``, the damper's
     extension from the static state is ``h (λ − λ_s)``, its rate ``h ∂λ/∂t = h e·∂s v``
     (``e = g/λ``), so its force ``N = c h e·∂s v + k h (λ − λ_s)`` does the virtual work
-    ``N e·(δu_b − δu_a) = ∫ N e·∂s δu dx`` over the cell; None without dampers. Jacobians
+    ``N e·(δu_b − δu_a) = ∫ N e·∂s δu dx`` over the cell; None without dampers. With a
+    ``direction`` n the damper acts on the nodes' relative motion along n instead,
+    ``F = n (c n·Δv + k n·Δ(u − u_s))`` (``Δ``: node b less node a), linear. Jacobians
     (in ``u`` through ``e``, and in ``v``) are derived by UFL."""
     g = forms.stretch_vector(u, t0)
     lam = ufl.sqrt(ufl.dot(g, g))
@@ -93,10 +95,18 @@ def link_work(mesh, dampers, dx, h, u, v, us, du, t0):
     work = None
     for i, d in enumerate(dampers):
         c = fem.Constant(mesh, PETSc.ScalarType(d.coefficient))
-        N = c * h * ufl.dot(e, forms.ds_(v, t0))
-        if d.stiffness > 0:
-            k = fem.Constant(mesh, PETSc.ScalarType(d.stiffness))
-            N = N + k * h * (lam - lam_s)
-        term = N * ufl.dot(e, forms.ds_(du, t0)) * dx(i + 1)
+        k = fem.Constant(mesh, PETSc.ScalarType(d.stiffness))
+        if d.direction is not None:  # along a fixed direction: F = c P Δv + k P Δ(u - u_s)
+            # with P = n n^T and Δw = w_b - w_a = h ∂s w; its work F.Δδu = ∫ F.∂s δu dx
+            n = fem.Constant(mesh, np.asarray(d.direction, dtype=PETSc.ScalarType))
+            rel = c * ufl.dot(n, forms.ds_(v, t0))
+            if d.stiffness > 0:
+                rel = rel + k * ufl.dot(n, forms.ds_(u - us, t0))
+            term = h * rel * ufl.dot(n, forms.ds_(du, t0)) * dx(i + 1)
+        else:
+            N = c * h * ufl.dot(e, forms.ds_(v, t0))
+            if d.stiffness > 0:
+                N = N + k * h * (lam - lam_s)
+            term = N * ufl.dot(e, forms.ds_(du, t0)) * dx(i + 1)
         work = term if work is None else work + term
     return work

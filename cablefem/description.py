@@ -130,11 +130,13 @@ class DamperLink:
     """A damper of a network (``docs/dampers.md``): every cell of the mesh's 1D group
     ``group`` is a dashpot of ``coefficient`` c (N s/m), with a spring of ``stiffness`` k
     (N/m) in parallel, between its two nodes (cable nodes, or a cable node and an anchor),
-    acting along the line between them. Installed at rest, like :class:`Damper`."""
+    acting along the line between them, or along a fixed unit ``direction`` on the nodes'
+    relative motion. Installed at rest, like :class:`Damper`."""
 
     group: str
     coefficient: float
     stiffness: float = 0.0
+    direction: np.ndarray | None = None
 
 
 @dataclass

@@ -220,12 +220,12 @@ coefficient = 10.0
 @pytest.mark.parametrize("defect,key", [
     ("missing", "dampers[0].group"), ("cable", "dampers[0].group"),
     ("dangling", "dampers[0].group"), ("negative", "dampers[0].coefficient"),
-    ("stiffness", "dampers[0].stiffness")])
+    ("stiffness", "dampers[0].stiffness"), ("direction", "dampers[0].direction")])
 def test_network_damper_bad_input(mpi_tmp_path, defect, key):
     """A network's [[dampers]] entry is checked with the key named: its group must be a 1D
     group of the mesh and no [[cables]] group, each of its cells must join a cable node to
     another cable node or an anchor (a cell ending at a node of nothing would hold a node
-    without mass or stiffness), coefficient and stiffness >= 0."""
+    without mass or stiffness), coefficient and stiffness >= 0, a direction non-zero."""
     from test_network import write_mesh  # noqa: E402
 
     from cablefem.case import CaseError
@@ -245,6 +245,8 @@ def test_network_damper_bad_input(mpi_tmp_path, defect, key):
         d["dampers"][0]["coefficient"] = -1.0
     elif defect == "stiffness":
         d["dampers"][0]["stiffness"] = -1.0
+    elif defect == "direction":
+        d["dampers"][0]["direction"] = [0.0, 0.0, 0.0]
     elif defect == "dangling":  # the tie's far end on no anchor
         x = np.linspace(0.0, L, 5)
         pts = np.vstack([np.column_stack([x, 0 * x, 0 * x]), [[x[2], -1.0, 0.0]]])
@@ -258,10 +260,11 @@ def test_network_damper_bad_input(mpi_tmp_path, defect, key):
 
 
 def _tie_network(path, grounded: bool, c: float, k: float, n: int = 50, a: int = 5,
-                 **extra):
+                 slant: float = 0.0, direction=None, **extra):
     """Network dampers: a taut cable along x (nodes (x_i, 0, 0), n elements, pinned ends)
     with a damper cell (group "tie") from its node a along y: to the same node of a second,
-    identical cable at y = 1 m, or (``grounded``) to an anchor at y = -1 m."""
+    identical cable at y = 1 m, or (``grounded``) to an anchor at y = -1 m (and ``slant``
+    m along x); ``direction``: the damper's line of action (default: its cell's)."""
     from test_network import case_dict, write_mesh  # noqa: E402  (tests/ is on the path)
 
     x = np.linspace(0.0, L, n + 1)
@@ -269,7 +272,7 @@ def _tie_network(path, grounded: bool, c: float, k: float, n: int = 50, a: int =
     cells = [np.column_stack([np.arange(n), np.arange(1, n + 1)])]
     ends = [0, n]
     if grounded:
-        pts.append([[x[a], -1.0, 0.0]])
+        pts.append([[x[a] + slant, -1.0, 0.0]])
         tie, ground = [a, n + 1], [n + 1]
     else:
         pts.append(pts[0] + [0.0, 1.0, 0.0])
@@ -285,7 +288,8 @@ def _tie_network(path, grounded: bool, c: float, k: float, n: int = 50, a: int =
     d = case_dict(mesh, [{"group": "c", "section": "s", "pretension": T}],
                   ["ends"] + (["ground"] if ground else []),
                   sections=[{"name": "s", "EA": EA, "EI": 1e-6, "mass": M}],
-                  dampers=[{"group": "tie", "coefficient": c, "stiffness": k}], **extra)
+                  dampers=[{"group": "tie", "coefficient": c, "stiffness": k,
+                            **({"direction": direction} if direction else {})}], **extra)
     for anc in d["anchors"]:
         anc["type"] = "pinned"
     return parse_case(d)
@@ -335,6 +339,37 @@ def test_network_damper_between_two_nodes(mpi_tmp_path, grounded):
         assert z[-1] == pytest.approx(ref[m][0][-1], rel=1e-7)
         assert w[-1] == pytest.approx(ref[m][1][-1], rel=1e-7)
         np.testing.assert_allclose(z[:-1], 0.0, atol=1e-9)
+
+
+def test_network_damper_along_a_given_direction(mpi_tmp_path):
+    """A grounded damper cell slanted at 45 degrees in x-y (its anchor 1 m along x and 1 m
+    along -y from the cable node) with direction = y acts along y only: the single cable's
+    damper of the same c and k along y, to the eigen-solver's tolerance (1e-7), modes 1
+    and 2 (zeta_1 = 4.63 %). Without the direction it acts along the slanted cell (half of
+    c across the cable, and along it): zeta_1 = 3.64 %, more than 10 % off."""
+    from cablefem.network import NetworkModel
+
+    n, a = 50, 5
+    c, k = np.sqrt(T * M) / (np.pi * a / n), 2e3
+    w1 = np.pi * np.sqrt(T * LAM / M) / L
+
+    def ratios(**kw):
+        net = NetworkModel(comm, _tie_network(mpi_tmp_path / "slant.msh", True, c, k, n, a,
+                                              slant=1.0, **kw))
+        solve_static(net)
+        return _by_mode_number(solve_modes(net, 4), w1)
+
+    got = ratios(direction=[0.0, 1.0, 0.0])
+    d = taut(a / n, 1.0, n, stiffness=k)
+    d["dampers"][0].update(coefficient=c, direction=[0.0, 1.0, 0.0])
+    one = CableModel(comm, parse_case(d))
+    solve_static(one)
+    ref = _by_mode_number(solve_modes(one, 4), w1)
+    for m in (1, 2):
+        assert got[m][0][-1] == pytest.approx(ref[m][0][-1], rel=1e-7)
+        assert got[m][1][-1] == pytest.approx(ref[m][1][-1], rel=1e-7)
+    along_cell = ratios()
+    assert abs(along_cell[1][0][-1] / ref[1][0][-1] - 1) > 0.1
 
 
 def _y_history(model, t_end, dt, nodes):

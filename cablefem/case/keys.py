@@ -382,7 +382,12 @@ def _network_keys() -> dict:
                                 "(not a [[cables]] group); each cell joins two cable nodes, "
                                 "or a cable node and an anchor (grounded)."),
                 "coefficient": c["dampers"].keys["coefficient"],
-                "stiffness": c["dampers"].keys["stiffness"]})}
+                "stiffness": c["dampers"].keys["stiffness"],
+                "direction": KeyDoc("3-vector", None, "-", "Line of action, non-zero, "
+                                    "normalised: the dashpot and spring act on the two "
+                                    "nodes' relative motion along it (a damper whose mesh "
+                                    "cell only says where it is attached); default: along "
+                                    "the line between the nodes, as it turns.")})}
     fluid = c["fluid"]
     keys["fluid"] = fluid._replace(keys={**fluid.keys, "diameter": KeyDoc(
         "number", None, "m", "Hydrodynamic diameter D of every cable, > 0; default: each "

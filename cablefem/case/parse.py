@@ -545,7 +545,8 @@ def _parse_network_case(data: dict, base_dir: Path, source: str) -> Case:
         elif group is not None and group in {d.group for d in links}:
             r.add("group", f"duplicate damper group {group!r}")
         links.append(DamperLink(group, r.number("coefficient", ge=0),
-                                r.number("stiffness", ge=0)))
+                                r.number("stiffness", ge=0),
+                                r.vector("direction", unit_vector=True)))
     damping = _parse_damping(top.table("damping"))
     dynamics = _parse_dynamics(top.table("dynamics"))
     modal = ModalSpec(table("modal").integer("modes"))
