@@ -33,7 +33,7 @@ import numpy as np
 from cablefem.motion import _check_table, _read_csv, _Spline, ramp_factors
 
 __all__ = ["Profile", "AiryWave", "VelocitySeries", "wave_number", "wave_kinematics",
-           "read_velocity_csv", "flow_problems", "POWER_FLOOR"]
+           "read_velocity_csv", "flow_problems", "POWER_FLOOR", "jonswap", "jonswap_waves"]
 
 #: the power-law profile is held below this fraction of its reference height (the law's
 #: slope is infinite at the ground)
@@ -120,6 +120,8 @@ class AiryWave:
     period: float
     direction: np.ndarray
     phase: float = 0.0
+    #: the case key it comes from when not its own [[fluid.waves]] entry (a spectrum's)
+    key: str | None = None
 
     @property
     def omega(self) -> float:
@@ -128,6 +130,45 @@ class AiryWave:
     def describe(self) -> dict:
         return {"height": self.height, "period": self.period,
                 "direction": np.asarray(self.direction, float).tolist(), "phase": self.phase}
+
+
+def jonswap(omega, hs: float, tp: float, gamma: float = 3.3) -> np.ndarray:
+    """The JONSWAP spectrum of the surface elevation S(ω) (m² s), one-sided, of significant
+    height ``hs`` (m), peak period ``tp`` (s) and peak enhancement ``gamma`` (1: the
+    Pierson-Moskowitz spectrum), in DNV's form (DNV-RP-C205)::
+
+        S(ω) = A_γ (5/16) Hs² ωp⁴ ω⁻⁵ exp(−(5/4)(ωp/ω)⁴) γ^exp(−(ω−ωp)²/(2σ²ωp²))
+
+    ``σ`` = 0.07 below the peak and 0.09 above, ``A_γ = 1 − 0.287 ln γ`` the normalisation
+    that keeps ``∫ S dω`` at ``Hs²/16`` (to about 1 % for γ from 1 to 7)."""
+    w = np.asarray(omega, float)
+    wp = 2.0 * math.pi / tp
+    sigma = np.where(w <= wp, 0.07, 0.09)
+    peak = gamma ** np.exp(-((w - wp) ** 2) / (2.0 * sigma**2 * wp**2))
+    with np.errstate(divide="ignore", over="ignore", invalid="ignore"):
+        pm = 5.0 / 16.0 * hs**2 * wp**4 * w**-5.0 * np.exp(-1.25 * (wp / w) ** 4)
+    return np.where(w > 0, (1.0 - 0.287 * math.log(gamma)) * pm * peak, 0.0)
+
+
+def jonswap_waves(hs: float, tp: float, direction, gamma: float = 3.3,
+                  components: int = 60, seed: int = 1, low: float = 0.5,
+                  high: float = 3.0) -> list[AiryWave]:
+    """An irregular long-crested sea of the JONSWAP spectrum (:func:`jonswap`) as
+    ``components`` Airy waves travelling along ``direction``: the band ``[low, high]``
+    times the peak frequency in equal bins, one component per bin at a frequency drawn
+    uniformly in it (the sea then does not repeat after 2π/Δω), of amplitude
+    ``sqrt(2 S(ω_i) Δω)`` (its variance ``S Δω``) and a random phase, from a generator
+    seeded with ``seed`` (the same sea on every rank and in every run)."""
+    rng = np.random.default_rng(seed)
+    wp = 2.0 * math.pi / tp
+    edges = np.linspace(low * wp, high * wp, components + 1)
+    dw = np.diff(edges)
+    w = edges[:-1] + rng.uniform(0.0, 1.0, components) * dw
+    amp = np.sqrt(2.0 * jonswap(w, hs, tp, gamma) * dw)
+    phases = rng.uniform(0.0, 2.0 * math.pi, components)
+    d = np.asarray(direction, float)
+    return [AiryWave(float(2.0 * a), float(2.0 * math.pi / wi), d, float(ph), "fluid.spectrum")
+            for a, wi, ph in zip(amp, w, phases) if a > 0]
 
 
 def _depth_ratios(k: float, zeta: np.ndarray, depth: float | None):
@@ -225,7 +266,8 @@ def flow_problems(fluid, gravity) -> list[tuple[str, str]]:
     gdir = gdir / np.linalg.norm(gdir)
     for i, w in enumerate(fluid.waves):
         c = float(np.dot(np.asarray(w.direction, float), gdir))
-        if abs(c) > 1e-6:
-            out.append((f"fluid.waves[{i}].direction", f"must be horizontal (normal to "
-                        f"gravity), its component along gravity is {c:.3g}"))
+        key = f"{w.key or f'fluid.waves[{i}]'}.direction"
+        if abs(c) > 1e-6 and key not in {k for k, _ in out}:
+            out.append((key, f"must be horizontal (normal to gravity), its component along "
+                        f"gravity is {c:.3g}"))
     return out

@@ -189,6 +189,24 @@ CASE_KEYS: dict[str, KeyDoc | TableDoc] = {
             "phase": KeyDoc("number", 0.0, "rad", "Phase: the surface elevation is "
                             "H/2 cos(k d.x - omega t + phase)."),
         }),
+        "spectrum": TableDoc("table", None, "", "An irregular long-crested sea from a wave "
+                             "spectrum, added to waves as Airy components (equal frequency "
+                             "bins, each component at a random frequency in its bin, random "
+                             "phases; docs/fluid.md); needs surface.", {
+            "type": KeyDoc("string", "jonswap", "", "'jonswap' (gamma = 1: "
+                           "Pierson-Moskowitz)."),
+            "hs": KeyDoc("number", REQUIRED, "m", "Significant wave height, > 0."),
+            "tp": KeyDoc("number", REQUIRED, "s", "Peak period, > 0."),
+            "gamma": KeyDoc("number", 3.3, "-", "Peak enhancement factor, 1 to 10."),
+            "direction": KeyDoc("3-vector", REQUIRED, "-", "Direction of travel, horizontal "
+                                "(normal to gravity), normalised."),
+            "components": KeyDoc("integer", 60, "-", "Number of Airy components, >= 1."),
+            "seed": KeyDoc("integer", 1, "-", "Seed of the random frequencies and phases "
+                           "(the same sea for the same seed)."),
+            "low": KeyDoc("number", 0.5, "-", "Lowest frequency, in peak frequencies, > 0."),
+            "high": KeyDoc("number", 3.0, "-", "Highest frequency, in peak frequencies, > "
+                           "low."),
+        }),
         "depth": KeyDoc("number", None, "m", "Water depth below the surface for the waves' "
                         "dispersion and decay, > 0; default: surface - seabed.z with a "
                         "seabed, else deep water."),

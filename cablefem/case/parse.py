@@ -50,7 +50,7 @@ from cablefem.description import (
     VelocitySeries,
 )
 from cablefem.errors import CaseError
-from cablefem.flow import flow_problems, read_velocity_csv
+from cablefem.flow import flow_problems, jonswap_waves, read_velocity_csv
 from cablefem.motion import (
     EllipseMotion,
     HarmonicMotion,
@@ -307,6 +307,11 @@ def _parse_fluid(r: _Reader | None, section, base_dir: Path) -> Fluid | None:
     waves = [_parse_wave(w) for w in r.tables("waves")]
     if waves and surface is None and not r.has("surface"):
         r.add("waves", "waves need the free surface: give fluid.surface")
+    spectrum = r.table("spectrum")
+    if spectrum is not None:
+        waves += _parse_spectrum(spectrum)
+        if surface is None and not r.has("surface"):
+            r.add("spectrum", "waves need the free surface: give fluid.surface")
     velocity = r.table("velocity")
     if velocity is not None:
         hold = velocity.boolean("hold")
@@ -348,6 +353,23 @@ def _parse_profile(r: _Reader | None) -> Profile | None:
         r.add("elevation", "must be strictly increasing")
         return None
     return Profile("table", elevations=z, factors=f)
+
+
+def _parse_spectrum(r: _Reader) -> list:
+    """``[fluid.spectrum]``: an irregular sea of a JONSWAP spectrum, as Airy components
+    (:func:`cablefem.flow.jonswap_waves`)."""
+    r.string("type", ("jonswap",))
+    hs, tp = r.number("hs", gt=0), r.number("tp", gt=0)
+    gamma = r.number("gamma", ge=1, le=10)
+    direction = r.vector("direction", unit_vector=True)
+    n, seed = r.integer("components"), r.integer("seed", ge=0)
+    low, high = r.number("low", gt=0), r.number("high", gt=0)
+    if None not in (low, high) and low >= high:
+        r.add("high", f"must be above low = {low:g}")
+        return []
+    if _missing(hs, tp, gamma, direction, n, seed, low, high):
+        return []
+    return jonswap_waves(hs, tp, direction, gamma, n, seed, low, high)
 
 
 def _parse_wave(r: _Reader) -> AiryWave | None:
