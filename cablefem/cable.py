@@ -673,29 +673,36 @@ class CableModel:
         slack = (e.x.array[:n_owned] <= 0.0) & self.cable_cells()
         return self.comm.allreduce(int(np.count_nonzero(slack)))
 
-    def residual_floor(self) -> float:
+    def residual_floor(self, displaced: bool = False) -> float:
         """The round-off floor of the residual's norm (N): the tension ``EA (λ/c − 1)`` is
-        computed from a stretch whose round-off is about ε times the displacement over the
-        element length (``∂s u`` is a difference of nodal displacements over ``h``), at
-        least ε, so each nodal force carries a round-off of ε EA max(1, |u|/h), and the
-        norm over the N unknowns that times sqrt(N); ``|u|``: the larger of the current
-        displacement and the statics' initial guess (a sagging cable's is its sag from the
-        straight reference: 100 m over 5 m elements, 20 times ε EA). Newton cannot go
-        below it: its absolute tolerances stay 10 times above (a stiff cable, EA/T = 1e4,
-        moving by millimetres stalled at it and its time steps were cut over and over; a
-        mooring line's statics on 2 ranks failed at its catenary guess, 3 times above the
-        floor without the displacement's factor)."""
+        computed from a stretch known to the machine precision ε, so each nodal force
+        carries a round-off of about ε EA, and the norm over the N unknowns ε EA_max
+        sqrt(N). Newton cannot go below it: its absolute tolerances stay 10 times above (a
+        stiff cable, EA/T = 1e4, moving by millimetres stalled at it, and its time steps
+        were cut over and over).
+
+        ``displaced`` (statics): the stretch's gradient is assembled as ``Σ u_i ∇φ_i``,
+        each product rounded on its own, so its round-off grows to ε |u|/h with the
+        displacement ``|u|`` from the reference (a sagging cable's sag from the straight
+        stress-free line: 100 m over 5 m elements, 20 times ε) where the guess is far from
+        it: the floor times max(1, |u|/h_min), ``|u|`` the larger of the current
+        displacement and the statics' guess (a mooring line's statics on 2 ranks failed
+        at its catenary guess 3 times above 10 ε EA sqrt(N)). Dynamics keeps the plain
+        floor: its Newton, started from converged states, gets below it, and the looser
+        tolerance let an irregular sea's mooring line drift into a failed step."""
         EA = self.EA.x.array if isinstance(self.EA, fem.Function) else \
             np.atleast_1d(self.EA.value)
         EA_max = self.comm.allreduce(float(np.max(np.abs(EA), initial=0.0)), op=MPI.MAX)
         n = self.bs * self.V.dofmap.index_map.size_global
+        floor = float(np.finfo(float).eps * EA_max * np.sqrt(n))
+        if not displaced:
+            return floor
         u = self.u.x.array.reshape(-1, self.bs)[:, :3]
         size = float(np.max(np.linalg.norm(u, axis=1), initial=0.0))
         size = self.comm.allreduce(size, op=MPI.MAX)
         size = max(size, float(np.max(np.linalg.norm(self.initial_guess()[:, :3], axis=1),
                                       initial=0.0)))
-        ratio = max(1.0, size / self.min_element_length())
-        return float(np.finfo(float).eps * EA_max * np.sqrt(n) * ratio)
+        return floor * max(1.0, size / self.min_element_length())
 
     def min_element_length(self) -> float:
         """The shortest element's mesh length (m)."""

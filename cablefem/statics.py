@@ -65,7 +65,8 @@ def _make_snes(model, history: SNESHistory, bilateral: bool = False, prefix: str
     # scale it with the larger of the cable's weight and its catenary tension
     defaults = {"snes_type": "newtonls", "snes_linesearch_type": "bt", "snes_max_it": 50,
                 "snes_rtol": 1e-10,
-                "snes_atol": max(1e-10 * model.force_scale, 10.0 * model.residual_floor()),
+                "snes_atol": max(1e-10 * model.force_scale,
+                                 10.0 * model.residual_floor(displaced=True)),
                 "snes_stol": 1e-14,
                 **lu_options(model.comm.size), **getattr(model, "static_options", {}),
                 **extra}
