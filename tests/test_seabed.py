@@ -193,9 +193,8 @@ def test_mooring_demo_in_an_irregular_sea(mpi_tmp_path):
     with Newton's absolute tolerance raised by statics' displacement factor (|u|/h ~ 90
     here) accepted steps 5e-4 N from equilibrium and failed at t = 0.96 s (a Newton step
     from 1e-3 N to 99 N, cut six times); dynamics keeps the plain round-off floor."""
-    from pathlib import Path
-
     import tomllib
+    from pathlib import Path
 
     demo = Path(__file__).resolve().parents[1] / "demos" / "mooring.toml"
     d = tomllib.loads(demo.read_text())
