@@ -318,15 +318,17 @@ class KinkMoments:
         """(n_kinks, 3, 3) current positions of each kink's three nodes, on every rank."""
         return self._nodal(self.model.u) + self.model.geometry.points[self.nodes]
 
-    def measure(self, t: float = 0.0) -> dict[str, np.ndarray]:
+    def measure(self, t: float = 0.0, r: np.ndarray | None = None) -> dict[str, np.ndarray]:
         """The columns (one row per kink) at the model's current state, time ``t`` (for
         the loads), and ``normal`` (n_kinks, 3), the unit axis ``e- × e+`` of the turn
-        (zero without one; a clamp's side: its layer's)."""
+        (zero without one; a clamp's side: its layer's); ``r``: the nodes' positions when
+        the caller has them (:meth:`positions`)."""
         if not self.kinks:
             return self.columns(np.zeros((0, 3, 3)))
         load = np.array([self._loads.load_at(t, m, d) for m, d in zip(self.m, self.D)]
                         ).reshape(-1, 3)
-        return self.columns(self.positions(), self._nodal(self.model.a), load)
+        r = self.positions() if r is None else r
+        return self.columns(r, self._nodal(self.model.a), load)
 
     def side_forces(self, r: np.ndarray, a: np.ndarray | None = None,
                     load: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:

@@ -390,9 +390,13 @@ class StaticProblem:
         freedom stiffness (a slack cable has none transverse to itself), the next
         step with ``κ`` divided by :attr:`RELAX_DECAY` (multiplied by 10 after a failed
         one); every third step plain Newton is tried from the step's state and ends it.
-        The potential energy of a tension-only string under gravity, buoyancy and a
-        seabed is convex, so the steps converge to the equilibrium. Returns (Newton
-        iterations, steps); StaticError after :attr:`RELAX_STEPS` steps."""
+        The potential energy of a tension-only string under gravity and a seabed is
+        convex (``EA/2 (λ − 1)₊²`` of a convex ``λ = |∂s r|``, a linear weight, a convex
+        penalty), so the steps converge to the equilibrium; buoyancy per current length
+        and a steady drag add small parts that are not. Each step takes full Newton
+        steps (``<prefix>relax_``): its problem is strongly convex and starts near its
+        solution. Returns (Newton iterations, steps); StaticError after
+        :attr:`RELAX_STEPS` steps."""
         model, history = self.model, self.history
         prev = fem.Function(model.V, name="relaxation_anchor")
         kappa = fem.Constant(model.mesh, PETSc.ScalarType(self.RELAX_START))

@@ -234,7 +234,7 @@ class RunOutput:
         (docs/kinks.md)."""
         km = self.kinkout.moments
         r = km.positions()
-        c = km.measure(t) if fields else None
+        c = km.measure(t, r) if fields else None
         d = np.diff(r, axis=1)
         e = d / np.linalg.norm(d, axis=2)[..., None]
         for i, sig in enumerate(self.sigmas[len(self.clamped):]):
