@@ -154,8 +154,8 @@ def run_fatigue(case: Case, rundir: Path, outdir: Path | None = None, *,
                     raise ValueError(f"{rundir}/anchors.csv has no rows for the clamped "
                                      f"anchors {missing}")
             else:  # network anchors are "group:k"; not those a cable runs through
-                given = _network_sections(Path(rundir), sections) if data else {}
-                clamped = [n for n in data if n.split(":")[0] in groups and n in given]
+                sections = _network_sections(Path(rundir), sections) if data else {}
+                clamped = [n for n in data if n.split(":")[0] in groups and n in sections]
             sections = _anchor_sections(case, Path(rundir), clamped, sections)
             win, rule = fatigue_window(case, window or spec.window)
             t_last = max((float(data[n]["time"][-1]) for n in clamped), default=0.0)
