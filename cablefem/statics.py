@@ -97,7 +97,26 @@ def _make_snes(model, history: SNESHistory, bilateral: bool = False, prefix: str
 def _try(snes, x, history) -> tuple[bool, int]:
     history.clear()
     snes.solve(None, x)
-    return snes.getConvergedReason() > 0, snes.getIterationNumber()
+    ok = snes.getConvergedReason() > 0
+    if not ok and snes.getKSP().getConvergedReason() == \
+            PETSc.KSP.ConvergedReason.DIVERGED_PCSETUP_FAILED:
+        _fresh_pc(snes.getKSP())
+    return ok, snes.getIterationNumber()
+
+
+def _fresh_pc(ksp: PETSc.KSP) -> None:
+    """Give ``ksp`` a new preconditioner of the same kind. A factorisation that failed (a
+    wild iterate) fails every later solve of the same KSP at its first iteration, even on a
+    good matrix (a rod on 2 ranks, ``pc_type redundant``; resetting the PC does not clear
+    it): the continuation's and the relaxation's next steps could never succeed."""
+    old = ksp.getPC()
+    pc = PETSc.PC().create(old.getComm())
+    pc.setOptionsPrefix(old.getOptionsPrefix())
+    pc.setType(old.getType())
+    if old.getType() == PETSc.PC.Type.LU:
+        pc.setFactorSolverType(old.getFactorSolverType())
+    ksp.setPC(pc)
+    pc.destroy()
 
 
 def _hinge_iterations(model, snes, x, history, reaction, forces, tol: float | None = None,
@@ -302,55 +321,29 @@ class StaticProblem:
             if ok:
                 ok, its = _try(snes, x, history)
                 total_its += its
+        buckled = None
+        if ok and stages is not None:
+            # a rod may find a buckled equilibrium from a guess far from its layers (a fine
+            # mesh of a sagging cable with horizontal clamps: compressed elements, a
+            # negative eigenvalue); the relaxation's descent from the guess is tried too
+            copy_in(x, model.u)
+            n_slack = model.slack_elements()
+            if n_slack:
+                buckled, ok = (x.copy(), n_slack), False
         if not ok:
-            log.info("statics: Newton failed from the catenary (%s); load continuation",
-                     history.text())
-            # what load_factor scales: the extra loads, and for a network the weight as well
-            has_extra = bool(model.case.point_masses or model.case.point_loads
-                             or model.case.loads or model.ramp_weight
-                             or getattr(model.case, "fluid", None) is not None)
-            if not has_extra:
-                raise StaticError(
-                    "static equilibrium not found: Newton failed from the elastic catenary "
-                    f"and there is no extra load to ramp. Newton history: {history.text()}. "
-                    "Check the geometry (a weightless or very slack cable has no unique "
-                    "equilibrium) or set solver.petsc_options.")
-            model.scatter_nodal(guess, model.u)
-            x = model.u.vector.copy()
-            lam, dlam = 0.0, 0.25
-            last = x.copy()
-            while lam < 1.0:
-                # no step from the unloaded state in three tries: it has no stiffness to
-                # start from (a slack line that the load has to hang): relaxation
-                if steps >= max_continuation_steps or dlam < 1e-6 or (
-                        lam == 0.0 and dlam < 0.25 / 6):
-                    stalled = (f"load continuation stalled at load factor {lam:.4g} "
-                               f"(increment {dlam:.2e}); last Newton history: "
-                               f"{history.text()}")
-                    # e.g. a slack line that the load has to hang (a mooring line in a
-                    # network): the unloaded state has no stiffness to start from
-                    log.info("statics: %s; relaxation from the guess", stalled)
-                    model.load_factor.value = 1.0
-                    model.scatter_nodal(guess, model.u)
-                    x = model.u.vector.copy()
-                    its, n_relax = self._relax(x, stalled)
-                    total_its += its
-                    steps += n_relax
-                    break
-                trial = min(1.0, lam + dlam)
-                model.load_factor.value = trial
-                x.copy(last)
-                ok, its = _try(snes, x, history)
+            failure = None if buckled is None else (
+                f"Newton reached a state with {buckled[1]} compressed element(s)")
+            try:
+                x, its, steps = self._fallback(guess, max_continuation_steps, failure)
                 total_its += its
-                steps += 1
-                if ok:
-                    lam = trial
-                    dlam *= 1.5
-                    log.info("statics: load factor %.4g converged in %d iterations", lam, its)
-                else:
-                    last.copy(x)  # back to the last converged state
-                    dlam *= 0.5
-            model.load_factor.value = 1.0
+            except StaticError:
+                if buckled is None:
+                    raise
+                x = buckled[0]
+            if buckled is not None:
+                copy_in(x, model.u)
+                if model.slack_elements() >= buckled[1]:
+                    x = buckled[0]  # no better: the compressed state stands (warned below)
         copy_in(x, model.u)
         if not np.all(np.isfinite(model.u.x.array)):
             raise StaticError("static solution contains NaN/inf")
@@ -376,6 +369,72 @@ class StaticProblem:
                  "tension %.6g..%.6g %s, %.2f s", total_its, steps, tmin, tmax,
                  unit(model.case.units, "force"), res.wall_time)
         return res
+
+    def _fallback(self, guess: np.ndarray, max_steps: int,
+                  failure: str | None = None) -> tuple[PETSc.Vec, int, int]:
+        """Newton failed from ``guess`` (``failure``: how, default its history): load
+        continuation, or the relaxation when there is nothing to ramp. Returns the
+        solution, Newton iterations and steps."""
+        model, history = self.model, self.history
+        # what load_factor scales: the extra loads, and for a network the weight as well
+        has_extra = bool(model.case.point_masses or model.case.point_loads
+                         or model.case.loads or model.ramp_weight
+                         or getattr(model.case, "fluid", None) is not None)
+        if not has_extra:
+            # nothing to ramp: relaxation from the guess (e.g. a fine rod whose
+            # clamped layers the guess misses by more than Newton can cross)
+            failure = failure or f"Newton failed from the elastic catenary ({history.text()})"
+            why = f"{failure} and there is no extra load to ramp"
+            log.info("statics: %s; relaxation from the guess", why)
+            model.scatter_nodal(guess, model.u)
+            x = model.u.vector.copy()
+            its, steps = self._relax(x, "static equilibrium not found: " + why)
+        else:
+            log.info("statics: %s; load continuation",
+                     failure or f"Newton failed from the catenary ({history.text()})")
+            x, its, steps = self._continue(guess, max_steps)
+        return x, its, steps
+
+    def _continue(self, guess: np.ndarray, max_steps: int) -> tuple[PETSc.Vec, int, int]:
+        """Load continuation from ``guess`` (the extra loads, and a network's weight,
+        scaled by ``model.load_factor`` from 0 to 1), with the relaxation when it stalls.
+        Returns the solution, Newton iterations and steps."""
+        model, history, snes = self.model, self.history, self.snes
+        model.scatter_nodal(guess, model.u)
+        x = model.u.vector.copy()
+        lam, dlam, total_its, steps = 0.0, 0.25, 0, 0
+        last = x.copy()
+        try:
+            while lam < 1.0:
+                # no step from the unloaded state in three tries: it has no stiffness to
+                # start from (a slack line that the load has to hang): relaxation
+                if steps >= max_steps or dlam < 1e-6 or (lam == 0.0 and dlam < 0.25 / 6):
+                    stalled = (f"load continuation stalled at load factor {lam:.4g} "
+                               f"(increment {dlam:.2e}); last Newton history: "
+                               f"{history.text()}")
+                    log.info("statics: %s; relaxation from the guess", stalled)
+                    model.load_factor.value = 1.0
+                    model.scatter_nodal(guess, model.u)
+                    model.u.vector.copy(x)
+                    its, n_relax = self._relax(x, stalled)
+                    return x, total_its + its, steps + n_relax
+                trial = min(1.0, lam + dlam)
+                model.load_factor.value = trial
+                x.copy(last)
+                ok, its = _try(snes, x, history)
+                total_its += its
+                steps += 1
+                if ok:
+                    lam = trial
+                    dlam *= 1.5
+                    log.info("statics: load factor %.4g converged in %d iterations", lam, its)
+                else:
+                    last.copy(x)  # back to the last converged state
+                    dlam *= 0.5
+            return x, total_its, steps
+        finally:
+            model.load_factor.value = 1.0
+            last.destroy()
 
     #: the relaxation's first proximal stiffness, per unit mass: (2 pi/1 s)^2 (the
     #: load is applied as if over about a second), divided by RELAX_DECAY per step taken
@@ -403,8 +462,13 @@ class StaticProblem:
         u_t = model.u if model.bs == 3 else ufl.as_vector([model.u[i] for i in range(3)])
         p_t = prev if model.bs == 3 else ufl.as_vector([prev[i] for i in range(3)])
         d_t = model.du if model.bs == 3 else ufl.as_vector([model.du[i] for i in range(3)])
-        model.forms.add("static_relaxation", kappa * model.m * model.c
-                        * ufl.inner(u_t - p_t, d_t) * ufl.dx, kind="static")
+        if model.bs == 3:
+            spring, dx = ufl.inner(u_t - p_t, d_t), ufl.dx
+        else:  # a rod integrates every cell term with one point: the P1 product's form
+            from cablefem.rod import p1_product
+            spring, dx = p1_product(u_t - p_t, d_t, model.t0, model.mesh), model.forms.dx
+        model.forms.add("static_relaxation", kappa * model.m * model.c * spring * dx,
+                        kind="static")
         # full Newton steps: each step's problem is strongly convex and starts near its
         # solution, and a backtracking line search on |F| stalls at the kinks of the
         # tension-only law (measured: 120 steps and 4900 iterations against 6 and 165 for
