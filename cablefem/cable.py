@@ -454,7 +454,7 @@ class CableModel:
         from cablefem.hinge import DCOS
 
         law = SimpleNamespace()
-        for name in ("a", "b", "ka", "kb", "tf", "tc", "cos_ref"):
+        for name in ("a", "b", "ka", "kb", "tf", "tc", "cos_ref", "tref", "qT", "qC"):
             setattr(law, name, fem.Function(self.W, name=f"law_{name}"))
             setattr(self, f"law_{name}" if name != "cos_ref" else "cos_ref",
                     getattr(law, name))
@@ -465,6 +465,7 @@ class CableModel:
         with quiet_compiler():  # the element is JIT-compiled on first use
             space = fem.VectorFunctionSpace(self.mesh, ("DG", 0), dim=3)
         self.turn_dir = fem.Function(space, name="turn_dir")
+        law.dir = self.turn_dir
         g = forms.stretch_vector(self.u, self.t0)
         law.cos = ufl.dot(self.turn_dir, g) / ufl.sqrt(ufl.dot(g, g))
         self.law = law
@@ -478,18 +479,20 @@ class CableModel:
         """Build the model's terms of the residual in :attr:`forms` (a
         :class:`cablefem.forms.CableForms`; users add theirs with ``model.forms.add``)."""
         u, v, a, du, t0, cc = self.u, self.v, self.a, self.du, self.t0, self.c
-        T = T2 = None
-        if self.law is not None:  # virtual hinges: their regions' law
-            T = forms.layer_law_tension(u, t0, self.law, self.tension_only)
-            T2 = forms.layer_law_tension(u, t0, self.law, False)
+        T = T2 = g = None
+        if self.law is not None:  # virtual hinges: their regions' law and offset
+            g = self.law.g = forms.layer_stretch_vector(u, t0, self.law)
+            T = forms.layer_law_tension(u, t0, self.law, self.tension_only, g)
+            T2 = forms.layer_law_tension(u, t0, self.law, False, g)
         self._set_forms(
-            F_int=forms.internal_work(u, du, t0, self.EA, self.tension_only, c=cc, T=T),
+            F_int=forms.internal_work(u, du, t0, self.EA, self.tension_only, c=cc, T=T,
+                                      g=g),
             F_weight=forms.load_work(self.m * self.gravity, du, c=cc),
             F_inertia=forms.inertia_work(self.m, a, du, c=cc),
             du_t=du, a_t=a, dx=ufl.dx,
             # the same with compression allowed: statics uses it to get off a guess on
             # which every element is slack (zero tangent stiffness under tension only)
-            bilateral=forms.internal_work(u, du, t0, self.EA, False, c=cc, T=T2))
+            bilateral=forms.internal_work(u, du, t0, self.EA, False, c=cc, T=T2, g=g))
         self.forms.outputs = {
             "tension": T if T is not None else forms.tension(u, t0, self.EA,
                                                               self.tension_only, cc),

@@ -121,6 +121,7 @@ class _Hinge:
         self.elements = np.zeros(0, np.int64)  # their numbers in the geometry (all ranks)
         self.nodes = nodes  # first element: (anchor node, other node, X_other - X_anchor)
         self.n = 0  # elements the layer's length is taken from
+        self.K = 0.0  # their stress-free length without the hinge
         self.p = np.zeros(0)  # their shares of it
         self.touched = 0  # elements whose coefficients the hinge has changed
         self.h = 0.0  # the node is at A + h c
@@ -298,7 +299,8 @@ class VirtualHinges:
                                      f"than {REGION_FRACTION:g} of half the cable (or of "
                                      "its chain up to the next junction)")
                 hg.n = max(hg.n, need)
-            hg.p = hg.s[:hg.n] / float(np.sum(hg.s[:hg.n]))  # the same fraction of each
+            hg.K = float(np.sum(hg.s[:hg.n]))  # the region's stress-free length
+            hg.p = hg.s[:hg.n] / hg.K  # the same fraction of each
             r = np.zeros(hg.s.size)
             r[:hg.n] = sig * hg.p
             hg.h, hg.sigma = float(h), float(sig)
@@ -327,29 +329,37 @@ class VirtualHinges:
         return {hg.anchor.name: hg.n for hg in self.items}
 
     # ------------------------------------------------------------------ dynamics
-    def _cell_values(self, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Tension (with the law in force) and cos Delta of every local cell in the state
-        ``u`` (a Function's array with its ghosts; ``model.u`` is left as it was; cos
-        Delta: zero outside the regions)."""
+    def _cell_values(self, u: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Tension (with the law in force), cos Delta and stretch of every local cell in
+        the state ``u`` (a Function's array with its ghosts; ``model.u`` is left as it was),
+        the last two from the cell's effective stretch vector (with the hinge's normal
+        offset, :func:`cablefem.forms.layer_stretch_vector`: the direction of its force);
+        cos Delta is zero outside the regions."""
         m = self.model
         keep = None
         if u is not m.u.x.array:
             keep = m.u.x.array.copy()
             m.u.x.array[:] = u
         if self._scratch is None:
+            import ufl
             from dolfinx import fem
 
             from cablefem.jit import quiet_compiler
 
+            g = m.law.g
+            lam = ufl.sqrt(ufl.dot(g, g))
+            points = m.W.element.interpolation_points()
             with quiet_compiler():
-                cos = fem.Expression(m.law.cos, m.W.element.interpolation_points())
-            self._scratch = (fem.Function(m.W), fem.Function(m.W), cos)
-        T, C, cos = self._scratch
+                exprs = (fem.Expression(ufl.dot(m.law.dir, g) / lam, points),
+                         fem.Expression(lam, points))
+            self._scratch = (fem.Function(m.W), fem.Function(m.W), fem.Function(m.W), exprs)
+        T, C, L, (cos, lam) = self._scratch
         T.interpolate(m.tension_expr)
         C.interpolate(cos)
+        L.interpolate(lam)
         if keep is not None:
             m.u.x.array[:] = keep
-        return T.x.array, C.x.array
+        return T.x.array, C.x.array, L.x.array
 
     def _local(self, hg: _Hinge) -> tuple[np.ndarray, np.ndarray]:
         """The region elements (indices into ``hg.cells``) on this rank, and their cells."""
@@ -358,19 +368,17 @@ class VirtualHinges:
         return k, c[k]
 
     def _measure(self, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Tension and anchor angle Delta (between the clamp direction and the first
-        element) of every hinge's first element in the displacement ``u`` (a Function's
+        """Tension and anchor angle Delta (between the clamp direction and the direction of
+        the first element's force: its effective stretch vector, with the hinge's normal
+        offset) of every hinge's first element in the displacement ``u`` (a Function's
         array, ghosts up to date); from the ranks that have the element, to all ranks."""
-        x = u.reshape(-1, 3)
-        Tc, _ = self._cell_values(u)
+        Tc, Cc, _ = self._cell_values(u)
         local = np.zeros((len(self.items), 3))
         for k, hg in enumerate(self.items):
             if hg.nodes is None:
                 continue
-            a, b, E = hg.nodes
-            e = E + x[b] - x[a]
-            cosd = float(np.dot(hg.anchor.direction, e)) / float(np.linalg.norm(e))
-            local[k] = (Tc[int(hg.cells[0])], np.arccos(np.clip(cosd, -1.0, 1.0)), 1.0)
+            c = int(hg.cells[0])
+            local[k] = (Tc[c], np.arccos(np.clip(Cc[c], -1.0, 1.0)), 1.0)
         tot = self.model.comm.allreduce(local, op=MPI.SUM)  # every holder has the same values
         return tot[:, 0] / tot[:, 2], tot[:, 1] / tot[:, 2]
 
@@ -394,6 +402,27 @@ class VirtualHinges:
                  - self._sigma_far(hg, T, np.arccos(lo))) / (hi - lo)
         return sig_T, sig_C
 
+    def _offset_derivatives(self, hg: _Hinge, T: float, delta: float, cell_delta):
+        """The far field's normal offset from the fixed node, ``dn = D_n(T, Delta) - h
+        sin(Delta)`` (zero at the static state), linearised about the first element's
+        static tension ``T`` and angle ``Delta``, as each region cell sees it: its offset is
+        ``q (c - (c.e) e)`` with ``|c - (c.e) e| = sin(Delta_k)`` at its own angle, and
+        a rotation of the region turns every cell by the same angle, ``d cos(Delta_k) =
+        -sin(Delta_k) dDelta``. Returns ``(dq/dT, dq/d cos(Delta_k))`` per cell; zero
+        where ``sin(Delta_k) < 1e-3`` (the offset is O(Delta^2) there)."""
+        sec = hg.anchor.section
+
+        def dn(T_, d_):
+            return float(far_field_offsets(d_, T_, sec.EI, sec.EA)[1]) - hg.h * np.sin(d_)
+
+        dT, dD = 1e-4 * T, 1e-5
+        n_T = (dn(T + dT, delta) - dn(T - dT, delta)) / (2 * dT)
+        n_D = (dn(T, delta + dD) - dn(T, delta - dD)) / (2 * dD)
+        sin = np.sin(np.asarray(cell_delta, float))
+        ok = sin > 1e-3
+        safe = np.where(ok, sin, 1.0)
+        return np.where(ok, n_T / safe, 0.0), np.where(ok, -n_D / safe**2, 0.0)
+
     def start_dynamics(self, u_static: np.ndarray) -> None:
         """Put the layer's law into each region (module docs): linearised about the static
         state ``u_static``, each cell about its own static tension T0 and cos Delta C0.
@@ -401,8 +430,8 @@ class VirtualHinges:
         a restart sets it again from the static state)."""
         m = self.model
         T, delta = self._measure(u_static)
-        Tc, Cc = self._cell_values(u_static)
-        for hg, t_k in zip(self.items, T):
+        Tc, Cc, _ = self._cell_values(u_static)
+        for hg, t_k, delta_k in zip(self.items, T, delta):
             hg.T_static = float(t_k)
             k, c = self._local(hg)
             T0, C0 = Tc[c], Cc[c]
@@ -422,6 +451,20 @@ class VirtualHinges:
             m.law_tf.x.array[c] = FLOOR * T0
             m.law_tc.x.array[c] = CEILING * T0
             m.cos_ref.x.array[c] = C0
+            # the far field's normal offset, each cell its share c0/K of it per mesh length
+            q_T, q_C = self._offset_derivatives(hg, t_k, delta_k,
+                                                np.arccos(np.clip(C0, -1.0, 1.0)))
+            q_T, q_C = q_T * c0 / hg.K, q_C * c0 / hg.K
+            # q is computed from the plain stretch vector g, but it turns the cell's own
+            # (effective) chord: d cos/dq = -sin^2/lambda, and through the law's rho(cos),
+            # dT/dq = (b/ka) d cos/dq. Solved for q at first order: q = q(g)/(1 - gamma)
+            lam = c_s * (1.0 + T0 / hg.EA0)
+            dcos_dq = -(1.0 - C0**2) / lam
+            gamma = (q_T * m.law_b.x.array[c] / m.law_ka.x.array[c] + q_C) * dcos_dq
+            m.law_tref.x.array[c] = T0
+            m.law_qT.x.array[c] = q_T / (1.0 - gamma)
+            m.law_qC.x.array[c] = q_C / (1.0 - gamma)
+            pass  # print("gamma", hg.anchor.name, gamma[:3])
             if hg.cells[0] >= 0:
                 hg.sig_T, hg.sig_C = float(sig_T[0]), float(sig_C[0])
 
