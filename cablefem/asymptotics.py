@@ -393,9 +393,10 @@ def virtual_hinge(delta: ArrayLike, T: ArrayLike, EI: ArrayLike,
     layer length): the hinge is one layer length into the cable, and the rod's stretch in
     the layer is kept. At finite Delta the hinge moves out (h = ell0/cos(Delta/2) for an
     inextensible rod) and less length is removed (sigma_h = ell0 (2 cos(Delta/2) - 1) /
-    cos(Delta/2)). H moves only at second order in a change of Delta, so that the string
-    turns about it as the rod's far field does. Returns ``(h, sigma_h)`` [m]; NaN where
-    T <= 0 or Delta >= pi.
+    cos(Delta/2)). At small Delta, H moves only at second order in a change of Delta, so
+    that the string turns about it as the rod's far field does; at a finite angle it moves
+    at first order (:mod:`cablefem.hinge`: the normal offset). Returns ``(h, sigma_h)``
+    [m]; NaN where T <= 0 or Delta >= pi.
     """
     d = np.asarray(delta, float)
     D_t, D_n = far_field_offsets(d, T, EI, EA)

@@ -30,8 +30,9 @@ the frequencies (the span turns about H, not about A).
   accelerated (:func:`cablefem.statics._hinge_iterations`).
 
 In dynamics the node stays where statics put it (it moves with the anchor), and so does the
-region: H moves only at second order in a change of Delta, and a prescribed node that jumps
-with the tension feeds velocity jumps into generalised-alpha (tried: the run blew up). The
+region: a prescribed node that jumps with the tension feeds velocity jumps into
+generalised-alpha (tried: the run blew up). Where the far field moves off the node, the
+string is shifted instead (below: the normal offset). The
 layer itself follows the tension T and the angle Delta through the region's constitutive
 law (:meth:`VirtualHinges.start_dynamics`, :func:`cablefem.forms.layer_law_tension`): sigma
 is the stress-free length for which the string from the fixed node lies, along the string,
@@ -59,6 +60,20 @@ the first element's tension at every step kicked the other region cells (their t
 differ by the region's weight). Round a small Delta sigma_C (C - C0) is second order, as it
 should be.
 
+The normal offset. The string's line through the fixed node along the force direction t
+passes at ``h sin(Delta)`` from A, the rod's far field at ``D_n(T, Delta)``: statics makes
+them equal, dynamics moves them apart at first order where the static angle is finite. Each
+region cell's stretch vector is shifted by its share of ``dn = D_n - h sin(Delta)`` normal to
+the string, ``g - q (c - (c.e) e)`` (:func:`cablefem.forms.layer_stretch_vector`), with q
+linearised about the static state in the first element's T and Delta
+(:meth:`VirtualHinges._offset_derivatives`) and divided by ``1 - gamma``: q is computed from
+the plain stretch vector, but the shift turns the cell's effective chord, which changes its
+angle and, through the law, its tension (``gamma`` from the static state). Without it the
+hinged string's in-plane frequencies of a 10 %-sag cable with horizontal clamps were 2 %
+low (docs/theory.md §6). Above ``GAMMA_MAX`` (larger anchor angles and layers, about
+eps > 0.035 on that cable) the division is ill-conditioned and the offset is off at that
+anchor (:meth:`VirtualHinges.report`).
+
 Out of range (the fallback). The linear law holds from ``FLOOR`` to ``CEILING`` times T0;
 outside, the cell keeps the law at the nearer end with the element's own elastic slope
 (``T = max(min(T_a, T_f), T_c)``, continuous, with kinks), and the change of C is clipped to
@@ -82,12 +97,16 @@ longer than REGION_FRACTION of half the cable or of its chain to a junction) rai
 
 from __future__ import annotations
 
+import logging
+
 import numpy as np
 from mpi4py import MPI
 from scipy.spatial import cKDTree
 
 from cablefem.asymptotics import far_field_offsets, layer, virtual_hinge
 from cablefem.errors import HingeError
+
+log = logging.getLogger(__name__)
 
 __all__ = ["VirtualHinges", "HingeError", "REGION_FRACTION", "FLOOR", "CEILING"]
 
@@ -107,6 +126,9 @@ CEILING = 2.0
 DCOS = 0.25
 #: Step in cos(Delta) of the derivative d sigma / d cos(Delta).
 HCOS = 1e-5
+#: The normal offset is followed where its self-turn gamma is at most this (the division
+#: by 1 - gamma at most 5): VirtualHinges._start_offset.
+GAMMA_MAX = 0.8
 
 
 class _Hinge:
@@ -122,6 +144,8 @@ class _Hinge:
         self.nodes = nodes  # first element: (anchor node, other node, X_other - X_anchor)
         self.n = 0  # elements the layer's length is taken from
         self.K = 0.0  # their stress-free length without the hinge
+        self.zone = 0  # dynamics: the region cells that carry the normal offset (0: off)
+        self.gamma = 0.0  # dynamics: the offset's self-turn (largest over the region)
         self.p = np.zeros(0)  # their shares of it
         self.touched = 0  # elements whose coefficients the hinge has changed
         self.h = 0.0  # the node is at A + h c
@@ -423,6 +447,35 @@ class VirtualHinges:
         safe = np.where(ok, sin, 1.0)
         return np.where(ok, n_T / safe, 0.0), np.where(ok, -n_D / safe**2, 0.0)
 
+    def _start_offset(self, hg: _Hinge, T: float, delta: float, Tc, Cc, Lc) -> None:
+        """The far field's normal offset (module docs) on the hinge's region, each cell
+        taking the share ``c0/K`` per mesh length. ``q`` is computed from the plain stretch
+        vector and divided by ``1 - gamma``, the turn its own shift gives the cell (through
+        the law's ``rho(cos Delta)`` and the angle), from the static state (``Tc``, ``Cc``,
+        ``Lc``: the cells' tension, cosine and stretch). Where ``gamma > GAMMA_MAX`` the
+        division is ill-conditioned (a 10 %-sag cable with horizontal clamps at eps = 0.08,
+        gamma = 0.81-0.86, stopped within 0.1 s; a shorter zone, gamma > 1, gave a negative
+        eigenvalue there and stopped at eps = 0.05): the offset is off at that anchor, its
+        node staying where statics put it (``report``: ``offset_elements`` 0)."""
+        m = self.model
+        k, c = self._local(hg)
+        T0, C0, lam = Tc[c], Cc[c], Lc[c]
+        q_T, q_C = self._offset_derivatives(hg, T, delta, np.arccos(np.clip(C0, -1.0, 1.0)))
+        share = hg.c0[k] / hg.K
+        q_T, q_C = q_T * share, q_C * share
+        gamma = (q_T * m.law_b.x.array[c] / m.law_ka.x.array[c] + q_C) * (-(1.0 - C0**2) / lam)
+        worst = m.comm.allreduce(float(np.max(gamma, initial=-np.inf)), op=MPI.MAX)
+        hg.gamma = worst
+        hg.zone = hg.n if worst <= GAMMA_MAX else 0
+        on = 1.0 if hg.zone else 0.0
+        m.law_tref.x.array[c] = T0
+        m.law_qT.x.array[c] = on * q_T / (1.0 - gamma)
+        m.law_qC.x.array[c] = on * q_C / (1.0 - gamma)
+        if not hg.zone:
+            log.info("anchor %s: the virtual hinge's normal offset is off (its self-turn "
+                     "%.3g > %g): the node stays where statics put it", hg.anchor.name,
+                     worst, GAMMA_MAX)
+
     def start_dynamics(self, u_static: np.ndarray) -> None:
         """Put the layer's law into each region (module docs): linearised about the static
         state ``u_static``, each cell about its own static tension T0 and cos Delta C0.
@@ -430,7 +483,7 @@ class VirtualHinges:
         a restart sets it again from the static state)."""
         m = self.model
         T, delta = self._measure(u_static)
-        Tc, Cc, _ = self._cell_values(u_static)
+        Tc, Cc, Lc = self._cell_values(u_static)
         for hg, t_k, delta_k in zip(self.items, T, delta):
             hg.T_static = float(t_k)
             k, c = self._local(hg)
@@ -451,22 +504,9 @@ class VirtualHinges:
             m.law_tf.x.array[c] = FLOOR * T0
             m.law_tc.x.array[c] = CEILING * T0
             m.cos_ref.x.array[c] = C0
-            # the far field's normal offset, each cell its share c0/K of it per mesh length
-            q_T, q_C = self._offset_derivatives(hg, t_k, delta_k,
-                                                np.arccos(np.clip(C0, -1.0, 1.0)))
-            q_T, q_C = q_T * c0 / hg.K, q_C * c0 / hg.K
-            # q is computed from the plain stretch vector g, but it turns the cell's own
-            # (effective) chord: d cos/dq = -sin^2/lambda, and through the law's rho(cos),
-            # dT/dq = (b/ka) d cos/dq. Solved for q at first order: q = q(g)/(1 - gamma)
-            lam = c_s * (1.0 + T0 / hg.EA0)
-            dcos_dq = -(1.0 - C0**2) / lam
-            gamma = (q_T * m.law_b.x.array[c] / m.law_ka.x.array[c] + q_C) * dcos_dq
-            m.law_tref.x.array[c] = T0
-            m.law_qT.x.array[c] = q_T / (1.0 - gamma)
-            m.law_qC.x.array[c] = q_C / (1.0 - gamma)
-            pass  # print("gamma", hg.anchor.name, gamma[:3])
             if hg.cells[0] >= 0:
                 hg.sig_T, hg.sig_C = float(sig_T[0]), float(sig_C[0])
+            self._start_offset(hg, t_k, delta_k, Tc, Cc, Lc)
 
     def layer_sigma(self, T: float, delta: float, hg: _Hinge) -> float:
         """The stress-free length the law removes from the first element's region at its
@@ -497,6 +537,9 @@ class VirtualHinges:
 
     def report(self) -> dict[str, dict]:
         """Per anchor: the hinge distance h along the clamp direction, the stress-free
-        length sigma_h removed (m) and the number of elements it is taken from."""
-        return {hg.anchor.name: {"h": hg.h, "sigma_h": hg.sigma, "elements": hg.n}
+        length sigma_h removed (m), the number of elements it is taken from, and (once the
+        dynamics' law is set) the elements that carry the normal offset (0: off) and its
+        self-turn gamma."""
+        return {hg.anchor.name: {"h": hg.h, "sigma_h": hg.sigma, "elements": hg.n,
+                                 "offset_elements": hg.zone, "offset_gamma": hg.gamma}
                 for hg in self.items}
