@@ -146,6 +146,7 @@ class _Hinge:
         self.K = 0.0  # their stress-free length without the hinge
         self.zone = 0  # dynamics: the region cells that carry the normal offset (0: off)
         self.gamma = 0.0  # dynamics: the offset's self-turn (largest over the region)
+        self.offset_said = False  # the log said that the offset is off
         self.p = np.zeros(0)  # their shares of it
         self.touched = 0  # elements whose coefficients the hinge has changed
         self.h = 0.0  # the node is at A + h c
@@ -471,7 +472,8 @@ class VirtualHinges:
         m.law_tref.x.array[c] = T0
         m.law_qT.x.array[c] = on * q_T / (1.0 - gamma)
         m.law_qC.x.array[c] = on * q_C / (1.0 - gamma)
-        if not hg.zone:
+        if not hg.zone and not hg.offset_said:  # once (statics' report, modes, dynamics)
+            hg.offset_said = True
             log.info("anchor %s: the virtual hinge's normal offset is off (its self-turn "
                      "%.3g > %g): the node stays where statics put it", hg.anchor.name,
                      worst, GAMMA_MAX)
