@@ -81,17 +81,19 @@ def _law_tension(lam, cos, law):
 
 
 def layer_stretch_vector(u, t0, law):
-    """The stretch vector of a virtual hinge's region cell with the hinge's normal offset
-    (:mod:`cablefem.hinge`): the string starts on the rod's far-field line, which passes
-    ``δn = D_n(T, Δ) − h sin Δ`` off the fixed node, normal to the string in the plane of
-    the clamp direction ``c`` (``law.dir``, signed by the cell's orientation) and the
-    string. Each region cell takes its share of it, ``∂s r − q (c − (c·e) e)``, with
+    """The direction of a virtual hinge's region cell's force, with the hinge's normal
+    offset (:mod:`cablefem.hinge`): the string starts on the rod's far-field line, which
+    passes ``δn = D_n(T, Δ) − h sin Δ`` off the fixed node, normal to the string in the
+    plane of the clamp direction ``c`` (``law.dir``, signed by the cell's orientation) and
+    the string. Each region cell takes its share of it, ``∂s r − q (c − (c·e) e)``, with
     ``c − (c·e) e = sin Δ n`` and ``q = qT (T − T0) + qC (cos Δ − cos Δ0)`` linearised about
     the cell's static state (``law.qT``, ``law.qC``: zero outside the regions and in
-    statics; ``T`` and ``cos Δ`` from the plain stretch vector, within the law's range).
-    Without it the node stays where statics put it and the in-plane modes of a sagging
-    cable with horizontal clamps come out 0.8-2 % low (the far field's normal shift is a
-    first-order change of the cable's length where the span is curved)."""
+    statics). ``T`` and ``cos Δ`` are the cell's own under the layer's law, from its chord
+    ``∂s r`` (within the law's range): the shift is normal to the chord, so it changes the
+    stretch only at second order, and the law keeps reading its chord. Without it the node
+    stays where statics put it and the in-plane modes of a sagging cable with horizontal
+    clamps come out 1-2 % low (the far field's normal shift is a first-order change of the
+    length a curved span needs)."""
     g = stretch_vector(u, t0)
     lam = ufl.sqrt(ufl.dot(g, g))
     e = g / lam
@@ -102,18 +104,16 @@ def layer_stretch_vector(u, t0, law):
     return g - q * (law.dir - cos * e)
 
 
-def layer_law_tension(u, t0, law, tension_only: bool = True, g=None):
+def layer_law_tension(u, t0, law, tension_only: bool = True):
     """Tension under the virtual hinges' layer law (:mod:`cablefem.hinge`), a piecewise
     linear law in the stretch ``λ`` whose cell coefficients are in ``law`` (an object with
     the attributes ``a, b, ka, kb, tf, tc, dir, cos_ref, dcos``). Following the layer,
-    ``λ = ρ + ka T`` with ``ρ = a − b clip(cos − cos_ref, ±dcos)``; below the floor
-    tension ``tf`` and above the ceiling ``tc`` the elastic slope ``kb`` (< ``ka``) through
-    the same point at ``tf`` and ``tc``: ``T = max(min(T_a, T_f), T_c)``. With ``b = tf =
-    tc = 0`` and ``ka = kb = c/EA``, ``a = c``, it is the elastic law ``EA (λ/c − 1)``.
-    ``g``: the stretch vector (default ``∂s r``; :func:`layer_stretch_vector` with the
-    hinge's offset), whose length is ``λ`` and whose direction gives ``cos = dir · g/λ``."""
-    if g is None:
-        g = stretch_vector(u, t0)
+    ``λ = ρ + ka T`` with ``ρ = a − b clip(cos − cos_ref, ±dcos)`` (``cos = dir · ∂s r/λ``);
+    below the floor tension ``tf`` and above the ceiling ``tc`` the elastic slope ``kb``
+    (< ``ka``) through the same point at ``tf`` and ``tc``: ``T = max(min(T_a, T_f), T_c)``.
+    With ``b = tf = tc = 0`` and ``ka = kb = c/EA``, ``a = c``, it is the elastic law
+    ``EA (λ/c − 1)``."""
+    g = stretch_vector(u, t0)
     lam = ufl.sqrt(ufl.dot(g, g))
     T = _law_tension(lam, ufl.dot(law.dir, g) / lam, law)
     if tension_only:

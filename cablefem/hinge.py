@@ -63,16 +63,12 @@ should be.
 The normal offset. The string's line through the fixed node along the force direction t
 passes at ``h sin(Delta)`` from A, the rod's far field at ``D_n(T, Delta)``: statics makes
 them equal, dynamics moves them apart at first order where the static angle is finite. Each
-region cell's stretch vector is shifted by its share of ``dn = D_n - h sin(Delta)`` normal to
-the string, ``g - q (c - (c.e) e)`` (:func:`cablefem.forms.layer_stretch_vector`), with q
-linearised about the static state in the first element's T and Delta
-(:meth:`VirtualHinges._offset_derivatives`) and divided by ``1 - gamma``: q is computed from
-the plain stretch vector, but the shift turns the cell's effective chord, which changes its
-angle and, through the law, its tension (``gamma`` from the static state). Without it the
-hinged string's in-plane frequencies of a 10 %-sag cable with horizontal clamps were 2 %
-low (docs/theory.md §6). Above ``GAMMA_MAX`` (larger anchor angles and layers, about
-eps > 0.035 on that cable) the division is ill-conditioned and the offset is off at that
-anchor (:meth:`VirtualHinges.report`).
+region cell's force direction is that of its stretch vector shifted by its share of ``dn =
+D_n - h sin(Delta)`` normal to the string, ``g - q (c - (c.e) e)``
+(:func:`cablefem.forms.layer_stretch_vector`), with q linearised about the static state in
+the first element's T and Delta (:meth:`VirtualHinges._offset_derivatives`) and computed,
+like the law, from the cell's own chord. Without it the hinged string's in-plane
+frequencies of a 10 %-sag cable with horizontal clamps were 1-2 % low (docs/theory.md §6).
 
 Out of range (the fallback). The linear law holds from ``FLOOR`` to ``CEILING`` times T0;
 outside, the cell keeps the law at the nearer end with the element's own elastic slope
@@ -97,16 +93,12 @@ longer than REGION_FRACTION of half the cable or of its chain to a junction) rai
 
 from __future__ import annotations
 
-import logging
-
 import numpy as np
 from mpi4py import MPI
 from scipy.spatial import cKDTree
 
 from cablefem.asymptotics import far_field_offsets, layer, virtual_hinge
 from cablefem.errors import HingeError
-
-log = logging.getLogger(__name__)
 
 __all__ = ["VirtualHinges", "HingeError", "REGION_FRACTION", "FLOOR", "CEILING"]
 
@@ -126,9 +118,6 @@ CEILING = 2.0
 DCOS = 0.25
 #: Step in cos(Delta) of the derivative d sigma / d cos(Delta).
 HCOS = 1e-5
-#: The normal offset is followed where its self-turn gamma is at most this (the division
-#: by 1 - gamma at most 5): VirtualHinges._start_offset.
-GAMMA_MAX = 0.8
 
 
 class _Hinge:
@@ -144,9 +133,6 @@ class _Hinge:
         self.nodes = nodes  # first element: (anchor node, other node, X_other - X_anchor)
         self.n = 0  # elements the layer's length is taken from
         self.K = 0.0  # their stress-free length without the hinge
-        self.zone = 0  # dynamics: the region cells that carry the normal offset (0: off)
-        self.gamma = 0.0  # dynamics: the offset's self-turn (largest over the region)
-        self.offset_said = False  # the log said that the offset is off
         self.p = np.zeros(0)  # their shares of it
         self.touched = 0  # elements whose coefficients the hinge has changed
         self.h = 0.0  # the node is at A + h c
@@ -354,37 +340,29 @@ class VirtualHinges:
         return {hg.anchor.name: hg.n for hg in self.items}
 
     # ------------------------------------------------------------------ dynamics
-    def _cell_values(self, u: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Tension (with the law in force), cos Delta and stretch of every local cell in
-        the state ``u`` (a Function's array with its ghosts; ``model.u`` is left as it was),
-        the last two from the cell's effective stretch vector (with the hinge's normal
-        offset, :func:`cablefem.forms.layer_stretch_vector`: the direction of its force);
-        cos Delta is zero outside the regions."""
+    def _cell_values(self, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Tension (with the law in force) and cos Delta of every local cell in the state
+        ``u`` (a Function's array with its ghosts; ``model.u`` is left as it was; cos
+        Delta: zero outside the regions)."""
         m = self.model
         keep = None
         if u is not m.u.x.array:
             keep = m.u.x.array.copy()
             m.u.x.array[:] = u
         if self._scratch is None:
-            import ufl
             from dolfinx import fem
 
             from cablefem.jit import quiet_compiler
 
-            g = m.law.g
-            lam = ufl.sqrt(ufl.dot(g, g))
-            points = m.W.element.interpolation_points()
             with quiet_compiler():
-                exprs = (fem.Expression(ufl.dot(m.law.dir, g) / lam, points),
-                         fem.Expression(lam, points))
-            self._scratch = (fem.Function(m.W), fem.Function(m.W), fem.Function(m.W), exprs)
-        T, C, L, (cos, lam) = self._scratch
+                cos = fem.Expression(m.law.cos, m.W.element.interpolation_points())
+            self._scratch = (fem.Function(m.W), fem.Function(m.W), cos)
+        T, C, cos = self._scratch
         T.interpolate(m.tension_expr)
         C.interpolate(cos)
-        L.interpolate(lam)
         if keep is not None:
             m.u.x.array[:] = keep
-        return T.x.array, C.x.array, L.x.array
+        return T.x.array, C.x.array
 
     def _local(self, hg: _Hinge) -> tuple[np.ndarray, np.ndarray]:
         """The region elements (indices into ``hg.cells``) on this rank, and their cells."""
@@ -393,11 +371,10 @@ class VirtualHinges:
         return k, c[k]
 
     def _measure(self, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Tension and anchor angle Delta (between the clamp direction and the direction of
-        the first element's force: its effective stretch vector, with the hinge's normal
-        offset) of every hinge's first element in the displacement ``u`` (a Function's
+        """Tension and anchor angle Delta (between the clamp direction and the first
+        element) of every hinge's first element in the displacement ``u`` (a Function's
         array, ghosts up to date); from the ranks that have the element, to all ranks."""
-        Tc, Cc, _ = self._cell_values(u)
+        Tc, Cc = self._cell_values(u)
         local = np.zeros((len(self.items), 3))
         for k, hg in enumerate(self.items):
             if hg.nodes is None:
@@ -448,35 +425,19 @@ class VirtualHinges:
         safe = np.where(ok, sin, 1.0)
         return np.where(ok, n_T / safe, 0.0), np.where(ok, -n_D / safe**2, 0.0)
 
-    def _start_offset(self, hg: _Hinge, T: float, delta: float, Tc, Cc, Lc) -> None:
+    def _start_offset(self, hg: _Hinge, T: float, delta: float, Tc, Cc) -> None:
         """The far field's normal offset (module docs) on the hinge's region, each cell
-        taking the share ``c0/K`` per mesh length. ``q`` is computed from the plain stretch
-        vector and divided by ``1 - gamma``, the turn its own shift gives the cell (through
-        the law's ``rho(cos Delta)`` and the angle), from the static state (``Tc``, ``Cc``,
-        ``Lc``: the cells' tension, cosine and stretch). Where ``gamma > GAMMA_MAX`` the
-        division is ill-conditioned (a 10 %-sag cable with horizontal clamps at eps = 0.08,
-        gamma = 0.81-0.86, stopped within 0.1 s; a shorter zone, gamma > 1, gave a negative
-        eigenvalue there and stopped at eps = 0.05): the offset is off at that anchor, its
-        node staying where statics put it (``report``: ``offset_elements`` 0)."""
+        taking the share ``c0/K`` of it per mesh length, linearised about the first
+        element's static tension ``T`` and angle ``delta`` (``Tc``, ``Cc``: the cells' static
+        tension and cosine)."""
         m = self.model
         k, c = self._local(hg)
-        T0, C0, lam = Tc[c], Cc[c], Lc[c]
-        q_T, q_C = self._offset_derivatives(hg, T, delta, np.arccos(np.clip(C0, -1.0, 1.0)))
+        q_T, q_C = self._offset_derivatives(hg, T, delta,
+                                            np.arccos(np.clip(Cc[c], -1.0, 1.0)))
         share = hg.c0[k] / hg.K
-        q_T, q_C = q_T * share, q_C * share
-        gamma = (q_T * m.law_b.x.array[c] / m.law_ka.x.array[c] + q_C) * (-(1.0 - C0**2) / lam)
-        worst = m.comm.allreduce(float(np.max(gamma, initial=-np.inf)), op=MPI.MAX)
-        hg.gamma = worst
-        hg.zone = hg.n if worst <= GAMMA_MAX else 0
-        on = 1.0 if hg.zone else 0.0
-        m.law_tref.x.array[c] = T0
-        m.law_qT.x.array[c] = on * q_T / (1.0 - gamma)
-        m.law_qC.x.array[c] = on * q_C / (1.0 - gamma)
-        if not hg.zone and not hg.offset_said:  # once (statics' report, modes, dynamics)
-            hg.offset_said = True
-            log.info("anchor %s: the virtual hinge's normal offset is off (its self-turn "
-                     "%.3g > %g): the node stays where statics put it", hg.anchor.name,
-                     worst, GAMMA_MAX)
+        m.law_tref.x.array[c] = Tc[c]
+        m.law_qT.x.array[c] = q_T * share
+        m.law_qC.x.array[c] = q_C * share
 
     def start_dynamics(self, u_static: np.ndarray) -> None:
         """Put the layer's law into each region (module docs): linearised about the static
@@ -485,7 +446,7 @@ class VirtualHinges:
         a restart sets it again from the static state)."""
         m = self.model
         T, delta = self._measure(u_static)
-        Tc, Cc, Lc = self._cell_values(u_static)
+        Tc, Cc = self._cell_values(u_static)
         for hg, t_k, delta_k in zip(self.items, T, delta):
             hg.T_static = float(t_k)
             k, c = self._local(hg)
@@ -508,7 +469,7 @@ class VirtualHinges:
             m.cos_ref.x.array[c] = C0
             if hg.cells[0] >= 0:
                 hg.sig_T, hg.sig_C = float(sig_T[0]), float(sig_C[0])
-            self._start_offset(hg, t_k, delta_k, Tc, Cc, Lc)
+            self._start_offset(hg, t_k, delta_k, Tc, Cc)
 
     def layer_sigma(self, T: float, delta: float, hg: _Hinge) -> float:
         """The stress-free length the law removes from the first element's region at its
@@ -539,9 +500,6 @@ class VirtualHinges:
 
     def report(self) -> dict[str, dict]:
         """Per anchor: the hinge distance h along the clamp direction, the stress-free
-        length sigma_h removed (m), the number of elements it is taken from, and (once the
-        dynamics' law is set) the elements that carry the normal offset (0: off) and its
-        self-turn gamma."""
-        return {hg.anchor.name: {"h": hg.h, "sigma_h": hg.sigma, "elements": hg.n,
-                                 "offset_elements": hg.zone, "offset_gamma": hg.gamma}
+        length sigma_h removed (m) and the number of elements it is taken from."""
+        return {hg.anchor.name: {"h": hg.h, "sigma_h": hg.sigma, "elements": hg.n}
                 for hg in self.items}

@@ -251,9 +251,6 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
     summary["wall_time"]["statics"] = static.wall_time
     summary["outer_correction"] = "none" if kind == "beam" else case.solver.outer_correction
     if model.hinges:
-        # the layers' law of dynamics (and the normal offset's zone) from the static state,
-        # as the modal analysis and the dynamics will set it
-        model.hinges.start_dynamics(model.u_static.x.array)
         summary["static"]["virtual_hinges"] = model.hinges.report()
     if getattr(case, "seabed", None) is not None and getattr(model, "is_network", False):
         from cablefem.seabed import network_contact  # per cable group
