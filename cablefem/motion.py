@@ -124,7 +124,8 @@ def default_ramp(omega: Any, amplitude: Any = None) -> float:
         moving = np.asarray(amplitude, dtype=float) != 0
         if np.any(moving):
             w = w[moving]
-    return float(DEFAULT_RAMP_PERIODS * 2.0 * math.pi / np.min(w))
+    with np.errstate(over="ignore", divide="ignore"):  # inf: the parser says so
+        return float(DEFAULT_RAMP_PERIODS * 2.0 * math.pi / np.min(w))
 
 
 def _check_ramp(ramp: Any) -> float:

@@ -501,6 +501,14 @@ def test_case_ramp_default_and_explicit():
         assert has_problem(problems_of(data), "anchors[1].motion.ramp", fragment)
     set_key(data, "anchors[1].motion", {"type": "table", "file": "m.csv", "ramp": 1.0})
     assert has_problem(problems_of(data), "anchors[1].motion.ramp", "does not apply")
+    # a frequency whose default ramp overflows (found by the fuzz test: a ValueError
+    # traceback before) is a problem of omega; a given ramp needs none
+    for kind, extra in (("ellipse", {"axis_sin": [0, 0, 1e-3]}),
+                        ("harmonic", {"amplitude": [0, 0, 1e-3]})):
+        set_key(data, "anchors[1].motion", {"type": kind, "omega": 5e-324, **extra})
+        assert has_problem(problems_of(data), "anchors[1].motion.omega", "too small")
+        set_key(data, "anchors[1].motion.ramp", 2.0)
+        assert parse_case(data).anchors[1].motion.ramp == 2.0
 
 
 def test_startup_time_rules():

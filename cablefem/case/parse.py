@@ -142,6 +142,8 @@ def _parse_motion(r: _Reader | None, base_dir: Path) -> Motion | None:
         if not present or _missing(*parts) or bad_ramp:
             return None
         ramp = default_ramp(parts[1], parts[0]) if ramp is None else ramp
+        if not _finite_ramp(r, ramp):
+            return None
         return HarmonicMotion(*parts, ramp=ramp)
     if not (r.has("axis_sin") or r.has("axis_cos")):
         r.problems.append((r.path, "an ellipse motion needs axis_sin and/or axis_cos"))
@@ -150,7 +152,22 @@ def _parse_motion(r: _Reader | None, base_dir: Path) -> Motion | None:
     if not present or _missing(*parts) or bad_ramp:
         return None
     ramp = default_ramp(parts[0]) if ramp is None else ramp
+    if not _finite_ramp(r, ramp):
+        return None
     return EllipseMotion(*parts, ramp=ramp)
+
+
+def _finite_ramp(r: _Reader, ramp: float) -> bool:
+    """A ramp (given, or the default of a few periods) that is a number of seconds; else
+    the problem goes to ``omega`` (a frequency so small that its periods overflow) or
+    ``ramp``."""
+    if math.isfinite(ramp):
+        return True
+    key = "ramp" if r.has("ramp") else "omega"
+    r.problems.append((f"{r.path}.{key}", "too small a circular frequency: the default ramp "
+                       "of a few periods is not a finite time; give a larger omega or a ramp"
+                       if key == "omega" else "must be finite"))
+    return False
 
 
 def _parse_time(r: _Reader | None, base_dir: Path) -> TimeFunction | None:
