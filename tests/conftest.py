@@ -79,3 +79,20 @@ def read_series(path) -> list[tuple[float, dict]]:
             t, pd, cd = reader.read_data(k)
             frames.append((t, {**pd, **{key: v[0] for key, v in cd.items()}}))
     return frames
+
+
+def sagging_paper_case(eps: float) -> dict:
+    """The validation matrix's sagging cables as a case dict: case A's section with
+    ``EI = eps^2`` and chord 0.974 (10 % sag, horizontal clamps, anchor angles 0.44 rad), q
+    moving 0.01 out of plane at 2.5 rad/s (below the first frequency, 3.5), 1 % Rayleigh
+    damping at 3.5 and 7 rad/s."""
+    import tomllib
+
+    root = Path(__file__).resolve().parents[1]
+    data = tomllib.loads((root / "demos" / "paper_inplane.toml").read_text())
+    data["section"]["EI"] = eps**2
+    data["anchors"][1]["position"] = [0.974, 0.0, 0.0]
+    data["anchors"][1]["motion"] = {"type": "harmonic", "amplitude": [0.0, 0.01, 0.0],
+                                    "omega": 2.5}
+    data["damping"] = {"model": "rayleigh", "ratio": 0.01, "frequencies": [3.5, 7.0]}
+    return data

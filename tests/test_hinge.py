@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import sagging_paper_case
 from dolfinx.fem import petsc as fpetsc
 from dyn_util import resume_round_trip
 from mpi4py import MPI
@@ -486,12 +487,7 @@ def test_sagging_cable_with_horizontal_clamps_runs_by_default():
     the leading order's +0.05 %), 2 ranks as serial to Newton's tolerance."""
     from cablefem.dynamics import integrate
 
-    data = tomllib.loads((DEMOS / "paper_inplane.toml").read_text())
-    data["section"]["EI"] = 0.03**2
-    data["anchors"][1]["position"] = [0.974, 0.0, 0.0]
-    data["anchors"][1]["motion"] = {"type": "harmonic", "amplitude": [0.0, 0.01, 0.0],
-                                    "omega": 2.5}
-    data["damping"] = {"model": "rayleigh", "ratio": 0.01, "frequencies": [3.5, 7.0]}
+    data = sagging_paper_case(0.03)
     hist = {}
     for comm in (MPI.COMM_WORLD, MPI.COMM_SELF):
         m = CableModel(comm, parse_case(data, DEMOS))

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import level_case, observed_order
+from conftest import level_case, observed_order, sagging_paper_case
 from mpi4py import MPI
 
 from cablefem.cable import CableModel
@@ -171,16 +171,9 @@ def test_the_hinges_offset_runs_where_the_layers_are_long(mpi_tmp_path):
     offset. A version that solved the offset for the turn it gives its own cell (a
     division by 1 - gamma, gamma = 0.81-0.86 here) stopped at t = 0.10 s (Newton cycling);
     the offset now reads the cell's chord like the law, with nothing to divide."""
-    import tomllib
-
     from cablefem.app.run import run_case
 
-    d = tomllib.loads((DEMOS / "paper_inplane.toml").read_text())
-    d["section"]["EI"] = 0.08 ** 2
-    d["anchors"][1]["position"] = [0.974, 0.0, 0.0]
-    d["anchors"][1]["motion"] = {"type": "harmonic", "amplitude": [0.0, 0.01, 0.0],
-                                 "omega": 2.5}
-    d["damping"] = {"model": "rayleigh", "ratio": 0.01, "frequencies": [3.5, 7.0]}
+    d = sagging_paper_case(0.08)
     d["dynamics"].update({"t_end": 0.3, "dt": 0.005})
     s = run_case(parse_case(d), mpi_tmp_path / "sag08", figures=False,
                  progress=False).summary
