@@ -481,9 +481,9 @@ class CableModel:
         u, v, a, du, t0, cc = self.u, self.v, self.a, self.du, self.t0, self.c
         T = T2 = g = None
         if self.law is not None:  # virtual hinges: their regions' law and offset
-            g = forms.layer_stretch_vector(u, t0, self.law)  # the force's direction
             T = forms.layer_law_tension(u, t0, self.law, self.tension_only)
             T2 = forms.layer_law_tension(u, t0, self.law, False)
+            g = forms.layer_stretch_vector(u, t0, self.law, T2)  # the force's direction
         self._set_forms(
             F_int=forms.internal_work(u, du, t0, self.EA, self.tension_only, c=cc, T=T,
                                       g=g),

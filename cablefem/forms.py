@@ -80,7 +80,7 @@ def _law_tension(lam, cos, law):
     return ufl.max_value(ufl.min_value(T_a, T_f), T_c)
 
 
-def layer_stretch_vector(u, t0, law):
+def layer_stretch_vector(u, t0, law, T=None):
     """The direction of a virtual hinge's region cell's force, with the hinge's normal
     offset (:mod:`cablefem.hinge`): the string starts on the rod's far-field line, which
     passes ``δn = D_n(T, Δ) − h sin Δ`` off the fixed node, normal to the string in the
@@ -93,12 +93,15 @@ def layer_stretch_vector(u, t0, law):
     stretch only at second order, and the law keeps reading its chord. Without it the node
     stays where statics put it and the in-plane modes of a sagging cable with horizontal
     clamps come out 1-2 % low (the far field's normal shift is a first-order change of the
-    length a curved span needs)."""
+    length a curved span needs). ``T``: the law's tension with compression allowed
+    (:func:`layer_law_tension`, ``tension_only=False``) when the caller has it."""
     g = stretch_vector(u, t0)
     lam = ufl.sqrt(ufl.dot(g, g))
     e = g / lam
     cos = ufl.dot(law.dir, e)
-    T = ufl.max_value(ufl.min_value(_law_tension(lam, cos, law), law.tc), law.tf)
+    if T is None:
+        T = _law_tension(lam, cos, law)
+    T = ufl.max_value(ufl.min_value(T, law.tc), law.tf)
     dc = ufl.max_value(ufl.min_value(cos - law.cos_ref, law.dcos), -law.dcos)
     q = law.qT * (T - law.tref) + law.qC * dc
     return g - q * (law.dir - cos * e)

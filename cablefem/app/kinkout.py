@@ -9,7 +9,6 @@ import numpy as np
 
 from cablefem.app.report import steady_state_stats
 from cablefem.io import anchorcsv
-from cablefem.io.anchorcsv import AnchorCSV
 from cablefem.kinks import KINK_COLUMNS, KinkMoments, rod_kink_moments
 
 __all__ = ["KinkOutput"]
@@ -36,11 +35,8 @@ class KinkOutput:
         self._pending = []
         if not self.kinks:
             return
-        path = outdir / "kinks.csv"
-        if resume_after is not None:
-            anchorcsv.truncate(model.comm, path, resume_after)
-            self._load(path)
-        self.csv = AnchorCSV(path, KINK_COLUMNS, model.comm, append=resume_after is not None)
+        self.csv = anchorcsv.open_series(model.comm, outdir / "kinks.csv", KINK_COLUMNS,
+                                         resume_after, self._load)
 
     def _columns(self, t: float = 0.0) -> dict[str, np.ndarray]:
         cols = self.moments.measure(t)

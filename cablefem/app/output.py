@@ -14,7 +14,7 @@ from cablefem.app.kinkout import KinkOutput
 from cablefem.app.touchdownout import TouchdownOutput
 from cablefem.cable import CableModel
 from cablefem.io import anchorcsv
-from cablefem.io.anchorcsv import FORCE_COLUMNS, AnchorCSV
+from cablefem.io.anchorcsv import FORCE_COLUMNS
 from cablefem.io.series import (
     MomentsWriter,
     OutputError,
@@ -83,15 +83,14 @@ class RunOutput:
         self.fallback: dict[str, list[bool]] = {}
         self._names = [a.name for a in model.anchors]
         self._index = {name: j for j, name in enumerate(self._names)}
-        if resume_after is not None:  # the rows up to the checkpoint, without a kill's rest
-            anchorcsv.truncate(model.comm, outdir / "anchors.csv", resume_after)
-            self._load_history(outdir / "anchors.csv")
+        # resumed: the rows up to the checkpoint, without a kill's rest
+        self.csv = anchorcsv.open_series(model.comm, outdir / "anchors.csv",
+                                         anchorcsv.columns(bool(self.clamped)), resume_after,
+                                         self._load_history)
         frames = frames or {}
         self.kinkout = KinkOutput(model, outdir, omega, resume_after)  # kinks.csv
         self.touchdown = TouchdownOutput(model, outdir, resume_after)  # touchdown.csv
         self.string = StringWriter(model, outdir, resume_after, frames.get("string"))
-        self.csv = AnchorCSV(outdir / "anchors.csv", anchorcsv.columns(bool(self.clamped)),
-                             model.comm, append=resume_after is not None)
         self._pending = 0  # rows recorded, not yet written
         self._last: dict = {}  # the moment columns of the last written block, per anchor
         self._last_time = None  # and its last time

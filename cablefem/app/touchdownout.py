@@ -10,7 +10,6 @@ import numpy as np
 
 from cablefem.app.kinkout import KinkOutput
 from cablefem.io import anchorcsv
-from cablefem.io.anchorcsv import AnchorCSV
 
 __all__ = ["TOUCHDOWN_COLUMNS", "TouchdownOutput"]
 
@@ -38,12 +37,8 @@ class TouchdownOutput:
         self.csv = None
         if not self.active:
             return
-        path = outdir / "touchdown.csv"
-        if resume_after is not None:
-            anchorcsv.truncate(model.comm, path, resume_after)
-            self._load(path)
-        self.csv = AnchorCSV(path, TOUCHDOWN_COLUMNS, model.comm,
-                             append=resume_after is not None)
+        self.csv = anchorcsv.open_series(model.comm, outdir / "touchdown.csv",
+                                         TOUCHDOWN_COLUMNS, resume_after, self._load)
 
     def _load(self, path: Path) -> None:
         """The rows written before a restart (every rank reads them: small)."""

@@ -25,7 +25,7 @@ import math
 import os
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Mapping, Sequence
+from typing import Callable, Mapping, Sequence
 
 import numpy as np
 
@@ -281,6 +281,20 @@ def read_rows(comm, path: str | Path) -> list[dict]:
         with open(path, newline="") as fh:
             data = list(csv.DictReader(fh))
     return _comm(comm).bcast(data, root=0) or []
+
+
+def open_series(comm, path: str | Path, columns: Sequence[str], resume_after: float | None,
+                load: Callable[[Path], None] | None = None) -> AnchorCSV:
+    """A time-series CSV for a run: a new file with ``columns``, or, resuming after the
+    checkpoint time ``resume_after``, the existing one cut to its rows up to it
+    (:func:`truncate`), read back by ``load(path)`` (the history the summary needs) and
+    continued."""
+    path = Path(path)
+    if resume_after is not None:
+        truncate(comm, path, resume_after)
+        if load is not None:
+            load(path)
+    return AnchorCSV(path, columns, comm, append=resume_after is not None)
 
 
 def truncate(comm, path: str | Path, t_max: float) -> None:
