@@ -249,6 +249,11 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
         "slack_elements": static.slack_elements, "max_tension": static.max_tension,
         "min_tension": static.min_tension, "sag_ratio": sag}
     summary["wall_time"]["statics"] = static.wall_time
+    if kind == "beam" and static.slack_elements:
+        # statics tried the relaxation from the guess and found nothing better
+        warn(summary, "statics", f"the rod's static state has {static.slack_elements} "
+             f"compressed element(s) (least tension {static.min_tension:.4g}): a buckled "
+             "equilibrium, not a reference for a cable; try another --refine")
     summary["outer_correction"] = "none" if kind == "beam" else case.solver.outer_correction
     if model.hinges:
         summary["static"]["virtual_hinges"] = model.hinges.report()
