@@ -11,7 +11,9 @@ the frequencies (the span turns about H, not about A).
 :class:`VirtualHinges` puts that into the finite-element string:
 
 * the anchor node is prescribed at H (the anchor's ``offset`` h c, added to its
-  prescribed displacement, so an anchor motion moves the hinge with it);
+  prescribed displacement, so an anchor motion moves the hinge with it), shifted by the far
+  field's second order ``E`` (:func:`cablefem.asymptotics.far_field_second_order`: the load
+  along the layer turns the far field and changes its tension; docs/theory.md §6.2);
 * the stress-free length ``sigma_h`` is taken out of the *region* next to the anchor: the
   fewest whole elements whose stress-free length K is at least ``sigma_h / REGION_FRACTION``
   (one element on a coarse mesh, as many as needed on a fine one), each shortened by the same
@@ -97,7 +99,7 @@ import numpy as np
 from mpi4py import MPI
 from scipy.spatial import cKDTree
 
-from cablefem.asymptotics import far_field_offsets, layer, virtual_hinge
+from cablefem.asymptotics import far_field_offsets, far_field_second_order, layer, virtual_hinge
 from cablefem.errors import HingeError
 
 __all__ = ["VirtualHinges", "HingeError", "REGION_FRACTION", "FLOOR", "CEILING"]
@@ -142,6 +144,7 @@ class _Hinge:
         self.T_static = 0.0  # dynamics: the first element's static tension, N
         self.sig_T = self.sig_C = 0.0  # dynamics: the first element's law (layer_sigma)
         self.c0 = np.ones(len(s))  # stress-free length per mesh length without the hinge
+        self.second = np.zeros(3)  # the node's O(ell^2) shift off the clamp line, m
 
 
 class VirtualHinges:
@@ -150,6 +153,7 @@ class VirtualHinges:
     def __init__(self, model) -> None:
         self.model = model
         self._scratch = None  # dynamics: cell functions of :meth:`_cell_values`
+        self._loads = None  # the distributed loads at the anchors (statics, first use)
         self.items: list[_Hinge] = []
         self.g_vec = np.asarray(model.g_vec, float)
         if getattr(model, "is_network", False):
@@ -268,14 +272,17 @@ class VirtualHinges:
 
     # ------------------------------------------------------------------ statics
     def place(self, forces: np.ndarray) -> np.ndarray:
-        """(n_hinges, 2): h and sigma_h of every hinge from the anchor forces (n_anchors,
-        >= 3) at the real anchors. Raises :class:`HingeError` where a hinge cannot be
-        placed."""
-        out = np.zeros((len(self.items), 2))
+        """(n_hinges, 5): h, sigma_h and the second-order shift E (3) of every hinge from the
+        anchor forces (n_anchors, >= 3) at the real anchors. Raises :class:`HingeError`
+        where a hinge cannot be placed."""
+        out = np.zeros((len(self.items), 5))
+        if self._loads is None:
+            from cablefem.moments import AnchorMoments
+            self._loads = AnchorMoments.from_model(self.model)
         for k, hg in enumerate(self.items):
             sec = hg.anchor.section
-            lay = layer(np.asarray(forces[hg.index][:3], float), hg.anchor.direction, sec.EI,
-                        sec.EA)
+            N = np.asarray(forces[hg.index][:3], float)
+            lay = layer(N, hg.anchor.direction, sec.EI, sec.EA)
             h, sig = (float(v) for v in virtual_hinge(lay.delta, lay.tension, sec.EI,
                                                       sec.EA))
             why = None
@@ -291,15 +298,21 @@ class VirtualHinges:
                 raise HingeError(f"anchor {hg.anchor.name}: cannot place the virtual hinge: "
                                  f"{why}. Use solver.outer_correction = \"none\" (or "
                                  "--outer-correction none) for the leading order.")
-            out[k] = h, sig
+            # the far field's second-order shift (the load along the layer, theory.md §6.2)
+            q = -self._loads.anchor_load(hg.anchor.name, 0.0)
+            out[k, :2] = h, sig
+            out[k, 2:] = far_field_second_order(N, hg.anchor.direction, q, sec.EI, sig)
         return out
 
     def apply(self, z: np.ndarray) -> None:
-        """Put hinges at ``z`` (n_hinges, 2: h, sigma_h) into the model (statics): the node
-        offsets, and sigma_h taken from the elements next to the anchor, each filled to
-        REGION_FRACTION of its stress-free length in turn (a change of sigma_h changes only
-        the last element it reaches: the fixed point's equilibria stay close)."""
-        for hg, (h, sig) in zip(self.items, np.asarray(z, float).reshape(-1, 2)):
+        """Put hinges at ``z`` (n_hinges, 5: h, sigma_h, E) into the model (statics): the
+        node offsets ``h c + E``, and sigma_h taken from the elements next to the anchor,
+        each filled to REGION_FRACTION of its stress-free length in turn (a change of
+        sigma_h changes only the last element it reaches: the fixed point's equilibria stay
+        close)."""
+        for hg, row in zip(self.items, np.asarray(z, float).reshape(-1, 5)):
+            h, sig = float(row[0]), float(row[1])
+            hg.second = row[2:].copy()
             if not (np.isfinite(h) and np.isfinite(sig) and 0.0 < sig):
                 raise HingeError(f"anchor {hg.anchor.name}: cannot place the virtual hinge "
                                  f"(h = {h:.3g} m, sigma_h = {sig:.3g} m)")
@@ -316,7 +329,7 @@ class VirtualHinges:
             r[:hg.n] = sig * hg.p
             hg.h, hg.sigma = float(h), float(sig)
             hg.mass_length = float(sig)
-            hg.anchor.offset = h * hg.anchor.direction
+            hg.anchor.offset = h * hg.anchor.direction + hg.second
             touched = max(hg.n, hg.touched)  # cells changed before and now
             c = hg.cells[:touched]
             cs = (hg.c0[:touched] * (1.0 - r[:touched] / hg.s[:touched]))[c >= 0]
@@ -332,8 +345,9 @@ class VirtualHinges:
         self.model.invalidate_time()
 
     def current(self) -> np.ndarray:
-        """(n_hinges, 2): the h and sigma_h in the model."""
-        return np.array([(hg.h, hg.sigma) for hg in self.items], float).reshape(-1, 2)
+        """(n_hinges, 5): the h, sigma_h and E in the model."""
+        return np.array([(hg.h, hg.sigma, *hg.second) for hg in self.items],
+                        float).reshape(-1, 5)
 
     def regions(self) -> dict[str, int]:
         """Per anchor: the number of elements the layer's length is taken from."""
@@ -500,6 +514,9 @@ class VirtualHinges:
 
     def report(self) -> dict[str, dict]:
         """Per anchor: the hinge distance h along the clamp direction, the stress-free
-        length sigma_h removed (m) and the number of elements it is taken from."""
-        return {hg.anchor.name: {"h": hg.h, "sigma_h": hg.sigma, "elements": hg.n}
+        length sigma_h removed (m), the number of elements it is taken from, and the node's
+        offset from the anchor, ``h c + E`` (m, E the second order of docs/theory.md
+        §6.2)."""
+        return {hg.anchor.name: {"h": hg.h, "sigma_h": hg.sigma, "elements": hg.n,
+                                 "offset": [float(v) for v in hg.anchor.offset]}
                 for hg in self.items}

@@ -154,8 +154,15 @@ def anchor_moments(forces: np.ndarray, direction: np.ndarray, EI: float, EA: flo
     qs = (mass, omega) if omega else None
     lay = asymptotics.layer(N, direction, EI, EA, form=form, length=length, quasi_static=qs)
     kap = asymptotics.string_curvature(lay.tangent, lay.tension, mass, accel, load)
+    m_layer = lay.moment
     with np.errstate(invalid="ignore"):
-        M = lay.moment_vector + EI * kap
+        M = lay.moment_vector
+        if outer_order == 1:  # the tension's gradient along the layer (theory.md §6.2)
+            q = mass * np.asarray(accel, float) - np.asarray(load, float)
+            grad = asymptotics.gradient_moment_factor(lay.delta, lay.tension, lay.tangent,
+                                                      q, EI)
+            M, m_layer = M * grad[:, None], m_layer * grad
+        M = M + EI * kap
     M = np.where(lay.slack[:, None], np.nan, M)
     with np.errstate(invalid="ignore"):
         backwards = lay.delta > MAX_ANCHOR_ANGLE  # NaN (slack) compares False
@@ -168,7 +175,7 @@ def anchor_moments(forces: np.ndarray, direction: np.ndarray, EI: float, EA: flo
          "layer not quasi-static", "undefined layer"], default="")
     return {"delta": lay.delta, "moment": np.linalg.norm(M, axis=1), "Mx": M[:, 0],
             "My": M[:, 1], "Mz": M[:, 2], "psi0": lay.psi0, "layer_length": lay.layer_length,
-            "moment_layer": lay.moment, "valid": valid.astype(int),
+            "moment_layer": m_layer, "valid": valid.astype(int),
             "error_estimate": error_estimate(lay.delta, lay.tension, EI, EA, length,
                                              lay.period_ratio, outer_order, amplification,
                                              np.linalg.norm(M, axis=1), static_moment,
@@ -334,6 +341,11 @@ class AnchorMoments:
                 raise ValueError("load_at: the buoyancy needs the cable's diameter")
             f = f + self.buoyancy * (np.pi * diameter**2 / 4)
         return f
+
+    def anchor_load(self, name: str, t: float) -> np.ndarray:
+        """(3,) :meth:`load_at` on clamped anchor ``name``'s section at ``t``, N/m."""
+        a = self._by_name[name]
+        return self.load_at(t, a.mass, a.diameter)
 
     def anchor(self, name: str, times: np.ndarray, forces: np.ndarray) -> dict:
         """The columns of clamped anchor ``name`` (:func:`anchor_moments`'s dict) for its

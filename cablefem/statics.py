@@ -122,7 +122,7 @@ def _fresh_pc(ksp: PETSc.KSP) -> None:
 def _hinge_iterations(model, snes, x, history, reaction, forces, tol: float | None = None,
                       max_iterations: int = 30, depth: int = 3) -> int:
     """Fixed point hinge -> equilibrium -> anchor forces -> hinge (:mod:`cablefem.hinge`),
-    accelerated (Anderson mixing of depth ``depth`` on the hinges' (h, sigma_h)).
+    accelerated (Anderson mixing of depth ``depth`` on the hinges' (h, sigma_h, E)).
 
     The hinge depends on the anchor force only through ell ~ T^-1/2 and Delta; the plain
     iteration contracts by 1e-2 to 1e-3 per step on a taut cable but only by about a half on
@@ -233,7 +233,7 @@ def _hinge_iterations(model, snes, x, history, reaction, forces, tol: float | No
             dG = np.column_stack([G[k + 1] - G[k] for k in range(len(G) - 1)])
             gamma = np.linalg.lstsq(dR, R[-1], rcond=1e-12)[0]
             z_next = G[-1] - dG @ gamma
-        z = z_next.reshape(-1, 2) * scale
+        z = z_next.reshape(-1, 5) * scale
         if not (np.all(np.isfinite(z)) and np.all(z[:, 1] > 0)):
             z = g  # a wild extrapolation: the plain step
             Z, G = [], []

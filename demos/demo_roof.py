@@ -20,7 +20,8 @@
 #   $\mathbf N_a$ and the clamp direction $\mathbf c$ alone: $T = |\mathbf N_a|$,
 #   $\cos\Delta = \mathbf c\cdot\mathbf N_a/T$,
 #   $M(0) = 2\sqrt{EI\,T}\,\sin(\Delta/2)\sqrt{1 + (T/EA)\cos^2(\Delta/2)}$
-#   (docs/theory.md §3), against the layer moment the run reports;
+#   (docs/theory.md §3; the virtual hinge multiplies it by the factor of the tension's
+#   gradient along the layer, §6.2), against the layer moment the run reports;
 # * **the kinks at the crossings** (docs/kinks.md), from their tension and kink angle.
 #
 # Run: `python demos/demo_roof.py --output output/roof` (5 s of motion; 1 s with the
@@ -75,8 +76,10 @@ for cab in case.network.cables:
 # ## Checks
 # 1. $\sum_a \mathbf N_a$ against the weight: the consistent reactions balance the discrete
 #    loads exactly, only Newton's tolerance remains; tolerance $10^{-8}$ of the weight.
-# 2. The layer moment [N m] at every clamped anchor against the closed form above: the same
-#    formula evaluated twice in double precision; tolerance $10^{-10}$.
+# 2. The layer moment [N m] at every clamped anchor against the closed form above, times
+#    the first-order factor of the weight's tension gradient along the layer (a few
+#    $10^{-6}$ here): the same formula evaluated twice in double precision; tolerance
+#    $10^{-10}$.
 # 3. At each of the 9 junctions both cables kink (`kinks.csv`, `summary.json`'s `kinks`):
 #    each side of the node carries the clamped layer about the bisector, half the kink
 #    angle $\Delta$: $M = 2\sqrt{EI\,T}\,\sin(\Delta/4)\sqrt{1 + (T/EA)\cos^2(\Delta/4)}$;
@@ -100,6 +103,10 @@ for name, a in s["anchors"].items():
     delta = float(np.arccos(np.clip(np.dot(a["direction"], N) / T, -1, 1)))
     M = 2 * np.sqrt(sec.EI * T) * np.sin(delta / 2) * np.sqrt(
         1 + T / sec.EA * np.cos(delta / 2) ** 2)
+    # with the virtual hinge, the weight's tension gradient along the layer, dT/ds = -w.t:
+    # the factor 1 + ell0 (dT/ds)/(4 T cos^2(Delta/4)) (docs/theory.md §6.2)
+    dTds = -sec.mass * case.gravity.g * float(np.dot(gdir, N)) / T
+    M *= 1 + np.sqrt(sec.EI / T) * dTds / (4 * T * np.cos(delta / 4) ** 2)
     err_m = max(err_m, abs(M / a["static_moment_layer"] - 1))
 ok_m = err_m < 1e-10
 # each cable passing through a junction kinks there (docs/kinks.md): the clamped layer

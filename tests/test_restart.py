@@ -280,9 +280,9 @@ def test_output_times_on_the_grid_and_displacements(case, reference):
     np.testing.assert_allclose(X, np.linspace(0, 1.0, len(X))[:, None] * chord, atol=1e-15)
     static = s[0][1]["displacement"]  # t = 0 is the static state
     # the string's end nodes are at the virtual hinges, h along each clamp direction from
-    # the anchor (the default first-order correction, docs/theory.md §6)
+    # the anchor plus the second order (the default correction, docs/theory.md §6, §6.2)
     hinges = json.loads((reference / "summary.json").read_text())["static"]["virtual_hinges"]
-    ends = [p + hinges["p"]["h"] * chord, q - hinges["q"]["h"] * chord]
+    ends = [p + np.asarray(hinges["p"]["offset"]), q + np.asarray(hinges["q"]["offset"])]
     np.testing.assert_allclose(X[[0, -1]] + static[[0, -1]], ends, atol=1e-15)
     tol = 1e-12 * np.linalg.norm(q)  # positions summed from parts: round-off
     for (t, d), (_, dm) in zip(s, m):

