@@ -117,6 +117,9 @@ def error_estimate(delta: np.ndarray, tension: np.ndarray, EI: float, EA: float,
             e = e + np.nan_to_num(np.asarray(period_ratio, float) ** 2, nan=0.0)
     return np.minimum(e, 1.0)
 
+#: Largest relative change of the layer's moment by the tension's gradient along it
+#: (asymptotics.gradient_moment_factor, the first-order route): beyond, the row is invalid.
+MAX_GRADIENT_CORRECTION = 0.25
 #: Largest angle Delta between the clamp direction and the anchor force that the layer
 #: describes. The clamp turns the cable by Delta within the layer; beyond 90 degrees the
 #: cable would leave the clamp backwards, which no taut cable does: such a force has the
@@ -155,6 +158,7 @@ def anchor_moments(forces: np.ndarray, direction: np.ndarray, EI: float, EA: flo
     lay = asymptotics.layer(N, direction, EI, EA, form=form, length=length, quasi_static=qs)
     kap = asymptotics.string_curvature(lay.tangent, lay.tension, mass, accel, load)
     m_layer = lay.moment
+    steep = np.zeros(N.shape[0], bool)
     with np.errstate(invalid="ignore"):
         M = lay.moment_vector
         if outer_order == 1:  # the tension's gradient along the layer (theory.md §6.2)
@@ -162,17 +166,21 @@ def anchor_moments(forces: np.ndarray, direction: np.ndarray, EI: float, EA: flo
             grad = asymptotics.gradient_moment_factor(lay.delta, lay.tension, lay.tangent,
                                                       q, EI)
             M, m_layer = M * grad[:, None], m_layer * grad
+            # a first-order correction above a quarter is no correction: the tension
+            # changes across the layer by its own size
+            steep = np.abs(grad - 1.0) > MAX_GRADIENT_CORRECTION
         M = M + EI * kap
     M = np.where(lay.slack[:, None], np.nan, M)
     with np.errstate(invalid="ignore"):
         backwards = lay.delta > MAX_ANCHOR_ANGLE  # NaN (slack) compares False
         long_ = lay.length_ratio > asymptotics.MAX_LENGTH_RATIO
         dynamic = lay.period_ratio > asymptotics.MAX_PERIOD_RATIO
-    valid = lay.valid & ~backwards
+    valid = lay.valid & ~backwards & ~steep
     reason = np.select(
-        [lay.slack, backwards, ~lay.valid & long_, ~lay.valid & dynamic, ~lay.valid],
+        [lay.slack, backwards, ~lay.valid & long_, ~lay.valid & dynamic, ~lay.valid, steep],
         ["slack", "force more than 90 deg from the clamp direction", "layer too long",
-         "layer not quasi-static", "undefined layer"], default="")
+         "layer not quasi-static", "undefined layer", "tension varies along the layer"],
+        default="")
     return {"delta": lay.delta, "moment": np.linalg.norm(M, axis=1), "Mx": M[:, 0],
             "My": M[:, 1], "Mz": M[:, 2], "psi0": lay.psi0, "layer_length": lay.layer_length,
             "moment_layer": m_layer, "valid": valid.astype(int),

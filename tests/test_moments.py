@@ -129,3 +129,28 @@ def test_swapping_anchors_swaps_series():
     for name in ("p", "q"):
         np.testing.assert_allclose(sb[name], sa[name], rtol=1e-8)
     assert not np.allclose(sa["p"], sa["q"], rtol=1e-3)  # the two anchors do differ
+
+
+def test_the_first_order_route_scales_the_layer_by_the_tension_gradient():
+    """anchor_moments with the hinge (outer_order 1) multiplies the layer's moment by
+    1 + ell0 T'/(4 T cos^2(Delta/4)) (docs/theory.md §6.2), T' = (m a - f).t; the leading
+    order (outer_order 0) does not. A gradient that changes the moment by more than a
+    quarter makes the row invalid, with its reason. Exact arithmetic: rtol 1e-12."""
+    EI, EA, m, L = 4e-4, np.inf, 1.0, 1.0
+    delta, T = 0.3, 25.0
+    F = T * np.array([[np.cos(delta), 0.0, -np.sin(delta)]] * 3)
+    c = np.array([1.0, 0.0, 0.0])
+    t = F[0] / T
+    # loads per length (N/m): the weight, a strong pull along -t, and one 100 times that
+    loads = np.array([[0.0, 0.0, -1.0], -2000.0 * t, -2e5 * t])
+    acc = np.zeros((3, 3))
+    lead = anchor_moments(F, c, EI, EA, m, acc, loads, L, outer_order=0)
+    first = anchor_moments(F, c, EI, EA, m, acc, loads, L, outer_order=1)
+    ell0 = np.sqrt(EI / T)
+    Tp = np.einsum("ij,j->i", -loads, t)  # (m a - f).t with a = 0
+    factor = 1 + ell0 * Tp / (4 * T * np.cos(delta / 4) ** 2)
+    np.testing.assert_allclose(first["moment_layer"], lead["moment_layer"] * factor,
+                               rtol=1e-12)
+    assert abs(factor[1] - 1) < 0.25 < abs(factor[2] - 1)
+    assert list(first["valid"]) == [1, 1, 0] and list(lead["valid"]) == [1, 1, 1]
+    assert first["invalid_reason"][2] == "tension varies along the layer"
