@@ -515,8 +515,12 @@ class CableModel:
         curvature, handed over by the layer; the clamp's rotation stays with the layer).
         Returns the bending energy (a form)."""
         self.EI = fem.Constant(self.mesh, PETSc.ScalarType(self.case.section.EI))
+        # the curvature per stress-free length of the *outer* string: the mesh's (a single
+        # cable's mesh is stress-free), not the hinge region's c < 1, which holds the
+        # layer's removed length (theory.md §6.1; with c the region was 1/(1 - sigma_h/K)
+        # too stiff in bending)
         self.forms.add("span_bending", forms.span_bending_work(
-            self.u, self.du, self.t0, self.EI, self.mesh, self.dS, c=self.c), kind="static")
+            self.u, self.du, self.t0, self.EI, self.mesh, self.dS, c=1.0), kind="static")
         clamped = [(i + 1, anc) for i, anc in enumerate(self.anchors) if anc.kind == "clamped"]
         if clamped:
             ds = ufl.Measure("ds", domain=self.mesh, subdomain_data=self._vertex_tags(
@@ -528,7 +532,7 @@ class CableModel:
                 fem.Constant(self.mesh, np.asarray(anc.direction, dtype=PETSc.ScalarType)),
                 ds(tag)) for tag, anc in clamped)
             self.forms.add("end_moments", work, kind="static")
-        return forms.span_bending_energy(self.u, self.t0, self.EI, self.mesh, c=self.c) * \
+        return forms.span_bending_energy(self.u, self.t0, self.EI, self.mesh, c=1.0) * \
             self.dS
 
     def _axial_damping_work(self):

@@ -192,8 +192,9 @@ def turning_cosine(u, t0):
 def span_bending_energy(u, t0, EI, mesh, c=1.0, active=1.0):
     """Bending energy of the span at an interior vertex (integrate with ``dS``):
     ``EI (1 − cos θ) / h̄`` with ``θ`` the turning angle between the neighbouring elements'
-    deformed tangents and ``h̄`` the mean stress-free length of the two elements
-    (``docs/theory.md`` §6.1). It is ``EI θ² / (2 h̄)`` to ``O(θ⁴)``: the energy
+    deformed tangents and ``h̄`` the mean stress-free length of the two elements, ``c``
+    times the mesh length (``docs/theory.md`` §6.1; the model passes the outer string's, c =
+    1, also in a hinge's region). It is ``EI θ² / (2 h̄)`` to ``O(θ⁴)``: the energy
     ``∫ EI κ² / 2 ds`` of a curvature ``κ = θ / h̄`` lumped at the vertex.
 
     ``active`` (a cell field, 1 or 0) switches the term off at a vertex where either
