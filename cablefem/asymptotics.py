@@ -488,8 +488,8 @@ def gradient_moment_factor(delta: ArrayLike, tension: ArrayLike, tangent: ArrayL
     """``1 + m1 ell0 T'/T0``: the layer's moment at the clamp under a tension that grows
     along the layer by ``T' = q.t`` per stress-free length (docs/theory.md §6.2; ``m1`` of
     :func:`gradient_integrals`; 1/4 at small Delta, where M ~ sqrt(T): the moment of the
-    tension half a layer into the span). ``tangent`` (..., 3) into
-    the span, ``q`` (..., 3) = m a - f, N/m; NaN where T <= 0."""
+    tension half a layer into the span). ``tangent`` (..., 3) into the span, ``q`` (..., 3)
+    = m a - f, N/m; NaN where T <= 0."""
     T = np.asarray(tension, float)
     t = np.asarray(tangent, float)
     Tp = np.sum(t * np.asarray(q, float), axis=-1) / np.linalg.norm(t, axis=-1)

@@ -117,6 +117,7 @@ def error_estimate(delta: np.ndarray, tension: np.ndarray, EI: float, EA: float,
             e = e + np.nan_to_num(np.asarray(period_ratio, float) ** 2, nan=0.0)
     return np.minimum(e, 1.0)
 
+
 #: Largest relative change of the layer's moment by the tension's gradient along it
 #: (asymptotics.gradient_moment_factor, the first-order route): beyond, the row is invalid.
 MAX_GRADIENT_CORRECTION = 0.25
