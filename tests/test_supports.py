@@ -109,6 +109,42 @@ def test_clamp_along_the_cable_is_two_end_clamps(mpi_tmp_path, direction):
         check_side_segments(out, summary)
 
 
+@pytest.mark.parametrize("EI,warns", [(1.0e4, False), (1.5e5, True)])
+def test_a_clamp_along_the_cable_says_it_is_leading_order(mpi_tmp_path, EI, warns):
+    """By default the end clamps get virtual hinges but a clamp the cable runs through does
+    not (docs/kinks.md): each of its sides carries the anchors' leading-order error
+    estimate (2 h/(lambda l), docs/theory.md §5.1) with the side's tension and angle and
+    the length to the next anchor, which here equals the estimate of the span run alone
+    and clamped at the corner with the leading order, to rel 1e-2: the end clamps' hinges
+    move the side's tension and angle by O(ell/l) ~ 1e-2 (measured 3.6e-3 at EI = 1.5e5),
+    and its length is the mesh's, the span's the stress-free one (T0/EA = 1e-3). Above the 2 %
+    threshold (EI = 1.5e5: ell = 1.2 m on spans of 60-100 m, 2.4-4 %) the run warns,
+    naming the side; below (EI = 1e4: 0.6-1 %) it does not. Before, neither."""
+    corners = [[0.0, 0.0, 0.0], [100.0, 0.0, -2.0], [160.0, 0.0, 1.8]]
+    mesh = spans(str(mpi_tmp_path / "two.msh"), corners, 20, {"ends": [0, 2], "mid": [1]})
+    section = {**SECTION, "EI": EI}
+
+    def go(msh, anchors, out, correction):
+        d = {"title": "supports", "network": {"mesh": str(msh)}, "sections": [section],
+             "cables": [{"group": "c", "section": "s", "pretension": T0}],
+             "gravity": {"g": 9.81}, "anchors": anchors, "dynamics": {"t_end": 0.02,
+                                                                     "dt": 0.01},
+             "solver": {"outer_correction": correction}}
+        return run_case(parse_case(d), mpi_tmp_path / out, comm, figures=False,
+                        progress=False, modes=0).summary
+
+    summary = go(mesh, [{"name": "ends"}, {"name": "mid"}], "two", "hinge")
+    keys = {w["key"] for w in summary.get("warnings", [])}
+    for side, (a, b) in (("mid:0-/c", (1, 0)), ("mid:0+/c", (1, 2))):
+        one = spans(str(mpi_tmp_path / f"span{b}.msh"), [corners[a], corners[b]], 20,
+                    {"corner": [0], "far": [1]})
+        ref = go(one, [{"name": "corner"}, {"name": "far"}], f"span{b}", "none")
+        want = ref["anchors"]["corner:0"]["static_error_estimate"]
+        got = summary["kinks"][side]["static_error_estimate"]
+        assert got == pytest.approx(want, rel=1e-2)
+        assert (f"kinks.{side}" in keys) == warns == (got > 0.02)
+
+
 def check_side_segments(out, summary):
     """moments.xdmf at t = 0: the two end clamps' segments and one per side, each along
     its element only (s >= 0) from the clamp's node: the moment there is the side's

@@ -516,6 +516,13 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
                 warn(summary, f"kinks.{name}", f"{100 * (1 - frac):.3g} % of the rows are "
                      "invalid (the layer at this kink is slack, not quasi-static, or overlaps "
                      "a neighbouring kink or anchor): see valid in kinks.csv")
+            est = entry.get("static_error_estimate", 0.0)
+            if est > ERROR_THRESHOLD:  # a clamp side at leading order on the hinge's route
+                warn(summary, f"kinks.{name}", f"the side of clamped-through anchor "
+                     f"{entry['anchor']!r} is at leading order (the virtual hinge exists only "
+                     f"at clamps that end a chain of elements): its estimated moment error is "
+                     f"{100 * est:.2g} % at rest, above the {100 * ERROR_THRESHOLD:g} % "
+                     "threshold (docs/kinks.md)")
     gaps = getattr(model, "kink_gaps", [])
     if gaps:  # a network node where a cable group branches: no kink moment there
         k, group, n = gaps[0]
