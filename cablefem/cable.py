@@ -518,22 +518,51 @@ class CableModel:
         # the curvature per stress-free length of the *outer* string: the mesh's (a single
         # cable's mesh is stress-free), not the hinge region's c < 1, which holds the
         # layer's removed length (theory.md §6.1; with c the region was 1/(1 - sigma_h/K)
-        # too stiff in bending)
-        self.forms.add("span_bending", forms.span_bending_work(
-            self.u, self.du, self.t0, self.EI, self.mesh, self.dS, c=1.0), kind="static")
+        # too stiff in bending). Not at a kink (a point load, point mass or damper: the
+        # nodes tagged in dS): its turn belongs to the kink's own layer (cablefem.kinks),
+        # as a clamp's to the clamp's; the span's moment is handed over on both sides.
+        energy = forms.span_bending_energy(self.u, self.t0, self.EI, self.mesh, c=1.0)
+        kinks = sorted(set(self._node_tag.values()))
+        bending = energy * self.dS - sum((energy * self.dS(tag) for tag in kinks), 0 * self.dS)
+        self.forms.add("span_bending", ufl.derivative(bending, self.u, self.du),
+                       kind="static")
+        T = self.forms.outputs["tension"]
+        q = -(self.m * self.gravity + sum((f for f, _ in self.loads), 0.0 * self.gravity))
         clamped = [(i + 1, anc) for i, anc in enumerate(self.anchors) if anc.kind == "clamped"]
+        work = []
         if clamped:
             ds = ufl.Measure("ds", domain=self.mesh, subdomain_data=self._vertex_tags(
                 {anc.node: tag for tag, anc in clamped}))
-            T = self.forms.outputs["tension"]
-            q = -(self.m * self.gravity + sum((f for f, _ in self.loads), 0.0 * self.gravity))
-            work = sum(forms.end_moment_work(
+            work += [forms.end_moment_work(
                 self.u, self.du, self.t0, self.EI, T, q,
                 fem.Constant(self.mesh, np.asarray(anc.direction, dtype=PETSc.ScalarType)),
-                ds(tag)) for tag, anc in clamped)
-            self.forms.add("end_moments", work, kind="static")
-        return forms.span_bending_energy(self.u, self.t0, self.EI, self.mesh, c=1.0) * \
-            self.dS
+                ds(tag)) for tag, anc in clamped]
+        if kinks:
+            density = forms.end_moment_density(self.u, self.du, self.t0, self.EI, T, q,
+                                               self._away_from_kinks())
+            work += [density(side) * self.dS(tag) for tag in kinks for side in ("+", "-")]
+        if work:
+            self.forms.add("end_moments", sum(work[1:], work[0]), kind="static")
+        return bending
+
+    def _away_from_kinks(self):
+        """A cell field (DG0, 3): on each element next to a kink node (a node tagged in
+        :attr:`dS`), the unit direction from that node into the element (the side's
+        'clamp direction' of the span's moment handed over there); zero elsewhere. An
+        element between two kink nodes takes the second's (such kinks' layers overlap:
+        their rows are invalid, cablefem.kinks)."""
+        geo = self.geometry
+        pts, cells = np.asarray(geo.points), np.asarray(geo.cells)
+        with quiet_compiler():
+            space = fem.VectorFunctionSpace(self.mesh, ("DG", 0), dim=3)
+        away = fem.Function(space, name="away_from_kink")
+        for i, c in enumerate(self._reference_cells()):  # owned and ghost cells alike
+            a, b = cells[c]
+            for k, other in ((a, b), (b, a)):
+                if int(k) in self._node_tag:
+                    d = pts[other] - pts[k]
+                    away.x.array[3 * i:3 * i + 3] = d / np.linalg.norm(d)
+        return away
 
     def _axial_damping_work(self):
         """The "axial" damping model's virtual work (strain-rate damping along the axis)."""

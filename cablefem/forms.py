@@ -32,7 +32,8 @@ __all__ = ["CableForms", "reference_tangent", "ds_", "stretch_vector", "stretch"
            "tension", "layer_law_tension", "layer_stretch_vector",
            "internal_force", "internal_work", "inertia_work", "load_work",
            "strain_rate", "axial_damping_work", "strain_energy_density",
-           "turning_cosine", "span_bending_energy", "span_bending_work", "end_moment_work"]
+           "turning_cosine", "span_bending_energy", "span_bending_work", "end_moment_work",
+           "end_moment_density"]
 
 
 def reference_tangent(mesh) -> ufl.core.expr.Expr:
@@ -217,6 +218,18 @@ def span_bending_work(u, du, t0, EI, mesh, dS=ufl.dS, c=1.0, active=1.0):
     return ufl.derivative(span_bending_energy(u, t0, EI, mesh, c, active) * dS, u, du)
 
 
+def end_moment_density(u, du, t0, EI, T, q, direction):
+    """The integrand of :func:`end_moment_work` (no measure): to be restricted to a side of
+    an interior vertex (a kink, ``docs/theory.md`` §6.1) or integrated over an end vertex."""
+    g = stretch_vector(u, t0)
+    lam = ufl.sqrt(ufl.dot(g, g))
+    e = g / lam
+    sgn = ufl.sign(ufl.dot(t0, direction))
+    q_perp = q - ufl.dot(q, e) * e
+    coeff = ufl.conditional(ufl.gt(T, 0.0), EI / T, 0.0)
+    return sgn * coeff * ufl.dot(q_perp, ds_(du, t0)) / lam
+
+
 def end_moment_work(u, du, t0, EI, T, q, direction, ds):
     """The residual term of the moment ``EI κ_s`` that a clamp's boundary layer hands to the
     span at its end (``docs/theory.md`` §6.1), on the first element (``ds``: its anchor
@@ -225,13 +238,7 @@ def end_moment_work(u, du, t0, EI, T, q, direction, ds):
     ``e`` the tangent into the span, ``T`` the first element's tension); its virtual work on
     the element's rotation ``e × δe`` is ``(EI/T) q⊥ · δe``. ``direction`` (the clamp's,
     into the span) orients the element. A slack element (``T = 0``) gets none."""
-    g = stretch_vector(u, t0)
-    lam = ufl.sqrt(ufl.dot(g, g))
-    e = g / lam
-    sgn = ufl.sign(ufl.dot(t0, direction))
-    q_perp = q - ufl.dot(q, e) * e
-    coeff = ufl.conditional(ufl.gt(T, 0.0), EI / T, 0.0)
-    return sgn * coeff * ufl.dot(q_perp, ds_(du, t0)) / lam * ds
+    return end_moment_density(u, du, t0, EI, T, q, direction) * ds
 
 
 # ----------------------------------------------------------------------------- the residuals
