@@ -523,7 +523,9 @@ class CableModel:
         # as a clamp's to the clamp's; the span's moment is handed over on both sides.
         energy = forms.span_bending_energy(self.u, self.t0, self.EI, self.mesh, c=1.0)
         kinks = sorted(set(self._node_tag.values()))
-        bending = energy * self.dS - sum((energy * self.dS(tag) for tag in kinks), 0 * self.dS)
+        bending = energy * self.dS
+        for tag in kinks:
+            bending = bending - energy * self.dS(tag)
         self.forms.add("span_bending", ufl.derivative(bending, self.u, self.du),
                        kind="static")
         T = self.forms.outputs["tension"]
