@@ -521,13 +521,10 @@ class CableModel:
         # too stiff in bending). Not at a kink (a point load, point mass or damper: the
         # nodes tagged in dS): its turn belongs to the kink's own layer (cablefem.kinks),
         # as a clamp's to the clamp's; the span's moment is handed over on both sides.
-        energy = forms.span_bending_energy(self.u, self.t0, self.EI, self.mesh, c=1.0)
         kinks = sorted(set(self._node_tag.values()))
-        bending = energy * self.dS
-        for tag in kinks:
-            bending = bending - energy * self.dS(tag)
-        self.forms.add("span_bending", ufl.derivative(bending, self.u, self.du),
-                       kind="static")
+        self.forms.add("span_bending", forms.span_bending_work(
+            self.u, self.du, self.t0, self.EI, self.mesh, self.dS, c=1.0, skip=kinks),
+            kind="static")
         T = self.forms.outputs["tension"]
         q = -(self.m * self.gravity + sum((f for f, _ in self.loads), 0.0 * self.gravity))
         clamped = [(i + 1, anc) for i, anc in enumerate(self.anchors) if anc.kind == "clamped"]
@@ -545,7 +542,8 @@ class CableModel:
             work += [density(side) * self.dS(tag) for tag in kinks for side in ("+", "-")]
         if work:
             self.forms.add("end_moments", sum(work[1:], work[0]), kind="static")
-        return bending
+        return forms.span_bending_form(self.u, self.t0, self.EI, self.mesh, self.dS, c=1.0,
+                                       skip=kinks)
 
     def _away_from_kinks(self):
         """A cell field (DG0, 3): on each element next to a kink node (a node tagged in

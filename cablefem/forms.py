@@ -32,8 +32,8 @@ __all__ = ["CableForms", "reference_tangent", "ds_", "stretch_vector", "stretch"
            "tension", "layer_law_tension", "layer_stretch_vector",
            "internal_force", "internal_work", "inertia_work", "load_work",
            "strain_rate", "axial_damping_work", "strain_energy_density",
-           "turning_cosine", "span_bending_energy", "span_bending_work", "end_moment_work",
-           "end_moment_density"]
+           "turning_cosine", "span_bending_energy", "span_bending_form", "span_bending_work",
+           "end_moment_work", "end_moment_density"]
 
 
 def reference_tangent(mesh) -> ufl.core.expr.Expr:
@@ -190,32 +190,37 @@ def turning_cosine(u, t0):
     return sigma * ufl.dot(gp, gm) / ufl.sqrt(ufl.dot(gp, gp) * ufl.dot(gm, gm))
 
 
-def span_bending_energy(u, t0, EI, mesh, c=1.0, active=1.0):
+def span_bending_energy(u, t0, EI, mesh, c=1.0):
     """Bending energy of the span at an interior vertex (integrate with ``dS``):
     ``EI (1 − cos θ) / h̄`` with ``θ`` the turning angle between the neighbouring elements'
     deformed tangents and ``h̄`` the mean stress-free length of the two elements, ``c``
-    times the mesh length (``docs/theory.md`` §6.1; the model passes the outer string's, c =
-    1, also in a hinge's region). It is ``EI θ² / (2 h̄)`` to ``O(θ⁴)``: the energy
-    ``∫ EI κ² / 2 ds`` of a curvature ``κ = θ / h̄`` lumped at the vertex.
-
-    ``active`` (a cell field, 1 or 0) switches the term off at a vertex where either
-    neighbouring cell has 0 (next to a clamped anchor); ``c`` is the stress-free length per
-    mesh length (a cell field or a number)."""
+    (a cell field or a number) times the mesh length (``docs/theory.md`` §6.1; the model
+    passes the outer string's, c = 1, also in a hinge's region). It is ``EI θ² / (2 h̄)``
+    to ``O(θ⁴)``: the energy ``∫ EI κ² / 2 ds`` of a curvature ``κ = θ / h̄`` lumped at the
+    vertex."""
     J = ufl.Jacobian(mesh)
     h = ufl.sqrt(ufl.dot(J[:, 0], J[:, 0]))  # mesh length of the cell (reference cell [0, 1])
     def side(f, s):  # a cell field takes the side's value; a constant is the same on both
         return f(s) if isinstance(f, ufl.Coefficient) else f
 
     hp, hm = h("+") * side(c, "+"), h("-") * side(c, "-")
-    on = side(active, "+") * side(active, "-")
-    return on * EI * (1.0 - turning_cosine(u, t0)) / (0.5 * (hp + hm))
+    return EI * (1.0 - turning_cosine(u, t0)) / (0.5 * (hp + hm))
 
 
-def span_bending_work(u, du, t0, EI, mesh, dS=ufl.dS, c=1.0, active=1.0):
+def span_bending_form(u, t0, EI, mesh, dS=ufl.dS, c=1.0, skip=()):
+    """:func:`span_bending_energy` summed over the interior vertices of ``dS``, less those
+    tagged ``skip`` in it (a kink's vertex, whose turn belongs to its own layer)."""
+    energy = span_bending_energy(u, t0, EI, mesh, c)
+    form = energy * dS
+    for tag in skip:
+        form = form - energy * dS(tag)
+    return form
+
+
+def span_bending_work(u, du, t0, EI, mesh, dS=ufl.dS, c=1.0, skip=()):
     """Virtual work of the span's bending: the Gateaux derivative of
-    :func:`span_bending_energy` summed over the interior vertices (its tangent is
-    symmetric)."""
-    return ufl.derivative(span_bending_energy(u, t0, EI, mesh, c, active) * dS, u, du)
+    :func:`span_bending_form` (its tangent is symmetric)."""
+    return ufl.derivative(span_bending_form(u, t0, EI, mesh, dS, c, skip), u, du)
 
 
 def end_moment_density(u, du, t0, EI, T, q, direction):
