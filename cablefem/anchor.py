@@ -12,14 +12,10 @@ import numpy as np
 
 from cablefem.motion import Motion
 
-__all__ = ["Anchor", "AnchorBC", "ANCHOR_KINDS", "CLAMPED_THROUGH"]
+__all__ = ["Anchor", "AnchorBC", "ANCHOR_KINDS"]
 
 #: how an anchor holds the cable: "clamped" (position and tangent) or "pinned" (position)
 ANCHOR_KINDS = ("clamped", "pinned")
-#: a network's clamped anchor on a node of more than one cable element (a cable running
-#: through the clamp, or several cables clamped at one node): it has no moment of its own;
-#: each element's side is a clamped layer, a row of kinks.csv (cablefem.kinks)
-CLAMPED_THROUGH = "clamped-through"
 
 
 @dataclass
@@ -66,7 +62,7 @@ class AnchorBC:
     node: int  #: node index in the cable's station order
     reference: np.ndarray  #: reference (stress-free) position X of the anchor node, m
     position: np.ndarray  #: static position of the anchor, m
-    kind: str  #: "clamped", "pinned" or (a network's) CLAMPED_THROUGH
+    kind: str  #: "clamped" or "pinned"
     direction: np.ndarray | None  #: unit clamp direction into the cable (clamped only)
     motion: Motion | None
     dofs: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int32))
@@ -78,6 +74,8 @@ class AnchorBC:
     moment_map: np.ndarray | None = None  #: beam: reaction of the q rows -> moment
     offset: np.ndarray = field(default_factory=lambda: np.zeros(3))  #: string: where the
     #: node is prescribed relative to the anchor (a virtual hinge, cablefem.hinge), m
+    #: a network's clamp a cable runs through, whose side this anchor is (cablefem.network)
+    clamp: str | None = None
 
     def _layout(self) -> tuple[np.ndarray, np.ndarray]:
         """The unrolled rows and the component of each, computed once per layout (a rod

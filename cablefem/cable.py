@@ -280,15 +280,57 @@ class CableModel:
             self.warnings.append(("seabed", f"statics starts from the free catenary ({err})"))
             return shape
 
+    def anchor_span(self, name: str) -> float:
+        """The length clamped anchor ``name``'s layer is measured against (its validity
+        ``ell/l``, its error estimate): the cable's stress-free length, m (a network's:
+        the anchor's chain of elements, :meth:`cablefem.network.NetworkModel.anchor_span`)."""
+        return float(self.length)
+
     def _locate_node(self, k: int) -> np.ndarray:
         """Local vertex indices (0 or 1 of them) of reference node ``k``."""
-        X = self.geometry.points[k]
-        tol = 1e-9 * max(1.0, float(np.max(np.abs(self.geometry.points))))
+        return np.nonzero(self._vertex_nodes() == k)[0].astype(np.int32)
 
-        def marker(x):
-            return np.linalg.norm(x.T - X[None, :], axis=1) < tol
+    def _vertex_nodes(self) -> np.ndarray:
+        """The reference node of every local vertex (owned, then ghosts), from the cells:
+        each local cell's two vertices are matched to its reference cell's two nodes by
+        position (distinct within a cell). Nodes at one point on different cells (a clamp
+        split into its sides, :func:`cablefem.network.split_clamps`) stay apart."""
+        if getattr(self, "_vertex_node", None) is None:
+            imap = self.mesh.topology.index_map(0)
+            n = imap.size_local + imap.num_ghosts
+            verts = self.mesh.topology.connectivity(1, 0).array.reshape(-1, 2)
+            # a vertex's "midpoint" is its position
+            xyz = dmesh.compute_midpoints(self.mesh, 0, np.arange(n, dtype=np.int32))
+            self._vertex_node = self._match_ends(xyz[verts], verts, n)
+        return self._vertex_node
 
-        return dmesh.locate_entities(self.mesh, 0, marker)
+    def _dof_nodes(self, space) -> np.ndarray:
+        """The reference node of every local dof block of the P1 ``space`` (owned, then
+        ghosts), matched within each local cell like :meth:`_vertex_nodes`."""
+        imap = space.dofmap.index_map
+        n = imap.size_local + imap.num_ghosts
+        dofs = np.asarray(space.dofmap.list.array, np.int64).reshape(-1, 2)
+        return self._match_ends(space.tabulate_dof_coordinates()[dofs], dofs, n)
+
+    def _match_ends(self, xyz: np.ndarray, items: np.ndarray, n: int) -> np.ndarray:
+        """Reference nodes of ``n`` local items (vertices or dof blocks) given per local
+        cell, ``items`` (cells, 2) at positions ``xyz`` (cells, 2, 3)."""
+        out = np.full(n, -1, np.int64)
+        ref = self._reference_cells()
+        if ref.size:
+            geo = self.geometry
+            ends = np.asarray(geo.cells, np.int64)[ref]
+            pts = np.asarray(geo.points, float)
+            to = np.stack([np.linalg.norm(xyz - pts[ends[:, j]][:, None, :], axis=2)
+                           for j in (0, 1)])  # (2, cells, 2): item's distance to each end
+            first = to[0] <= to[1]
+            scale = max(1.0, float(np.max(np.abs(pts))))
+            if np.max(np.minimum(to[0], to[1])) > 1e-8 * scale:
+                raise RuntimeError("could not map the mesh's nodes to the cable's nodes")
+            out[items] = np.where(first, ends[:, [0]], ends[:, [1]])
+        if np.any(out < 0):
+            raise RuntimeError("a local node on no local cell")
+        return out
 
     def _build_anchors(self) -> list[AnchorBC]:
         out = []
@@ -315,16 +357,14 @@ class CableModel:
         return out
 
     def _vertex_tags(self, node_tags: dict[int, int]):
-        """Mesh tags of dimension 0: reference node -> tag (the node's local vertices)."""
-        ents, vals = [], []
+        """Mesh tags of dimension 0: reference node -> tag (> 0; the node's local
+        vertices)."""
+        lookup = np.zeros(len(self.geometry.points), np.int32)
         for k, tag in node_tags.items():
-            v = self._locate_node(k)
-            ents.append(v)
-            vals.append(np.full(v.size, tag, dtype=np.int32))
-        ents_a = np.concatenate(ents).astype(np.int32) if ents else np.zeros(0, np.int32)
-        vals_a = np.concatenate(vals) if vals else np.zeros(0, np.int32)
-        order = np.argsort(ents_a)
-        return dmesh.meshtags(self.mesh, 0, ents_a[order], vals_a[order])
+            lookup[k] = tag
+        vals = lookup[self._vertex_nodes()]
+        ents = np.nonzero(vals)[0].astype(np.int32)
+        return dmesh.meshtags(self.mesh, 0, ents, vals[ents])
 
     def _point_tags(self) -> None:
         """Vertex tags for point masses and point loads (one tag per loaded node).
@@ -337,13 +377,21 @@ class CableModel:
         nodes = sorted({k for item in list(self.case.point_masses) + list(self.case.point_loads)
                         for k in self._item_nodes(item)} | set(self.damper_nodes))
         self._node_tag = {k: i + 1 for i, k in enumerate(nodes)}
-        self.dS = ufl.Measure("dS", domain=self.mesh,
-                              subdomain_data=self._vertex_tags(self._node_tag))
+        # one measure for every interior-vertex term (a form takes one subdomain_data)
+        tags = dict(self._node_tag)
+        self._bend_tag = len(nodes) + 1  #: the tag of a network's bending vertices in dS
+        tags.update({k: self._bend_tag for k in self._bending_nodes()})
+        self.dS = ufl.Measure("dS", domain=self.mesh, subdomain_data=self._vertex_tags(tags))
         degree = np.bincount(np.asarray(self.geometry.cells).ravel(),
                              minlength=len(self.geometry.points))
         self._one_sided = [k for k in nodes if degree[k] != 2]
         if self._one_sided:
             self._nodal_weights()
+
+    def _bending_nodes(self) -> list[int]:
+        """The nodes a network's span bending acts at (:mod:`cablefem.network`); a single
+        cable's span bending takes every interior facet of :attr:`dS` but the kinks."""
+        return []
 
     def _nodal_weights(self) -> None:
         """For every loaded node of other than two elements (:attr:`_one_sided`): one of its
@@ -398,6 +446,8 @@ class CableModel:
     def _reference_cells(self) -> np.ndarray:
         """The reference cell (a row of ``geometry.cells``) of every local cell, owned then
         ghosts, matched by midpoints (the partitioner reorders the cells)."""
+        if getattr(self, "_ref_cells", None) is not None:
+            return self._ref_cells
         from scipy.spatial import cKDTree
 
         geo = self.geometry
@@ -410,6 +460,7 @@ class CableModel:
         dist, idx = cKDTree(0.5 * (pts[cells[:, 0]] + pts[cells[:, 1]])).query(mid)
         if dist.max() > 1e-8 * max(1.0, float(np.max(np.abs(pts)))):
             raise RuntimeError("could not map mesh cells to the reference cells")
+        self._ref_cells = idx
         return idx
 
     def point_work(self, k: int, integrand):
@@ -758,16 +809,7 @@ class CableModel:
     # ------------------------------------------------------------------ nodal gather
     def _nodal_map(self) -> None:
         """Owned dof block -> node index in station order (for gathering to rank 0)."""
-        from scipy.spatial import cKDTree
-
-        n_owned = self.V.dofmap.index_map.size_local
-        xyz = self.V.tabulate_dof_coordinates()[:n_owned]
-        tree = cKDTree(self.geometry.points)
-        dist, idx = tree.query(xyz)
-        scale = max(1.0, float(np.max(np.abs(self.geometry.points))))
-        if dist.size and dist.max() > 1e-8 * scale:
-            raise RuntimeError("could not map mesh dofs to cable nodes")
-        self._owned_nodes = idx.astype(np.int64)
+        self._owned_nodes = self._dof_nodes(self.V)[:self.V.dofmap.index_map.size_local]
 
     def gather_nodal(self, f: fem.Function, root: int = 0) -> np.ndarray | None:
         """Values of a P1 vector function of the model's space at the nodes in station

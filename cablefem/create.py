@@ -138,9 +138,9 @@ def create_network(comm: MPI.Comm, mesh_file: str | os.PathLike, sections: dict[
                    anchors: list[Anchor], *, cables: list[CableSpec],
                    gravity: Gravity | None = None, loads=(), point_masses=(),
                    point_loads=(), damping: Damping | None = None, tension_only: bool = True,
-                   outer_correction: str = "hinge", petsc_options: dict | None = None,
-                   petsc_options_prefix: str = "cable_", units: str = "SI",
-                   name: str = "<python>"):
+                   outer_correction: str = "hinge", span_bending: bool = False,
+                   petsc_options: dict | None = None, petsc_options_prefix: str = "cable_",
+                   units: str = "SI", name: str = "<python>"):
     """A cable network from a tagged gmsh file (:class:`cablefem.network.NetworkModel`; tag
     convention in ``meshes/README.md``).
 
@@ -159,10 +159,13 @@ def create_network(comm: MPI.Comm, mesh_file: str | os.PathLike, sections: dict[
         :class:`cablefem.description.CableSpec` (1D group of the mesh, section name,
         pretension N) for every cable group of the mesh.
     gravity, loads, point_masses, point_loads, damping, tension_only, outer_correction,
-    petsc_options, petsc_options_prefix, units, name
+    span_bending, petsc_options, petsc_options_prefix, units, name
         As for :func:`create_cable`; point masses and point loads name 0D groups in ``s``.
-        ``outer_correction = "hinge"`` (default): a virtual hinge at every clamped anchor,
-        which must be the end node of one chain of elements (:mod:`cablefem.hinge`).
+        ``outer_correction = "hinge"`` (default): a virtual hinge at every clamped anchor
+        (a clamp a cable runs through: one per side, :func:`cablefem.network.split_clamps`).
+        ``span_bending``: the bending energy at every node of two cable elements that holds
+        no anchor or point term, the span's moment handed over at the others
+        (:meth:`cablefem.network.NetworkModel._add_span_bending`).
     """
     from cablefem.network import NetworkModel
 
@@ -170,7 +173,7 @@ def create_network(comm: MPI.Comm, mesh_file: str | os.PathLike, sections: dict[
         mesh_file, sections, anchors, cables=cables, gravity=gravity, loads=loads,
         point_masses=point_masses, point_loads=point_loads, damping=damping,
         tension_only=tension_only, outer_correction=outer_correction,
-        petsc_options=petsc_options, units=units, source=name)
+        span_bending=span_bending, petsc_options=petsc_options, units=units, source=name)
     return _named(NetworkModel, comm, description, petsc_options_prefix)
 
 

@@ -336,8 +336,9 @@ def describe_network(mesh_file: str | os.PathLike, sections: dict[str, Section],
                      anchors: list[Anchor], *, cables: list[CableSpec],
                      gravity: Gravity | None = None, loads=(), point_masses=(),
                      point_loads=(), damping: Damping | None = None, tension_only: bool = True,
-                     outer_correction: str = "hinge", petsc_options: dict | None = None,
-                     units: str = "SI", source: str = "<python>") -> CableDescription:
+                     outer_correction: str = "hinge", span_bending: bool = False,
+                     petsc_options: dict | None = None, units: str = "SI",
+                     source: str = "<python>") -> CableDescription:
     """A checked description of a cable network (the arguments of
     :func:`cablefem.create_network`, which see); the mesh itself is read by the model."""
     problems: list[tuple[str, str]] = []
@@ -366,7 +367,7 @@ def describe_network(mesh_file: str | os.PathLike, sections: dict[str, Section],
                     point_loads=point_loads, damping=damping, tension_only=tension_only,
                     outer_correction=outer_correction,
                     petsc_options={} if petsc_options is None else petsc_options,
-                    network=True)
+                    network=True, span_bending=span_bending)
     anchor_list = _anchors(problems, anchors, network=True)
     names = [a.name for a in anchor_list]
     problems += [(f"anchors[{i}].name", f"duplicate anchor group {n!r}")

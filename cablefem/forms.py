@@ -193,7 +193,8 @@ def turning_cosine(u, t0):
 def span_bending_energy(u, t0, EI, mesh, c=1.0):
     """Bending energy of the span at an interior vertex (integrate with ``dS``):
     ``EI (1 − cos θ) / h̄`` with ``θ`` the turning angle between the neighbouring elements'
-    deformed tangents and ``h̄`` the mean stress-free length of the two elements, ``c``
+    deformed tangents and ``h̄`` the mean stress-free length of the two elements (``EI``
+    a number or a cell field: then the mean of the two elements'), ``c``
     (a cell field or a number) times the mesh length (``docs/theory.md`` §6.1; the model
     passes the outer string's, c = 1, also in a hinge's region). It is ``EI θ² / (2 h̄)``
     to ``O(θ⁴)``: the energy ``∫ EI κ² / 2 ds`` of a curvature ``κ = θ / h̄`` lumped at the
@@ -204,7 +205,8 @@ def span_bending_energy(u, t0, EI, mesh, c=1.0):
         return f(s) if isinstance(f, ufl.Coefficient) else f
 
     hp, hm = h("+") * side(c, "+"), h("-") * side(c, "-")
-    return EI * (1.0 - turning_cosine(u, t0)) / (0.5 * (hp + hm))
+    EIm = 0.5 * (side(EI, "+") + side(EI, "-"))  # a network's cell field: the sides' mean
+    return EIm * (1.0 - turning_cosine(u, t0)) / (0.5 * (hp + hm))
 
 
 def span_bending_form(u, t0, EI, mesh, dS=ufl.dS, c=1.0, skip=()):

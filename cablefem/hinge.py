@@ -83,10 +83,11 @@ the run.
 
 Only the string model has hinges (``solver.outer_correction = "hinge"``); the rod resolves
 its layers itself. In a network (:class:`cablefem.network.NetworkModel`) a clamped anchor
-must be the end node of one chain of elements: the region is taken from that chain, from the
-anchor through nodes on two elements, up to a junction, a free end or half-way to another
-anchor (:meth:`VirtualHinges._network`); the elements keep their pretension's stress-free
-length per mesh length as their base (``c0``).
+is the end node of one chain of elements (a clamp a cable runs through is split into one
+anchor per side, :func:`cablefem.network.split_clamps`): the region is taken from that
+chain, from the anchor through nodes on two elements, up to a junction, a free end or
+half-way to another anchor (:meth:`VirtualHinges._network`); the elements keep their
+pretension's stress-free length per mesh length as their base (``c0``).
 
 A hinge that cannot be placed in statics (slack anchor, anchor angle above ~120 deg, a layer
 longer than REGION_FRACTION of half the cable or of its chain to a junction) raises
@@ -223,14 +224,8 @@ class VirtualHinges:
         geo = model.geometry
         X = model.V.tabulate_dof_coordinates()
         cells_g = np.asarray(geo.cells, np.int64)
-        n_nodes = len(geo.points)
         cable = geo.is_cable  # the dampers' cells are no part of a chain
-        degree = np.bincount(cells_g[cable].ravel(), minlength=n_nodes)
-        at_node: list[list[int]] = [[] for _ in range(n_nodes)]
-        for e in np.nonzero(cable)[0]:
-            a, b = cells_g[e]
-            at_node[a].append(int(e))
-            at_node[b].append(int(e))
+        degree = np.bincount(cells_g[cable].ravel(), minlength=len(geo.points))
         anchored = {int(k) for k in geo.anchor_nodes.values()}
         length = np.asarray(geo.cell_c, float) * np.linalg.norm(
             geo.points[cells_g[:, 1]] - geo.points[cells_g[:, 0]], axis=1)
@@ -245,14 +240,7 @@ class VirtualHinges:
                 raise HingeError(f"anchor {anc.name}: the virtual hinge needs the anchor at "
                                  f"the end of one cable (its node {k} is on {degree[k]} "
                                  "elements)")
-            chain, node, prev = [], k, -1
-            while True:
-                e = [c for c in at_node[node] if c != prev][0]
-                chain.append(e)
-                node = int(cells_g[e][cells_g[e] != node][0])
-                prev = e
-                if degree[node] != 2 or node in anchored:
-                    break
+            chain, node = model.chain(k)
             chain = np.asarray(chain, np.int64)
             if node in anchored:  # the other anchor's layer takes the other half
                 chain = chain[:max(1, chain.size // 2)]

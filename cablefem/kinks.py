@@ -31,10 +31,8 @@ be off by the half element's load, O(h)).
 
 Supports a cable passes through (networks): a pinned anchor on a node with two elements of
 a cable group is a kink of that group, its reaction the concentrated force. A clamped anchor
-on a node with more than one cable element (``clamped-through``) holds each element's
-tangent: each side is a clamped layer of its own, a kink row with ``clamp`` the direction
-into that element (``direction`` given: +d into the element it points into, -d into the
-other; else each element's mesh direction).
+on a node with more than one cable element is no kink: it is split into one clamped anchor
+per element (:func:`cablefem.network.split_clamps`), each with its own layer in anchors.csv.
 
 The rod (``cablefem.rod``) resolves the kink: its moment at the node is extrapolated from
 its element moments on each side (quadratic, from the three elements nearest the node;
@@ -49,7 +47,6 @@ from types import SimpleNamespace
 import numpy as np
 
 from cablefem import asymptotics
-from cablefem.anchor import CLAMPED_THROUGH
 
 __all__ = ["KINK_COLUMNS", "MIN_SPACING", "Kink", "KinkMoments", "kink_points", "network_kinks"]
 
@@ -70,8 +67,7 @@ class Kink:
     after)), the stress-free lengths of the two elements ``h``, the stress-free distance
     to the nearest other kink or anchor along the cable ``spacing``, the section's name
     (a network's; None for a single cable) and the two elements (``cells``, network cell
-    indices; a single cable's element numbers). A side of a clamp along the cable has one
-    element and its ``clamp`` direction."""
+    indices; a single cable's element numbers)."""
 
     name: str
     node: int
@@ -81,10 +77,7 @@ class Kink:
     spacing: float = np.inf
     section: str | None = None
     cells: tuple = ()
-    #: a side of a clamp along the cable: the unit clamp direction into its element (then
-    #: ``nodes`` = (other, node, other), ``cells`` = (e, e)); None for a kink
-    clamp: np.ndarray | None = None
-    #: the anchor of a clamp's side or of a pinned support's kink (its ``<group>:<i>``)
+    #: the anchor of a pinned support's kink (its ``<group>:<i>``)
     anchor: str | None = None
 
 
@@ -113,74 +106,21 @@ def kink_points(model) -> list[Kink]:
     return out
 
 
-def _side_sign_direction(e0: np.ndarray, e1: np.ndarray) -> np.ndarray:
-    """The tangent a through-clamp's sides are signed by when it has no ``direction``: the
-    mesh's tangent through the node, ``e1 - e0`` (the unit mesh directions of its two
-    elements away from the node), oriented so that the first of x, y, z along which it
-    has a component (above 1e-6) is positive (mesh independent)."""
-    d = e1 - e0
-    n = np.linalg.norm(d)
-    d = d / n if n > 1e-12 else e1
-    for comp in d:
-        if abs(comp) > 1e-6:
-            return d if comp > 0 else -d
-    return d
-
-
-def _clamp_sides(model, at_node, h) -> list[Kink]:
-    """The sides of every clamp a network's cables pass through (an anchor of kind
-    ``clamped-through``): one :class:`Kink` per cable element at its node, with the clamp
-    direction into that element. Named ``<anchor>+/<group>`` and ``<anchor>-/<group>`` at
-    a node of two elements (+: the side the clamp's ``direction`` points into, or by
-    default the mesh's tangent through the node, oriented towards +x, else +y, +z), else
-    ``<anchor>@<other node>/<group>``."""
-    geo = model.geometry
-    net = geo.net
-    cells = np.asarray(geo.cells, np.int64)
-    out = []
-    for anc in model.anchors:
-        if anc.kind != CLAMPED_THROUGH:
-            continue
-        k = int(anc.node)
-        es = [e for e in at_node[k] if geo.is_cable[e]]
-        other = [int(cells[e][cells[e] != k][0]) for e in es]
-        mesh_dir = [(geo.points[o] - geo.points[k]) / np.linalg.norm(geo.points[o]
-                                                                     - geo.points[k])
-                    for o in other]
-        if len(es) == 2:
-            d = (anc.direction if anc.direction is not None
-                 else _side_sign_direction(mesh_dir[0], mesh_dir[1]))
-            plus = int(np.argmax([np.dot(d, m) for m in mesh_dir]))
-            signs = ["+" if j == plus else "-" for j in range(2)]
-            clamps = ([d if j == plus else -d for j in range(2)]
-                      if anc.direction is not None else mesh_dir)
-            tags = signs
-        else:
-            clamps = mesh_dir
-            tags = [f"@{o}" for o in other]
-        for e, o, c, tag in zip(es, other, clamps, tags):
-            out.append(Kink(f"{anc.name}{tag}/{net.groups[int(net.cell_group[e])]}", k,
-                            np.nan, (o, k, o), (float(h[e]), float(h[e])),
-                            section=geo.cell_section[e], cells=(e, e),
-                            clamp=np.asarray(c, float) / np.linalg.norm(c), anchor=anc.name))
-    return out
-
-
 def network_kinks(model) -> list[Kink]:
     """The kinks of a network (:class:`cablefem.network.NetworkModel`): at every node that
     is not a clamped anchor, where a point load, a point mass, a damper or a pinned anchor
     acts or several cables meet (a junction), each cable group with exactly two elements
     at the node passes through it and kinks there. A group with one element there ends at
     the node (a pin: no moment); with more than two, its path through the node is
-    ambiguous: not covered. Named ``<vertex group>:<i>/<group>`` when the node is the i-th
-    of a 0D group (a pinned anchor's, a load's, a mass's), ``<damper group>:<j>.<end>/
-    <group>`` at an end (0 or 1, the cell's node order) of the j-th cell of a damper's
-    group, else ``node<k>/<group>``; ``spacing`` runs along the group's elements to the
-    nearest other kink of the group, anchor, junction or end. ``network.kinks`` of the
-    case chooses: "all" (loaded nodes, supports and junctions), "loaded" (nodes with point
-    loads, point masses, dampers or pinned anchors) or "none". The sides of the clamps the
-    cables pass through (:func:`_clamp_sides`) are there whatever ``network.kinks`` says:
-    they are the anchors' moments."""
+    ambiguous: not covered. A clamped node is an anchor (split into its sides).
+
+    Named ``<vertex group>:<i>/<group>`` when the node is the i-th of a 0D group (a pinned
+    anchor's, a load's, a mass's), ``<damper group>:<j>.<end>/<group>`` at an end (0 or 1,
+    the cell's node order) of the j-th cell of a damper's group, else
+    ``node<k>/<group>``; ``spacing`` runs along the group's elements to the nearest other
+    kink of the group, anchor, junction or end. ``network.kinks`` of the case chooses:
+    "all" (loaded nodes, supports and junctions), "loaded" (nodes with point loads, point
+    masses, dampers or pinned anchors) or "none"."""
     geo = model.geometry
     net, case = geo.net, model.case
     cells = np.asarray(geo.cells, np.int64)
@@ -226,14 +166,11 @@ def network_kinks(model) -> list[Kink]:
                             (float(h[es[0]]), float(h[es[1]])),
                             section=geo.cell_section[es[0]], cells=tuple(es),
                             anchor=label[k] if k in anchored else None))
-    out += _clamp_sides(model, at_node, h)
     stops = anchored | junctions | {k.node for k in out}
     for kink in out:  # walk each way along the group until a stop or a branch
         g = net.cell_group[kink.cells[0]]
         dist = []
-        ways = (((kink.cells[0], kink.nodes[2]),) if kink.clamp is not None
-                else zip(kink.cells, (kink.nodes[0], kink.nodes[2])))
-        for e, node in ways:
+        for e, node in zip(kink.cells, (kink.nodes[0], kink.nodes[2])):
             d = h[e]
             while node not in stops:
                 nxt = [c for c in at_node[node] if c != e and net.cell_group[c] == g]
@@ -273,10 +210,6 @@ class KinkMoments:
         self.nodes = np.array([k.nodes for k in self.kinks], dtype=np.int64).reshape(-1, 3)
         self.h = np.array([k.h for k in self.kinks], float).reshape(-1, 2)
         self.spacing = np.array([k.spacing for k in self.kinks], float)
-        #: the sides of clamps along the cable, and their clamp directions (NaN elsewhere)
-        self.is_clamp = np.array([k.clamp is not None for k in self.kinks], bool)
-        self.clamp = np.array([k.clamp if k.clamp is not None else np.full(3, np.nan)
-                               for k in self.kinks], float).reshape(-1, 3)
         #: the distributed load at a time (weight, loads, buoyancy), as at the anchors
         self._loads = AnchorMoments.from_model(model, omega) if n else None
         self._local = None
@@ -321,7 +254,7 @@ class KinkMoments:
     def measure(self, t: float = 0.0, r: np.ndarray | None = None) -> dict[str, np.ndarray]:
         """The columns (one row per kink) at the model's current state, time ``t`` (for
         the loads), and ``normal`` (n_kinks, 3), the unit axis ``e- × e+`` of the turn
-        (zero without one; a clamp's side: its layer's); ``r``: the nodes' positions when
+        (zero without one); ``r``: the nodes' positions when
         the caller has them (:meth:`positions`)."""
         if not self.kinks:
             return self.columns(np.zeros((0, 3, 3)))
@@ -365,9 +298,9 @@ class KinkMoments:
         with np.errstate(invalid="ignore", divide="ignore"):  # slack: the element's
             f = np.where(size[..., None] > 0, F / size[..., None], away)
         # a kink: from e- = -f0 into the node to e+ = f1 out of it, with the mean tension,
-        # the clamp along the bisector; a clamp's side: its force against its direction
-        T = np.where(self.is_clamp, size[:, 1], size.mean(axis=1))
-        bis = np.where(self.is_clamp[:, None], self.clamp, f[:, 1] - f[:, 0])
+        # the clamp along the bisector
+        T = size.mean(axis=1)
+        bis = f[:, 1] - f[:, 0]
         network = getattr(self.model, "is_network", False)
         lay = SimpleNamespace(**{k: np.full(n, np.nan) for k in (
             "delta", "moment", "layer_length", "tension")}, valid=np.zeros(n, bool),
@@ -402,8 +335,7 @@ class KinkMoments:
         tsize = np.linalg.norm(turn, axis=1)
         with np.errstate(invalid="ignore", divide="ignore"):
             normal = np.where(tsize[:, None] > 1e-14, turn / tsize[:, None], 0.0)
-        normal = np.where(self.is_clamp[:, None], lay.normal, np.nan_to_num(normal))
-        return {"tension": T, "delta": np.where(self.is_clamp, 1.0, 2.0) * lay.delta,
+        return {"tension": T, "delta": 2.0 * lay.delta,
                 "moment": moment, "moment_layer": lay.moment,
                 "Mx": Mv[:, 0], "My": Mv[:, 1], "Mz": Mv[:, 2],
                 "layer_length": lay.layer_length, "valid": valid.astype(int),

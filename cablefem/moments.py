@@ -258,6 +258,8 @@ class ClampedAnchor:
     mass: float  #: kg/m, of the cable's section at the anchor
     motion: object = None  #: a :class:`cablefem.motion.Motion` (``acceleration(t)``) or None
     diameter: float | None = None  #: m, the fluid's diameter there (buoyancy; None: none)
+    #: m, the span its layer is measured against (None: the cable's length)
+    length: float | None = None
 
     def acceleration(self, times: np.ndarray) -> np.ndarray:
         """(n, 3) acceleration of the anchor at ``times``, m/s²."""
@@ -272,7 +274,8 @@ class AnchorMoments:
     clamped anchor of a model, from anchor-force histories: :func:`anchor_moments` with
     the anchor's section, clamp direction and acceleration, the distributed load at the
     anchor at each time (the weight plus the case's distributed loads, time-dependent ones
-    included), the cable's length, the highest excitation frequency ``omega`` and the
+    included), the span (the cable's length; a network's anchor: its chain of elements,
+    ``model.anchor_span``), the highest excitation frequency ``omega`` and the
     inner solution's ``form``. Pure NumPy: :meth:`from_model` reads what it needs from a
     model once; the object holds no dolfinx or PETSc object.
 
@@ -314,7 +317,8 @@ class AnchorMoments:
             buoyancy = -fluid.density * np.asarray(model.g_vec, float)
         clamped = [ClampedAnchor(a.name, i, np.asarray(a.direction, float), a.section.EI,
                                  a.section.EA, a.section.mass, a.motion,
-                                 None if fluid is None else fluid.diameter_on(a.section))
+                                 None if fluid is None else fluid.diameter_on(a.section),
+                                 model.anchor_span(a.name))
                    for i, a in enumerate(model.anchors) if a.kind == "clamped"]
         loads = [(np.asarray(ld.value, float), ld.time) for _, ld in model.loads]
         order = 1 if getattr(model, "hinges", None) else 0
@@ -363,7 +367,8 @@ class AnchorMoments:
         times = np.atleast_1d(np.asarray(times, float))
         load = np.array([self.load_at(t, a.mass, a.diameter) for t in times]).reshape(-1, 3)
         return anchor_moments(np.asarray(forces, float)[:, :3], a.direction, a.EI, a.EA,
-                              a.mass, a.acceleration(times), load, self.length, self.omega,
+                              a.mass, a.acceleration(times), load,
+                              self.length if a.length is None else a.length, self.omega,
                               self.form, self.outer_order, self.amplification,
                               self.static_moments.get(name), self.resonant_omega)
 

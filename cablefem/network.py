@@ -7,6 +7,13 @@ stress-free length is its mesh length divided by ``1 + T0/EA`` (``T0`` its prete
 that with the anchors at their mesh positions and no gravity the mesh is in equilibrium;
 statics then ramps gravity and the loads from there (load continuation if Newton fails).
 Section properties are cell-wise (DG0) coefficients of the same UFL forms as a single cable.
+
+A clamp that a cable runs through (or where several cables are clamped at one node) holds
+each element's tangent: the node is split into one node per cable element, all at the
+clamp's position (:func:`split_clamps`), and each becomes a clamped anchor of its own, its
+*side*, that ends its chain of elements. The split is exact: a clamp prescribes the node's
+position, so the sides do not see each other through it, and each side gets what an end
+clamp gets (its anchors.csv rows, its layer, its virtual hinge).
 """
 
 from __future__ import annotations
@@ -18,17 +25,111 @@ import numpy as np
 import ufl
 from dolfinx import fem
 from dolfinx import mesh as dmesh
+from mpi4py import MPI
 from petsc4py import PETSc
 
-from cablefem.anchor import CLAMPED_THROUGH
+from cablefem import forms
 from cablefem.cable import MAX_PLAUSIBLE_STRAIN, AnchorBC, CableModel
 from cablefem.errors import CaseError
 from cablefem.fluid import submerged_weight
 from cablefem.geometry import MeshError, NetworkMesh, connected_components, read_network_mesh
+from cablefem.jit import quiet_compiler
 
-__all__ = ["NetworkModel", "NetworkGeometry"]
+__all__ = ["NetworkModel", "NetworkGeometry", "ClampSide", "split_clamps"]
 
 log = logging.getLogger(__name__)
+
+
+@dataclass
+class ClampSide:
+    """One side of a clamp a network's cable runs through: a clamped anchor of its own."""
+
+    clamp: str  #: the clamp's anchor name, ``<group>:<i>``
+    name: str  #: the side's name: ``<clamp>+/<cable group>``, ``-/`` or ``@<node>/``
+    node: int  #: its node (the clamp's own node for the first side, a copy for the others)
+    cell: int  #: its cable element
+    direction: np.ndarray  #: unit clamp direction into its element
+
+
+def _side_sign_direction(e0: np.ndarray, e1: np.ndarray) -> np.ndarray:
+    """The tangent a through-clamp's sides are signed by when it has no ``direction``: the
+    mesh's tangent through the node, ``e1 - e0`` (the unit mesh directions of its two
+    elements away from the node), oriented so that the first of x, y, z along which it
+    has a component (above 1e-6) is positive (mesh independent)."""
+    d = e1 - e0
+    n = np.linalg.norm(d)
+    d = d / n if n > 1e-12 else e1
+    for comp in d:
+        if abs(comp) > 1e-6:
+            return d if comp > 0 else -d
+    return d
+
+
+def split_clamps(net: NetworkMesh, anchors, is_cable: np.ndarray, source=None
+                 ) -> tuple[NetworkMesh, dict[int, list[ClampSide]]]:
+    """Split every clamped node on more than one cable element into one node per element.
+
+    ``anchors``: the case's anchor groups (:class:`cablefem.anchor.Anchor`); ``is_cable``:
+    which cells are a cable's (a damper's cells stay on the clamp's own node). Returns the
+    network with the copies appended to its points (at the clamp's position) and its cells
+    re-pointed, and, per clamp node, its sides. At a node of two elements the sides are
+    ``+`` and ``-``: ``+`` the element the clamp's ``direction`` points into (then clamped
+    along ``+d`` and ``-d``), or by default the one the mesh's tangent through the node
+    points into, oriented towards +x, else +y, +z (each then clamped along its own mesh
+    direction); at more than two, ``@<other node>`` and each its mesh direction (a
+    ``direction`` there is refused: :class:`CaseError`)."""
+    points = [np.asarray(net.points, float)]
+    cells = np.array(net.cells, np.int64, copy=True)
+    n = len(net.points)
+    sides: dict[int, list[ClampSide]] = {}
+    for spec in anchors:
+        if spec.kind != "clamped" or spec.name not in net.vertex_groups:
+            continue
+        for i, k in enumerate(net.vertex_groups[spec.name]):
+            k = int(k)
+            es = [int(e) for e in np.nonzero(((net.cells[:, 0] == k) | (net.cells[:, 1] == k))
+                                             & is_cable)[0]]
+            if len(es) < 2:
+                continue
+            clamp = f"{spec.name}:{i}"
+            other = [int(net.cells[e][net.cells[e] != k][0]) for e in es]
+            mesh_dir = [(net.points[o] - net.points[k])
+                        / np.linalg.norm(net.points[o] - net.points[k]) for o in other]
+            if len(es) == 2:
+                d = (None if spec.direction is None else
+                     np.asarray(spec.direction, float) / np.linalg.norm(spec.direction))
+                sign = d if d is not None else _side_sign_direction(*mesh_dir)
+                plus = int(np.argmax([np.dot(sign, m) for m in mesh_dir]))
+                tags = ["+" if j == plus else "-" for j in range(2)]
+                dirs = ([d if j == plus else -d for j in range(2)] if d is not None
+                        else mesh_dir)
+            else:
+                if spec.direction is not None:
+                    raise CaseError([(f"anchors[{spec.name}].direction",
+                                      f"anchor {clamp} at node {k} is on {len(es)} cable "
+                                      "elements: a direction is the tangent of one cable "
+                                      "running through a clamp (two elements); leave it out "
+                                      "and each element is clamped along its mesh direction")],
+                                    source)
+                tags = [f"@{o}" for o in other]
+                dirs = mesh_dir
+            out = []
+            for j, (e, tag, dj) in enumerate(zip(es, tags, dirs)):
+                node = k
+                if j:  # a copy of the node for every element but the first
+                    node = n
+                    n += 1
+                    points.append(np.asarray(net.points[k], float)[None, :])
+                    cells[e][cells[e] == k] = node
+                group = net.groups[int(net.cell_group[e])]
+                out.append(ClampSide(clamp, f"{clamp}{tag}/{group}", node, e,
+                                     np.asarray(dj, float) / np.linalg.norm(dj)))
+            sides[k] = out
+    if not sides:
+        return net, sides
+    split = NetworkMesh(np.concatenate(points), cells, net.cell_group, net.groups,
+                        net.vertex_groups, net.source)
+    return split, sides
 
 
 @dataclass
@@ -46,6 +147,8 @@ class NetworkGeometry:
     anchor_nodes: dict[str, int] = field(default_factory=dict)
     #: the [[dampers]] entry of each cell (-1: a cable's cell)
     cell_damper: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
+    #: the sides of every clamp a cable runs through, by the clamp's node (split_clamps)
+    clamp_sides: dict = field(default_factory=dict)
 
     @property
     def is_cable(self) -> np.ndarray:
@@ -126,6 +229,7 @@ class NetworkModel(CableModel):
                                         f"{k} at {net.points[k].tolist()}"))
         if problems:
             raise CaseError(problems, case.source)
+        net, sides = split_clamps(net, case.anchors, cell_damper < 0, case.source)
         secs = spec.sections
         for i, c in enumerate(spec.cables):
             strain = c.pretension / secs[c.section].EA
@@ -147,7 +251,7 @@ class NetworkModel(CableModel):
         h = np.linalg.norm(net.points[net.cells[:, 1]] - net.points[net.cells[:, 0]], axis=1)
         length = float(np.sum((c * h)[cable]))
         geo = NetworkGeometry(net.points, net.cells, length, net, EA, m, c, cell_section,
-                              cell_damper=cell_damper)
+                              cell_damper=cell_damper, clamp_sides=sides)
         # the seabed's contact law is smoothed over a fraction of the lightest cable's
         # penetration (cablefem.seabed): the least submerged weight of the sections used
         fl, g = getattr(case, "fluid", None), case.gravity.g
@@ -206,30 +310,30 @@ class NetworkModel(CableModel):
         secs = self.case.network.sections
         out = []
         imap = self.V.dofmap.index_map
+
+        def held(name, node, kind, direction, spec, cell):
+            geo.anchor_nodes[name] = node
+            dofs = fem.locate_dofs_topological(self.V, 0, self._locate_node(node))
+            owned = bool(np.any(dofs < imap.size_local))
+            section = secs[geo.cell_section[cell]] if cell is not None else None
+            X = net.points[node].copy()
+            return AnchorBC(name, node, X, X.copy(), kind, direction, spec.motion, dofs,
+                            owned, section)
+
         for spec in self.case.anchors:
             for i, k in enumerate(net.vertex_groups[spec.name]):
                 k = int(k)
                 name = f"{spec.name}:{i}"
-                geo.anchor_nodes[name] = k
+                if k in geo.clamp_sides:  # a clamp a cable runs through: one per side
+                    for side in geo.clamp_sides[k]:
+                        out.append(held(side.name, side.node, "clamped", side.direction,
+                                        spec, side.cell))
+                        out[-1].clamp = name
+                    continue
                 at = np.nonzero(((net.cells[:, 0] == k) | (net.cells[:, 1] == k))
                                 & geo.is_cable)[0]  # its cables' cells
-                direction, kind = None, spec.kind
-                if spec.kind == "clamped" and at.size > 1:
-                    # a clamp the cable runs through, or several cables clamped at one
-                    # node: each element's side is a layer of its own (cablefem.kinks)
-                    kind = CLAMPED_THROUGH
-                    if spec.direction is not None:
-                        if at.size != 2:
-                            raise CaseError([(f"anchors[{spec.name}].direction",
-                                              f"anchor {name} at node {k} is on {at.size} "
-                                              "cable elements: a direction is the tangent "
-                                              "of one cable running through a clamp (two "
-                                              "elements); leave it out and each element is "
-                                              "clamped along its mesh direction")],
-                                            self.case.source)
-                        direction = (np.asarray(spec.direction, float)
-                                     / np.linalg.norm(spec.direction))
-                elif spec.kind == "clamped":
+                direction = None
+                if spec.kind == "clamped":
                     if at.size == 0:  # only dampers end there
                         raise CaseError([(f"anchors[{spec.name}].type", f"anchor {name} at "
                                           f"node {k} holds no cable element, nothing to "
@@ -240,16 +344,104 @@ class NetworkModel(CableModel):
                         d = net.points[other] - net.points[k]
                         direction = d / np.linalg.norm(d)
                     direction = np.asarray(direction, float) / np.linalg.norm(direction)
-                verts = self._locate_node(k)
-                dofs = fem.locate_dofs_topological(self.V, 0, verts)
-                owned = bool(np.any(dofs < imap.size_local))
-                section = secs[geo.cell_section[at[0]]] if at.size else None
-                out.append(AnchorBC(name, k, net.points[k].copy(), net.points[k].copy(),
-                                    kind, direction, spec.motion, dofs, owned, section))
+                out.append(held(name, k, spec.kind, direction, spec,
+                                int(at[0]) if at.size else None))
         owners = self.comm.allreduce(np.array([int(a.owned) for a in out]))
         if np.any(owners != 1):
             raise RuntimeError("anchor ownership is not unique across ranks")
         return out
+
+    def _bending_nodes(self) -> list[int]:
+        """With ``solver.span_bending``: every node of two cable elements (of one group or
+        two) that holds no anchor, point load, point mass or damper (tagged in
+        :attr:`dS`)."""
+        if not self.case.solver.span_bending:
+            return []
+        geo = self.geometry
+        cells = np.asarray(geo.cells, np.int64)
+        cable = geo.is_cable
+        degree = np.bincount(cells[cable].ravel(), minlength=len(geo.points))
+        stops = ({int(k) for k in geo.anchor_nodes.values()} | set(self._node_tag)
+                 | {int(k) for k in cells[~cable].ravel()})
+        return [k for k in np.nonzero(degree == 2)[0].tolist() if k not in stops]
+
+    def _add_span_bending(self):
+        """``solver.span_bending`` on a network (docs/theory.md §6.1): the bending energy
+        at every node of :meth:`_bending_nodes`; at every other node of a cable (a clamped
+        anchor, a kink, a junction; not a free end or a pinned end) the span's moment
+        ``EI κ_s`` is handed over on each of its elements, as at a single cable's clamps
+        and kinks. The hand-over is constant along an element (P1: its tension, tangent
+        and rotation are), so it is integrated over the element against ``1/h``, which
+        also reaches a junction's elements (no interior facet joins three cells); an
+        element with hand-overs at both ends gets none (the two cancel: its curvature,
+        hence its moment, is the same at both). The energy's lengths are the outer
+        string's, the pretension's stress-free length per mesh length ``c0`` (also in a
+        hinge's region). Returns the bending energy (a form)."""
+        geo = self.geometry
+        cells = np.asarray(geo.cells, np.int64)
+        cable = geo.is_cable
+        n = len(geo.points)
+        degree = np.bincount(cells[cable].ravel(), minlength=n)
+        clamped = {int(a.node) for a in self.anchors if a.kind == "clamped"}
+        hand = (degree >= 2) | np.isin(np.arange(n), sorted(clamped))
+        hand[self._bending_nodes()] = False
+        self.EI = self.section_field("EI", lambda sec: sec.EI)
+        c0 = fem.Function(self.W, name="c_outer")
+        c0.x.array[:] = np.asarray(geo.cell_c, float)[self._cell_index]
+        energy = (forms.span_bending_energy(self.u, self.t0, self.EI, self.mesh, c0)
+                  * self.dS(self._bend_tag))
+        self.forms.add("span_bending", ufl.derivative(energy, self.u, self.du),
+                       kind="static")
+        # each cable element's sum of the unit vectors away from its hand-over ends (zero
+        # on the others: sign(0) = 0 in the hand-over)
+        with quiet_compiler():
+            space = fem.VectorFunctionSpace(self.mesh, ("DG", 0), dim=3)
+        away = fem.Function(space, name="away_from_handover")
+        ends = cells[self._cell_index]
+        d = geo.points[ends[:, 1]] - geo.points[ends[:, 0]]
+        d = d / np.linalg.norm(d, axis=1)[:, None]
+        w = (hand[ends[:, 0]].astype(float) - hand[ends[:, 1]]) * cable[self._cell_index]
+        away.x.array[:] = (w[:, None] * d).ravel()
+        if self.comm.allreduce(int(np.count_nonzero(w)), op=MPI.SUM):
+            T = self.forms.outputs["tension"]
+            q = -(self.m * self.gravity + sum((f for f, _ in self.loads), 0.0 * self.gravity))
+            J = ufl.Jacobian(self.mesh)
+            h = ufl.sqrt(ufl.dot(J[:, 0], J[:, 0]))
+            density = forms.end_moment_density(self.u, self.du, self.t0, self.EI, T, q, away)
+            self.forms.add("end_moments", density / h * ufl.dx, kind="static")
+        return energy
+
+    def chain(self, k: int) -> tuple[list[int], int]:
+        """The chain of cable elements from node ``k`` (the end of one cable element)
+        through nodes of two cable elements that hold no anchor, up to a junction, a free
+        end or an anchor: its cells, in order from ``k``, and the node it ends at."""
+        geo = self.geometry
+        if getattr(self, "_at_node", None) is None:
+            cells = np.asarray(geo.cells, np.int64)
+            self._at_node = [[] for _ in range(len(geo.points))]
+            for e in np.nonzero(geo.is_cable)[0]:
+                for n in cells[e]:
+                    self._at_node[int(n)].append(int(e))
+        at, cells = self._at_node, np.asarray(geo.cells, np.int64)
+        anchored = {int(n) for n in geo.anchor_nodes.values()}
+        chain, node, prev = [], int(k), -1
+        while True:
+            e = [c for c in at[node] if c != prev][0]
+            chain.append(e)
+            node = int(cells[e][cells[e] != node][0])
+            prev = e
+            if len(at[node]) != 2 or node in anchored:
+                return chain, node
+
+    def anchor_span(self, name: str) -> float:
+        """The stress-free length of clamped anchor ``name``'s chain of elements
+        (:meth:`chain`): the span its layer's validity and error estimate are measured
+        against (a single cable's is its length), m."""
+        geo = self.geometry
+        chain, _ = self.chain(geo.anchor_nodes[name])
+        cells = np.asarray(geo.cells, np.int64)[chain]
+        h = np.linalg.norm(geo.points[cells[:, 1]] - geo.points[cells[:, 0]], axis=1)
+        return float(np.sum(np.asarray(geo.cell_c, float)[chain] * h))
 
     def _item_nodes(self, item) -> list[int]:
         return [int(k) for k in self.geometry.net.vertex_groups[item.s]]

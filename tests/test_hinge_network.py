@@ -157,7 +157,7 @@ def test_network_hinge_refusals_name_the_key(mpi_tmp_path):
     """A clamped anchor whose chain to a junction is too short for the layer (0.01 m to
     the junction, sigma_h ~ ell = sqrt(EI/T) ~ 0.01 m > 0.25 x 0.01 m) is refused as an
     input error naming solver.outer_correction; without the hinge it is accepted. A clamped
-    junction (below) has no hinge: its elements' sides are kinks."""
+    junction (below) is split into its sides, each an anchor with its own hinge."""
     # a T: arms from the junction J (node 1) to anchors at nodes 0 (0.01 m away), 2 and 3
     pts = [[-0.01, 0, 0], [0, 0, 0], [10, 0, 0], [0, 0, -10]]
 
@@ -190,9 +190,14 @@ def test_network_hinge_refusals_name_the_key(mpi_tmp_path):
     assert "anchors[p].direction" in str(err.value), str(err.value)
     m = NetworkModel(comm, case(on_junction, "none"))
     solve_static(m)
-    assert [a.kind for a in m.anchors] == ["clamped-through", "clamped", "clamped"]
-    # (with the hinge, the two end clamps would have one, the junction none)
-    assert len(NetworkModel(comm, case(on_junction, "hinge")).hinges.items) == 2
+    assert [(a.name, a.kind, a.clamp) for a in m.anchors] == [
+        ("p:0@0/c", "clamped", "p:0"), ("p:0@2/c", "clamped", "p:0"),
+        ("p:0@3/c", "clamped", "p:0"), ("q:0", "clamped", None), ("r:0", "clamped", None)]
+    # with the hinges every side has one (cablefem.network.split_clamps): the side on the
+    # 0.01 m arm to a free end is too short for its layer and is refused, naming the key
+    with pytest.raises(CaseError) as err:
+        solve_static(NetworkModel(comm, case(on_junction, "hinge")))
+    assert "solver.outer_correction" in str(err.value) and "p:0@0/c" in str(err.value)
 
 
 @pytest.mark.parametrize("direction", ["chord", "segment"])

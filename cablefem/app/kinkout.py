@@ -10,7 +10,6 @@ import numpy as np
 from cablefem.app.report import steady_state_stats
 from cablefem.io import anchorcsv
 from cablefem.kinks import KINK_COLUMNS, KinkMoments, rod_kink_moments
-from cablefem.moments import error_estimate
 
 __all__ = ["KinkOutput"]
 
@@ -87,22 +86,6 @@ class KinkOutput:
         if self.csv is not None:
             self.csv.close()
 
-    def _leading_order_estimate(self, i: int) -> float | None:
-        """A clamp side's static moment is at leading order (no virtual hinge at a clamp the
-        cable runs through): its estimated relative error, the anchors' leading-order one
-        (:func:`cablefem.moments.error_estimate`, docs/theory.md §5.1) with the side's
-        tension and angle and the length along the cable to the nearest kink, anchor,
-        junction or free end (shorter than the chain: the estimate errs high). None for the
-        rod (it resolves the layer), on the leading-order route (the anchors' estimate is
-        the leading order's too, and the run's threshold applies to it alike) or where
-        undefined."""
-        if self.beam or not getattr(self.model, "hinges", None):
-            return None
-        est = float(error_estimate(self.static["delta"][i], self.static["tension"][i],
-                                   self.moments.EI[i], self.moments.EA[i],
-                                   self.moments.spacing[i], outer_order=0))
-        return est if np.isfinite(est) else None
-
     def summary(self) -> dict:
         """Per kink: its station (a network's: its node and section), the static moment,
         tension, angle and layer length, the fraction of valid rows and the steady-state
@@ -114,13 +97,8 @@ class KinkOutput:
             # a single cable's kink by its station, a network's by its node and section
             entry = ({"s": k.s} if k.section is None else {"node": k.node,
                                                            "section": k.section})
-            if k.anchor is not None:  # at a support: a pinned anchor's, a clamp's side
+            if k.anchor is not None:  # at a support: a pinned anchor's
                 entry["anchor"] = k.anchor
-            if k.clamp is not None:
-                entry["clamp_direction"] = k.clamp.tolist()
-                est = self._leading_order_estimate(i)
-                if est is not None:
-                    entry["static_error_estimate"] = est
             entry["static_valid"] = bool(self.static["valid"][i])
             for key, col in (("static_moment", "moment"),
                              ("static_moment_layer", "moment_layer"),

@@ -188,13 +188,11 @@ class RunOutput:
                                                            n_span=5))
         if self.net_kinks:  # model.u is the static state here
             # a kink's segment: 10 static layer lengths each side of the node, graded
-            # towards it, signed (< 0 back along the element before); a clamp's side:
-            # along its element only
-            sides = self.kinkout.moments.is_clamp
-            for ell, side in zip(self.kinkout.static["layer_length"], sides):
+            # towards it, signed (< 0 back along the element before)
+            for ell in self.kinkout.static["layer_length"]:
                 ell = ell if np.isfinite(ell) and ell > 0 else 1e-3 * self.model.length
                 half = asymptotics.graded_stations(10 * ell, [0.0], [0.5 * ell], n_span=5)
-                self.sigmas.append(half if side else np.concatenate([-half[:0:-1], half]))
+                self.sigmas.append(np.concatenate([-half[:0:-1], half]))
         self.points0 = self._segments(0.0, static_forces, None)[0]
         self.stations = np.concatenate(self.sigmas)
 
@@ -229,8 +227,7 @@ class RunOutput:
         """Append each network kink's segment at time ``t``, the current state
         (collective): the polyline from the node back along the element before and on
         along the one after, with the clamped layer of half the kink angle on each side
-        about e- x e+; a clamp's side: along its element, the layer of its angle
-        (docs/kinks.md)."""
+        about e- x e+ (docs/kinks.md)."""
         km = self.kinkout.moments
         r = km.positions()
         c = km.measure(t, r) if fields else None
@@ -242,9 +239,8 @@ class RunOutput:
             if not fields:
                 continue
             ell, delta = c["layer_length"][i], c["delta"][i]
-            angle = delta if km.is_clamp[i] else 0.5 * delta
             if np.isfinite(ell) and ell > 0 and np.isfinite(delta):
-                k = asymptotics.curvature_profile(np.abs(sig), angle, ell
+                k = asymptotics.curvature_profile(np.abs(sig), 0.5 * delta, ell
                                                   )[:, None] * c["normal"][i][None, :]
             else:  # slack: no layer
                 k = np.zeros((sig.size, 3))

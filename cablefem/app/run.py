@@ -17,7 +17,6 @@ import numpy as np
 from mpi4py import MPI
 
 from cablefem import __version__
-from cablefem.anchor import CLAMPED_THROUGH
 from cablefem.app.log import Progress, quiet_compiler
 from cablefem.app.output import RunOutput, rod_moment_columns
 from cablefem.app.report import (
@@ -447,15 +446,14 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
                  "direction": a.direction if a.direction is not None else None,
                  "static_tension": float(np.linalg.norm(static.anchor_forces[
                      model.anchors.index(a)][:3]))}
-        if a.kind == CLAMPED_THROUGH:  # its moments: a row of kinks.csv per side
-            entry["kinks"] = [k.name for k in emitter.kinkout.kinks if k.clamp is not None
-                              and k.anchor == a.name]
+        if a.clamp is not None:  # a side of a clamp a cable runs through
+            entry["clamp"] = a.clamp
         if a.kind == "clamped":
             F_static = static.anchor_forces[model.anchors.index(a)]
             st = anchor_moments(F_static[None, :3], a.direction, a.section.EI, a.section.EA,
                                 a.section.mass, np.zeros((1, 3)),
-                                emitter.load_at(0.0, a.section), model.length, None, form,
-                                1 if getattr(model, "hinges", None) else 0)
+                                emitter.load_at(0.0, a.section), model.anchor_span(a.name),
+                                None, form, 1 if getattr(model, "hinges", None) else 0)
             if kind == "beam":  # the rod's own; the composite with the beam's force beside
                 entry["static_moment_composite"] = float(st["moment"][0])
                 st = rod_moment_columns(st, F_static[None, 3:6], a.direction)
@@ -516,13 +514,6 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
                 warn(summary, f"kinks.{name}", f"{100 * (1 - frac):.3g} % of the rows are "
                      "invalid (the layer at this kink is slack, not quasi-static, or overlaps "
                      "a neighbouring kink or anchor): see valid in kinks.csv")
-            est = entry.get("static_error_estimate", 0.0)
-            if est > ERROR_THRESHOLD:  # a clamp side at leading order on the hinge's route
-                warn(summary, f"kinks.{name}", f"the side of clamped-through anchor "
-                     f"{entry['anchor']!r} is at leading order (the virtual hinge exists only "
-                     f"at clamps that end a chain of elements): its estimated moment error is "
-                     f"{100 * est:.2g} % at rest, above the {100 * ERROR_THRESHOLD:g} % "
-                     "threshold (docs/kinks.md)")
     gaps = getattr(model, "kink_gaps", [])
     if gaps:  # a network node where a cable group branches: no kink moment there
         k, group, n = gaps[0]

@@ -322,8 +322,9 @@ CASE_KEYS: dict[str, KeyDoc | TableDoc] = {
         "span_bending": KeyDoc(
             "boolean", False, "", "String: the span's own bending stiffness EI (a bending "
             "energy on the turning angle between neighbouring elements; the clamps' "
-            "rotation stays with the boundary layer); single cables only, the rod ignores "
-            "it."),
+            "rotation stays with the boundary layer; in a network, at every node of two cable "
+            "elements without an anchor or point term, the span's moment handed over at the "
+            "others); the rod ignores it."),
         "petsc_options": KeyDoc(
             "table of options", {}, "",
             "PETSc options without '-' (values string/number/boolean), e.g. ts_type, "
@@ -359,8 +360,7 @@ def _network_keys() -> dict:
                 "kinks": KeyDoc("string", "all", "", "Interior kinks reported (kinks.csv, "
                                 "docs/kinks.md): 'all' (nodes with point loads, masses, "
                                 "dampers or pinned anchors a cable passes through, and "
-                                "junctions), 'loaded' (the former only) or 'none'. The sides "
-                                "of a clamp a cable runs through are always reported.")}),
+                                "junctions), 'loaded' (the former only) or 'none'.")}),
             "sections": TableDoc("array of tables", REQUIRED, "", "Named cross-sections.", {
                 "name": KeyDoc("string", REQUIRED, "", "Section name, used by [[cables]]."),
                 **section_keys}),
@@ -372,7 +372,9 @@ def _network_keys() -> dict:
                                      "mesh length / (1 + pretension/EA).")}),
             "gravity": c["gravity"],
             "anchors": TableDoc("array of tables", REQUIRED, "", "One per 0D group of the mesh; "
-                                "every vertex of the group is an anchor named group:k.", {
+                                "every vertex of the group is an anchor named group:k (a "
+                                "clamped vertex on several cable elements: one anchor per "
+                                "side, group:k+/cable, group:k-/cable, docs/kinks.md).", {
                 "name": KeyDoc("string", REQUIRED, "", "0D physical group name in the mesh."),
                 "type": anchors.keys["type"],
                 "direction": KeyDoc("3-vector", None, "-", "Clamp direction into the cable "

@@ -591,9 +591,8 @@ def _parse_network_case(data: dict, base_dir: Path, source: str) -> Case:
     modal = ModalSpec(table("modal").integer("modes"))
     solver_r = table("solver")
     solver = SolverSpec(solver_r.boolean("tension_only"), _parse_petsc_options(solver_r),
-                        solver_r.string("outer_correction", ("none", "hinge")))
-    if solver_r.boolean("span_bending"):
-        solver_r.add("span_bending", "a network has no span bending yet (single cables only)")
+                        solver_r.string("outer_correction", ("none", "hinge")),
+                        solver_r.boolean("span_bending"))
     first = sections.get(cables[0].section) if cables else None
     fatigue = _parse_fatigue(top.table("fatigue"), first)
     fluid_r = top.table("fluid")

@@ -259,13 +259,19 @@ class StringWriter(_SeriesWriter):
 
             geo = m.geometry
             cellwise = S.ufl_element().degree() == 0
-            targets = (0.5 * (geo.points[geo.cells[:, 0]] + geo.points[geo.cells[:, 1]])
-                       if cellwise else geo.points)
             n_owned = S.dofmap.index_map.size_local
-            xyz = S.tabulate_dof_coordinates()[:n_owned]
-            dist, idx = cKDTree(targets).query(xyz)
-            scale = max(1.0, float(np.max(np.abs(geo.points))))
-            ok = not (dist.size and dist.max() > 1e-8 * scale)
+            if cellwise:  # by midpoints (the cells' are distinct)
+                targets = 0.5 * (geo.points[geo.cells[:, 0]] + geo.points[geo.cells[:, 1]])
+                xyz = S.tabulate_dof_coordinates()[:n_owned]
+                dist, idx = cKDTree(targets).query(xyz)
+                scale = max(1.0, float(np.max(np.abs(geo.points))))
+                ok = not (dist.size and dist.max() > 1e-8 * scale)
+            else:  # by the cells (a split clamp's nodes share a point)
+                targets = geo.points
+                try:
+                    idx, ok = m._dof_nodes(S)[:n_owned], True
+                except RuntimeError:
+                    idx, ok = np.zeros(n_owned, np.int64), False
             allidx = m.comm.gather(idx, root=0)
             if m.comm.rank == 0:
                 allidx = np.concatenate(allidx)
