@@ -112,7 +112,11 @@ def network_kinks(model) -> list[Kink]:
     acts or several cables meet (a junction), each cable group with exactly two elements
     at the node passes through it and kinks there. A group with one element there ends at
     the node (a pin: no moment); with more than two, its path through the node is
-    ambiguous: not covered. A clamped node is an anchor (split into its sides).
+    ambiguous: not covered. Where a point term acts at a node of two cable groups in line
+    (one group ends, the other begins), the cable kinks there too, named
+    ``<where>/<group>+<group>``, if both have the same section (else not covered: the
+    layer would straddle a change of section). A clamped node is an anchor (split into its
+    sides).
 
     Named ``<vertex group>:<i>/<group>`` when the node is the i-th of a 0D group (a pinned
     anchor's, a load's, a mass's), ``<damper group>:<j>.<end>/<group>`` at an end (0 or 1,
@@ -147,17 +151,34 @@ def network_kinks(model) -> list[Kink]:
     junctions = {int(k) for k in net.junctions}
     which = getattr(case.network, "kinks", "all")
     out = []
-    #: (node, cable group, elements) where a group meets itself with more than two
-    #: elements: no kink moment there (its path through the node is ambiguous)
+    #: (node, where, why) of the nodes with no kink moment: where a group meets itself
+    #: with more than two elements (its path through the node is ambiguous), or where a
+    #: concentrated force acts at the meeting of two cable groups of different sections
     model.kink_gaps = []
     candidates = [] if which == "none" else sorted(
         (set(label) | (junctions if which == "all" else set())) - clamped)
     for k in candidates:
         # a damper's cells are no cable: a cable kinks where a damper pulls at it
-        for g in sorted({int(net.cell_group[e]) for e in at_node[k] if not damper_cell[e]}):
+        cab = [e for e in at_node[k] if not damper_cell[e]]
+        in_line = len(cab) == 2 and net.cell_group[cab[0]] != net.cell_group[cab[1]]
+        if in_line and k in label:  # a force where two cable groups meet in line
+            where = "+".join(net.groups[int(net.cell_group[e])] for e in cab)
+            if geo.cell_section[cab[0]] != geo.cell_section[cab[1]]:
+                model.kink_gaps.append((k, where, "two cable groups of different sections "
+                                                  "meet there in line (the layer straddles "
+                                                  "a change of section)"))
+                continue
+            before, after = (int(cells[e][cells[e] != k][0]) for e in cab)
+            out.append(Kink(f"{label[k]}/{where}", k, np.nan, (before, k, after),
+                            (float(h[cab[0]]), float(h[cab[1]])),
+                            section=geo.cell_section[cab[0]], cells=tuple(cab),
+                            anchor=label[k] if k in anchored else None))
+            continue
+        for g in sorted({int(net.cell_group[e]) for e in cab}):
             es = [e for e in at_node[k] if net.cell_group[e] == g]
             if len(es) > 2:
-                model.kink_gaps.append((k, net.groups[g], len(es)))
+                model.kink_gaps.append((k, net.groups[g], f"the group meets itself with "
+                                                          f"{len(es)} elements there"))
             if len(es) != 2:
                 continue
             before, after = (int(cells[e][cells[e] != k][0]) for e in es)
@@ -167,10 +188,10 @@ def network_kinks(model) -> list[Kink]:
                             section=geo.cell_section[es[0]], cells=tuple(es),
                             anchor=label[k] if k in anchored else None))
     stops = anchored | junctions | {k.node for k in out}
-    for kink in out:  # walk each way along the group until a stop or a branch
-        g = net.cell_group[kink.cells[0]]
+    for kink in out:  # walk each way along the side's group until a stop or a branch
         dist = []
         for e, node in zip(kink.cells, (kink.nodes[0], kink.nodes[2])):
+            g = net.cell_group[e]
             d = h[e]
             while node not in stops:
                 nxt = [c for c in at_node[node] if c != e and net.cell_group[c] == g]

@@ -421,6 +421,42 @@ def test_a_branching_group_warns(mpi_tmp_path):
     assert len(msgs) == 1 and "node 10" in msgs[0] and "'a'" in msgs[0]
 
 
+@pytest.mark.parametrize("sections", [("s", "s"), ("s", "t")])
+def test_a_load_where_two_groups_meet_in_line(mpi_tmp_path, sections):
+    """One straight cable drawn as two cable groups "a" and "b" that meet at the loaded
+    node: of one section, the cable kinks there like a cable of one group (the same kink
+    moment, name <load>/a+b, to round-off: the same discrete problem); of two sections
+    (EI differs), the layer would straddle the change of section: no kink moment, and
+    the run warns, naming the node. Before, neither: each group ended at the node, so
+    there was no kink and no word."""
+    from test_network import case_dict, write_mesh  # noqa: E402
+
+    pts = np.column_stack([np.linspace(0.0, 100.0, 21), np.zeros(21), np.zeros(21)])
+    lines = np.column_stack([np.arange(20), np.arange(1, 21)])
+    secs = [{"name": "s", "EA": 1.0e6, "EI": 1.0, "mass": 2.0},
+            {"name": "t", "EA": 1.0e6, "EI": 2.0, "mass": 2.0}]
+    summaries = []
+    for groups in (["a"] * 20, ["a"] * 10 + ["b"] * 10):
+        mesh = write_mesh(str(mpi_tmp_path / f"{len(set(groups))}.msh"), pts, lines, groups,
+                          {"ends": [0, 20], "load": [10]})
+        cables = [{"group": g, "section": sec, "pretension": 1e4}
+                  for g, sec in zip(sorted(set(groups)), sections)]
+        d = case_dict(mesh, cables, ["ends"], sections=secs,
+                      point_loads=[{"group": "load", "value": [0.0, 0.0, -500.0]}])
+        summaries.append(run_case(parse_case(d), mpi_tmp_path / f"run{len(set(groups))}",
+                                  comm, figures=False, progress=False, modes=0).summary)
+    one, two = summaries
+    if sections[0] == sections[1]:
+        assert set(two["kinks"]) == {"load:0/a+b"}
+        assert two["kinks"]["load:0/a+b"]["static_moment"] == pytest.approx(
+            one["kinks"]["load:0/a"]["static_moment"], rel=1e-9)
+        assert not [w for w in two.get("warnings", []) if w["key"] == "kinks"]
+    else:
+        assert "kinks" not in two
+        msgs = [w["message"] for w in two.get("warnings", []) if w["key"] == "kinks"]
+        assert len(msgs) == 1 and "node 10" in msgs[0] and "a+b" in msgs[0]
+
+
 @pytest.mark.parametrize("elements", [40, 400])
 def test_span_bending_leaves_the_kink_to_its_layer(elements):
     """With the span's own bending (solver.span_bending) the kink's turn belongs to the

@@ -297,8 +297,8 @@ def arc_network(path, EI: float, n: int, load: float, span_bending: bool = True)
     """The cable of :func:`sagging` as a network: its mesh a circular arc of 10 % sag
     through p and q with ``n`` equal chords (so its stress-free elements, at zero
     pretension, are the single cable's uniform ones), in two cable groups that meet in
-    line at three quarters of the span (a node of two groups, which bends like any other),
-    and the single
+    line at mid-span (a node of two groups: it bends like any other, and a point load there
+    kinks the cable, cablefem.kinks), and the single
     cable of the same stress-free length; both clamped along the chord with the hinges
     and span bending, with a point load ``load`` (N, downwards) at mid-span."""
     from test_network import write_mesh
@@ -310,7 +310,7 @@ def arc_network(path, EI: float, n: int, load: float, span_bending: bool = True)
     length = n * 2 * R * np.sin(alpha / n)
     cells = np.column_stack([np.arange(n), np.arange(1, n + 1)])
     mesh = write_mesh(str(path / "arc.msh"), pts, cells,
-                      ["a"] * (3 * n // 4) + ["b"] * (n - 3 * n // 4),
+                      ["a"] * (n // 2) + ["b"] * (n - n // 2),
                       {"p": [0], "q": [n], "mid": [n // 2]})
     single = sagging(EI, "clamped", span_bending, elements=n)
     single["geometry"] = {"length": length}

@@ -515,11 +515,11 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
                      "invalid (the layer at this kink is slack, not quasi-static, or overlaps "
                      "a neighbouring kink or anchor): see valid in kinks.csv")
     gaps = getattr(model, "kink_gaps", [])
-    if gaps:  # a network node where a cable group branches: no kink moment there
-        k, group, n = gaps[0]
-        warn(summary, "kinks", f"{len(gaps)} node(s) where a cable group meets itself with "
-             f"more than two elements have no kink moment (e.g. node {k}, group {group!r}, "
-             f"{n} elements): give each cable through the node its own group")
+    if gaps:  # network nodes where a cable kinks but has no kink moment
+        k, where, why = gaps[0]
+        warn(summary, "kinks", f"{len(gaps)} node(s) where a cable kinks have no kink "
+             f"moment (e.g. node {k}, {where!r}: {why}): give each cable through such a "
+             "node its own group, of one section (docs/kinks.md)")
     if summary["status"] == "running":
         summary["status"] = "completed"
     if figures and len(times) > 1 and moments:
