@@ -129,5 +129,9 @@ def anchor_validity(summary: dict, name: str, times: np.ndarray, mo: dict,
              f"the factor {summary.get('error_resonance_factor', 1.0):.3g}) are too large"
              + (" (solver.outer_correction = 'hinge' reduces them)"
                 if summary.get("outer_correction") == "none" else "")
+             + (" (near a resonance the span's bending, which the string leaves out, moves "
+                "the resonant frequency: solver.span_bending = true puts it in)"
+                if summary.get("span_bending") is False
+                and summary.get("error_resonance_factor", 1.0) > 1.0 else "")
              + "; see error_estimate in anchors.csv")
     return out

@@ -254,6 +254,8 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
              f"compressed element(s) (least tension {static.min_tension:.4g}): a buckled "
              "equilibrium, not a reference for a cable; try another --refine")
     summary["outer_correction"] = "none" if kind == "beam" else case.solver.outer_correction
+    if kind != "beam":
+        summary["span_bending"] = bool(case.solver.span_bending)
     if model.hinges:
         summary["static"]["virtual_hinges"] = model.hinges.report()
     if getattr(case, "seabed", None) is not None and getattr(model, "is_network", False):
