@@ -31,6 +31,7 @@ from cablefem.fluid import add_fluid_terms, submerged_weight
 from cablefem.geometry import create_line_mesh, graded_stations, polyline_cable, straight_cable
 from cablefem.jit import quiet_compiler
 from cablefem.seabed import GroundedCatenary, add_seabed_terms
+from cablefem.span_bending import is_on
 
 __all__ = ["CableModel", "AnchorBC", "comm_first"]  # AnchorBC: from cablefem.anchor
 
@@ -388,6 +389,17 @@ class CableModel:
         if self._one_sided:
             self._nodal_weights()
 
+    def bending_vertices(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Where the span-bending term acts (docs/theory.md §6.1), whether it is on or not:
+        the vertices (node before, node, node after), (n, 3), every interior node but the
+        kinks' (:attr:`dS`'s tags); ``EI`` and the mean stress-free length of the two
+        elements ``hbar`` at each (the outer string's: the mesh's)."""
+        st = np.asarray(self.geometry.stations, float)
+        k = np.array([i for i in range(1, len(st) - 1) if i not in self._node_tag], np.int64)
+        v = np.column_stack([k - 1, k, k + 1]) if k.size else np.zeros((0, 3), np.int64)
+        hbar = 0.5 * (st[k + 1] - st[k - 1]) if k.size else np.zeros(0)
+        return v, np.full(k.size, float(self.case.section.EI)), hbar
+
     def _bending_nodes(self) -> list[int]:
         """The nodes a network's span bending acts at (:mod:`cablefem.network`); a single
         cable's span bending takes every interior facet of :attr:`dS` but the kinks."""
@@ -553,7 +565,7 @@ class CableModel:
         if getattr(self.case, "seabed", None) is not None:
             add_seabed_terms(self, self.submerged_weight)
         strain = forms.strain_energy_density(u, t0, self.EA, self.tension_only, cc) * ufl.dx
-        if self.case.solver.span_bending:
+        if is_on(self.case.solver.span_bending):
             strain = strain + self._add_span_bending()
         self.forms.energies = (
             0.5 * ufl.inner(v, v) * cc * self.m * ufl.dx, strain,

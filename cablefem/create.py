@@ -35,7 +35,7 @@ def create_cable(comm: MPI.Comm, anchors: list[Anchor], section: Section, *,
                  grading: float = 1.0, gravity: Gravity | None = None, loads=(),
                  point_masses=(), point_loads=(), damping: Damping | None = None,
                  tension_only: bool = True, outer_correction: str = "hinge",
-                 span_bending: bool = False, petsc_options: dict | None = None,
+                 span_bending: bool | str = False, petsc_options: dict | None = None,
                  petsc_options_prefix: str = "cable_", units: str = "SI",
                  name: str = "<python>", dampers=(), fluid=None):
     """The extensible string of one cable between two anchors
@@ -77,7 +77,9 @@ def create_cable(comm: MPI.Comm, anchors: list[Anchor], section: Section, *,
         'none' (the paper's leading order, for comparison).
     span_bending
         The span's own bending stiffness EI in the string (``docs/theory.md`` §6.1; the
-        clamps' rotation stays with the boundary layer).
+        clamps' rotation stays with the boundary layer). ``"auto"`` is resolved by
+        :func:`cablefem.run_case` (on where it would move a computed frequency by more than
+        0.5 %, :mod:`cablefem.span_bending`); a model built here takes it as off.
     petsc_options, petsc_options_prefix
         Options of the model's solvers (without the prefix) and the prefix.
     units
@@ -138,7 +140,7 @@ def create_network(comm: MPI.Comm, mesh_file: str | os.PathLike, sections: dict[
                    anchors: list[Anchor], *, cables: list[CableSpec],
                    gravity: Gravity | None = None, loads=(), point_masses=(),
                    point_loads=(), damping: Damping | None = None, tension_only: bool = True,
-                   outer_correction: str = "hinge", span_bending: bool = False,
+                   outer_correction: str = "hinge", span_bending: bool | str = False,
                    petsc_options: dict | None = None, petsc_options_prefix: str = "cable_",
                    units: str = "SI", name: str = "<python>"):
     """A cable network from a tagged gmsh file (:class:`cablefem.network.NetworkModel`; tag

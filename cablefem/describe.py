@@ -186,7 +186,7 @@ def _items(problems: list, key: str, items: Any, cls: type, network: bool) -> li
 
 def _common(problems: list, *, gravity, elements, grading, loads, point_masses, point_loads,
             damping, tension_only, outer_correction, petsc_options, network: bool,
-            span_bending: bool = False) -> dict:
+            span_bending: bool | str = False) -> dict:
     """The parts a single cable and a network share, checked."""
     if not isinstance(gravity, Gravity):
         problems.append(("gravity", f"expected a Gravity, got {show(gravity)}"))
@@ -215,8 +215,9 @@ def _common(problems: list, *, gravity, elements, grading, loads, point_masses, 
            f"expected a boolean, got {show(tension_only)}")
     _check(problems, "outer_correction", None if outer_correction in OUTER_CORRECTIONS else
            f"must be one of {', '.join(map(repr, OUTER_CORRECTIONS))}, got {outer_correction!r}")
-    _check(problems, "span_bending", None if isinstance(span_bending, bool) else
-           f"expected a boolean, got {show(span_bending)}")
+    _check(problems, "span_bending", None if isinstance(span_bending, bool)
+           or span_bending == "auto" else
+           f"expected a boolean or 'auto', got {show(span_bending)}")
     if not isinstance(petsc_options, dict):
         problems.append(("petsc_options", f"expected a dict, got {show(petsc_options)}"))
         petsc_options = {}
@@ -234,7 +235,7 @@ def describe_cable(anchors: list[Anchor], section: Section, *, length: float | N
                    polyline: Any = None, elements: int = 30, grading: float = 1.0,
                    gravity: Gravity | None = None, loads=(), point_masses=(), point_loads=(),
                    damping: Damping | None = None, tension_only: bool = True,
-                   outer_correction: str = "hinge", span_bending: bool = False,
+                   outer_correction: str = "hinge", span_bending: bool | str = False,
                    petsc_options: dict | None = None, beam: BeamSpec | None = None,
                    units: str = "SI", source: str = "<python>", dampers=(),
                    fluid: Fluid | None = None) -> CableDescription:
@@ -336,7 +337,7 @@ def describe_network(mesh_file: str | os.PathLike, sections: dict[str, Section],
                      anchors: list[Anchor], *, cables: list[CableSpec],
                      gravity: Gravity | None = None, loads=(), point_masses=(),
                      point_loads=(), damping: Damping | None = None, tension_only: bool = True,
-                     outer_correction: str = "hinge", span_bending: bool = False,
+                     outer_correction: str = "hinge", span_bending: bool | str = False,
                      petsc_options: dict | None = None, units: str = "SI",
                      source: str = "<python>") -> CableDescription:
     """A checked description of a cable network (the arguments of

@@ -224,7 +224,9 @@ class SolverSpec:
     tension_only: bool = True
     petsc_options: dict = field(default_factory=dict)
     outer_correction: str = "hinge"
-    span_bending: bool = False  #: the span's own EI in the string (docs/theory.md §6.1)
+    #: the span's own EI in the string (docs/theory.md §6.1): True, False or "auto" (on
+    #: where it matters, resolved by run_case; a model built directly takes it as off)
+    span_bending: bool | str = False
 
 
 @dataclass

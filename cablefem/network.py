@@ -34,6 +34,7 @@ from cablefem.errors import CaseError
 from cablefem.fluid import submerged_weight
 from cablefem.geometry import MeshError, NetworkMesh, connected_components, read_network_mesh
 from cablefem.jit import quiet_compiler
+from cablefem.span_bending import is_on
 
 __all__ = ["NetworkModel", "NetworkGeometry", "ClampSide", "split_clamps"]
 
@@ -352,18 +353,42 @@ class NetworkModel(CableModel):
         return out
 
     def _bending_nodes(self) -> list[int]:
-        """With ``solver.span_bending``: every node of two cable elements (of one group or
-        two) that holds no anchor, point load, point mass or damper (tagged in
+        """With ``solver.span_bending``: the nodes of :meth:`bending_vertices` (tagged in
         :attr:`dS`)."""
-        if not self.case.solver.span_bending:
+        if not is_on(self.case.solver.span_bending):
             return []
+        return self.bending_vertices()[0][:, 1].tolist()
+
+    def bending_vertices(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Where the span-bending term acts, whether it is on or not: every node of two
+        cable elements (of one group or two) that holds no anchor, point load, point mass
+        or damper end, as (node before, node, node after), (n, 3); the mean ``EI`` of the
+        two elements and their mean stress-free length ``hbar`` (the pretension's, the
+        outer string's) at each."""
         geo = self.geometry
         cells = np.asarray(geo.cells, np.int64)
         cable = geo.is_cable
         degree = np.bincount(cells[cable].ravel(), minlength=len(geo.points))
         stops = ({int(k) for k in geo.anchor_nodes.values()} | set(self._node_tag)
                  | {int(k) for k in cells[~cable].ravel()})
-        return [k for k in np.nonzero(degree == 2)[0].tolist() if k not in stops]
+        at: dict[int, list[int]] = {}
+        for e in np.nonzero(cable)[0]:
+            for n in cells[e]:
+                at.setdefault(int(n), []).append(int(e))
+        secs = self.case.network.sections
+        length = np.asarray(geo.cell_c, float) * np.linalg.norm(
+            geo.points[cells[:, 1]] - geo.points[cells[:, 0]], axis=1)
+        rows, EI, hbar = [], [], []
+        for k in np.nonzero(degree == 2)[0].tolist():
+            if k in stops:
+                continue
+            e0, e1 = at[k]
+            rows.append((int(cells[e0][cells[e0] != k][0]), k,
+                         int(cells[e1][cells[e1] != k][0])))
+            EI.append(0.5 * (secs[geo.cell_section[e0]].EI + secs[geo.cell_section[e1]].EI))
+            hbar.append(0.5 * (length[e0] + length[e1]))
+        return (np.asarray(rows, np.int64).reshape(-1, 3), np.asarray(EI, float),
+                np.asarray(hbar, float))
 
     def _add_span_bending(self):
         """``solver.span_bending`` on a network (docs/theory.md §6.1): the bending energy

@@ -11,6 +11,7 @@ import pytest
 from conftest import level_case, observed_order, sagging_paper_case
 from mpi4py import MPI
 
+from cablefem.app.run import run_case
 from cablefem.cable import CableModel
 from cablefem.case import CaseError, load_case, parse_case
 from cablefem.modal import solve_modes
@@ -357,3 +358,64 @@ def test_a_network_bends_like_the_single_cable(mpi_tmp_path, load):
         assert kinks[1][0] == pytest.approx(kinks[0][0], rel=1e-9)
     _, plain = arc_network(mpi_tmp_path, EI, n, load, span_bending=False)
     assert np.max(np.abs(state(NetworkModel(MPI.COMM_WORLD, plain))[:4] / b[:4] - 1)) > 1e-2
+
+
+# ----------------------------------------------------------------------------- "auto"
+def test_frequency_shift_estimate_on_the_taut_beam():
+    """cablefem.span_bending.frequency_shifts on the taut pinned string (24 elements) with
+    span bending off, against the discrete closed form with and without it
+    (taut_beam_discrete): a first-order estimate, so within (shift)^2 of the exact
+    relative change (eps = 0.01: shifts 0.05-0.8 %), and 1e-3 of it at least."""
+    from cablefem.span_bending import frequency_shifts
+
+    n, EA, l0, L, m, EI = 24, 1e4, 1.0, 1.0001, 1.0, 0.01 ** 2
+    d = level_case(EA=EA, EI=EI, mass=m, g=0.0, length=l0, chord=L, elements=n,
+                   solver={"span_bending": False})
+    for anc in d["anchors"]:
+        anc["type"] = "pinned"
+        del anc["direction"]
+    model = CableModel(MPI.COMM_WORLD, parse_case(d))
+    solve_static(model)
+    res = solve_modes(model, 8)
+    est = frequency_shifts(model, res)
+    T, lam = EA * (L / l0 - 1), L / l0
+    bent = np.repeat([taut_beam_discrete(n, k, T, lam, EI, m, l0) for k in (1, 2, 3, 4)], 2)
+    plain = np.repeat([taut_beam_discrete(n, k, T, lam, 0.0, m, l0) for k in (1, 2, 3, 4)],
+                      2)
+    exact = bent / plain - 1
+    assert np.all(exact > 4e-4)
+    np.testing.assert_allclose(est, exact, rtol=0,
+                               atol=max(np.max(exact) ** 2, 1e-3 * exact.min()))
+
+
+@pytest.mark.parametrize("eps,on", [(0.01, False), (0.03, True)])
+def test_auto_span_bending_where_it_matters(mpi_tmp_path, eps, on):
+    """solver.span_bending = "auto" (the case files' default): the string without the
+    span's bending estimates how far the bending would move each computed mode
+    (summary.json modes[].span_bending_shift; first order, against the actual change
+    with span bending on within 15 %: measured 1-13 %, the in-plane symmetric mode's the
+    largest) and switches it on above 0.5 %: on the 10 %-sag clamped cable at eps = 0.03
+    (largest shift 3.8 %, mode 4) the run is the one with span bending on; at eps = 0.01
+    (0.37 %) it stays off and is the run without, to the last digit (its statics and
+    modes are reused). Before, a sagging cable's in-plane symmetric frequency was 1.6-3.4 %
+    low by default with no word."""
+    def run(setting, name):
+        d = sagging(eps ** 2, "clamped", setting)
+        d["modal"] = {"modes": 4}
+        return run_case(parse_case(d), mpi_tmp_path / name, MPI.COMM_WORLD, figures=False,
+                        progress=False, dynamics=False).summary
+
+    auto, off, bent = run("auto", "auto"), run(False, "off"), run(True, "on")
+    rec = auto["span_bending_auto"]
+    assert rec["decision"] == ("on" if on else "off") and auto["span_bending"] is on
+    assert (rec["largest_shift"] > 0.005) is on
+    same = bent if on else off
+    for a, b in zip(auto["modes"], same["modes"]):
+        assert a["omega"] == b["omega"]
+    for name, F in auto["static"]["anchor_forces"].items():
+        np.testing.assert_array_equal(F, same["static"]["anchor_forces"][name])
+    est = np.array([m["span_bending_shift"] for m in off["modes"]])
+    actual = np.array([b["omega"] / a["omega"] - 1 for a, b in zip(off["modes"],
+                                                                    bent["modes"])])
+    np.testing.assert_allclose(est, actual, rtol=0.15)
+    assert ("span_bending_shift" in auto["modes"][0]) is not on

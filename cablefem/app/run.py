@@ -10,7 +10,7 @@ import math
 import signal
 import threading
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -51,6 +51,7 @@ from cablefem.moments import (
     resonance,
 )
 from cablefem.network import NetworkModel
+from cablefem.span_bending import AUTO_THRESHOLD, frequency_shifts, is_on
 from cablefem.statics import solve_static
 from cablefem.units import unit
 
@@ -172,6 +173,44 @@ class _StopOnSignal:
         return False
 
 
+@dataclass
+class _Probe:
+    """The string without the span's bending, solved for the ``"auto"`` decision: reused
+    by the run when the decision is off."""
+
+    model: object
+    static: object
+    modal: object
+    shifts: np.ndarray
+
+
+def _auto_span_bending(comm: MPI.Comm, case: Case, n_modes: int | None):
+    """Resolve ``solver.span_bending = "auto"`` (cablefem.span_bending): the case with it
+    on or off, the probe to reuse when off (None when on, or when no mode is asked for),
+    and the record for ``summary.json``."""
+    def with_bending(on: bool) -> Case:
+        return replace(case, solver=replace(case.solver, span_bending=on))
+
+    off = with_bending(False)
+    if not n_modes:
+        return off, None, {"decision": "off", "reason": "no mode computed"}
+    model = model_from_case(comm, off)
+    static = solve_static(model)
+    n = min(n_modes, free_dofs(model))
+    if not n:
+        return off, None, {"decision": "off", "reason": "no free degree of freedom"}
+    modal = solve_modes(model, n)
+    shifts = frequency_shifts(model, modal)
+    worst = int(np.nanargmax(np.abs(shifts))) if np.isfinite(shifts).any() else 0
+    size = float(abs(shifts[worst])) if np.isfinite(shifts[worst]) else 0.0
+    record = {"largest_shift": size, "mode": worst + 1, "threshold": AUTO_THRESHOLD}
+    if size > AUTO_THRESHOLD:
+        log.info("span bending: on (it would move mode %d by %.3g %%, above %.3g %%)",
+                 worst + 1, 100 * size, 100 * AUTO_THRESHOLD)
+        return with_bending(True), None, {"decision": "on", **record}
+    return off, _Probe(model, static, modal, shifts), {"decision": "off", **record}
+
+
 def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *,
              modes: int | None = None, dynamics: bool = True, t_end: float | None = None,
              form: str = "exact", progress: bool = True, figures: bool = True,
@@ -200,7 +239,11 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
         outdir.mkdir(parents=True, exist_ok=True)
     comm.Barrier()
     kind = model
-    model = model_from_case(comm, case, model=kind, refine=refine)
+    n_asked = case.modal.modes if modes is None else modes
+    probe, auto = None, None
+    if kind == "string" and case.solver.span_bending == "auto":
+        case, probe, auto = _auto_span_bending(comm, case, n_asked)
+    model = probe.model if probe else model_from_case(comm, case, model=kind, refine=refine)
     t_build = time.perf_counter() - wall0
     if restart:  # what a kill left half-written (the series' own parts: see io.Series)
         remove_temporaries(outdir, comm)
@@ -232,7 +275,7 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
         summary["notes"] = [note]
     if summary["elements"] >= model.LOG_PHASES_FROM:
         log.info("statics: %d degrees of freedom", summary["degrees_of_freedom"])
-    static = solve_static(model)
+    static = probe.static if probe else solve_static(model)
     r = model.gather_nodal(model.u)
     sag = None
     if comm.rank == 0 and case.gravity.g > 0 and case.network is None:
@@ -255,7 +298,9 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
              "equilibrium, not a reference for a cable; try another --refine")
     summary["outer_correction"] = "none" if kind == "beam" else case.solver.outer_correction
     if kind != "beam":
-        summary["span_bending"] = bool(case.solver.span_bending)
+        summary["span_bending"] = is_on(case.solver.span_bending)
+        if auto is not None:
+            summary["span_bending_auto"] = auto
     if model.hinges:
         summary["static"]["virtual_hinges"] = model.hinges.report()
     if getattr(case, "seabed", None) is not None and getattr(model, "is_network", False):
@@ -284,7 +329,7 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
     if not restart:
         write_json(outdir / "summary.json", summary, comm)
 
-    n_modes = case.modal.modes if modes is None else modes
+    n_modes = n_asked
     free = free_dofs(model)
     if n_modes and n_modes > free:
         warn(summary, "modal.modes", f"{n_modes} modes asked for, but the model has "
@@ -292,10 +337,16 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
                                                      "no modes computed"))
         n_modes = free
     if n_modes:
-        modal = solve_modes(model, n_modes)
+        modal = probe.modal if probe else solve_modes(model, n_modes)
         write_modes(model, modal, outdir / "modes.xdmf")
         summary["modes"] = [{"omega": w, "frequency_hz": w / (2 * np.pi), **lab}
                             for w, lab in zip(modal.omegas, modal.labels)]
+        if kind == "string" and not is_on(case.solver.span_bending):
+            # what the span's bending, left out, would do to each (span_bending.py)
+            shifts = probe.shifts if probe else frequency_shifts(model, modal)
+            for entry, x in zip(summary["modes"], shifts):
+                if np.isfinite(x):
+                    entry["span_bending_shift"] = float(x)
         for entry, z in zip(summary["modes"], modal.damping_ratios):
             if np.isfinite(z):  # from the damped system's complex modes (modal.py)
                 entry["damping_ratio"] = float(z)
@@ -342,7 +393,7 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
         raise RunError(f"{err}; run the case again") from err
     if n_modes and omega and kind != "beam":  # the error estimate near a resonance
         amp, w_r = resonance(omega, modal.omegas, _damping_ratio(case))
-        bends = case.solver.span_bending  # the outer problem has the span's bending
+        bends = is_on(case.solver.span_bending)  # the outer problem has the span's bending
         emitter.moment_columns.set_resonance(amp, static.anchor_forces,
                                              None if bends else w_r)
         summary["error_resonance_factor"] = amp

@@ -320,11 +320,13 @@ CASE_KEYS: dict[str, KeyDoc | TableDoc] = {
             "(cablefem.hinge) | 'none' pinned at the clamped anchors (the paper's leading "
             "order, for comparison); the rod ignores it."),
         "span_bending": KeyDoc(
-            "boolean", False, "", "String: the span's own bending stiffness EI (a bending "
-            "energy on the turning angle between neighbouring elements; the clamps' "
+            "boolean or 'auto'", "auto", "", "String: the span's own bending stiffness EI (a "
+            "bending energy on the turning angle between neighbouring elements; the clamps' "
             "rotation stays with the boundary layer; in a network, at every node of two cable "
             "elements without an anchor or point term, the span's moment handed over at the "
-            "others); the rod ignores it."),
+            "others). 'auto': on when it would move a computed mode's frequency by more "
+            "than 0.5 % (estimated from the string without it; off when no mode is "
+            "computed). The rod ignores it."),
         "petsc_options": KeyDoc(
             "table of options", {}, "",
             "PETSc options without '-' (values string/number/boolean), e.g. ts_type, "

@@ -106,6 +106,16 @@ class _Reader:
             return None
         return None if value is None else bool(value)
 
+    def boolean_or(self, name: str, word: str) -> bool | str | None:
+        """A boolean, or the string ``word`` (e.g. "auto")."""
+        value, given = self.raw(name)
+        if given and value == word:
+            return word
+        if given and not isinstance(value, (bool, np.bool_)):
+            self.add(name, f"expected true, false or {word!r}, got {_show(value)}")
+            return None
+        return value if value == word else (None if value is None else bool(value))
+
     def numbers(self, name: str, count: int, nonzero: bool = False, value: Any = _UNSET,
                 key: str | None = None, **bounds) -> np.ndarray | None:
         """A list of ``count`` numbers; ``value``/``key`` override the raw value/key path."""
