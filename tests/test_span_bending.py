@@ -23,9 +23,9 @@ DEMOS = Path(__file__).resolve().parents[1] / "demos"
 
 
 # ----------------------------------------------------------------------------- taut beam
-def taut_beam(n: int, EI: float, EA=1e4, l0=1.0, L=1.0001, m=1.0):
+def taut_beam(n: int, EI: float, EA=1e4, l0=1.0, L=1.0001, m=1.0, bending=True):
     d = level_case(EA=EA, EI=EI, mass=m, g=0.0, length=l0, chord=L, elements=n,
-                   solver={"span_bending": True})
+                   solver={"span_bending": bending})
     for anc in d["anchors"]:
         anc["type"] = "pinned"
         del anc["direction"]
@@ -369,13 +369,7 @@ def test_frequency_shift_estimate_on_the_taut_beam():
     from cablefem.span_bending import frequency_shifts
 
     n, EA, l0, L, m, EI = 24, 1e4, 1.0, 1.0001, 1.0, 0.01 ** 2
-    d = level_case(EA=EA, EI=EI, mass=m, g=0.0, length=l0, chord=L, elements=n,
-                   solver={"span_bending": False})
-    for anc in d["anchors"]:
-        anc["type"] = "pinned"
-        del anc["direction"]
-    model = CableModel(MPI.COMM_WORLD, parse_case(d))
-    solve_static(model)
+    model = taut_beam(n, EI, EA, l0, L, m, bending=False)
     res = solve_modes(model, 8)
     est = frequency_shifts(model, res)
     T, lam = EA * (L / l0 - 1), L / l0
