@@ -194,6 +194,7 @@ def _auto_span_bending(comm: MPI.Comm, case: Case, n_modes: int | None):
     off = with_bending(False)
     if not n_modes:
         return off, None, {"decision": "off", "reason": "no mode computed"}
+    log.info("span bending \"auto\": the string without it first (statics and modes)")
     model = model_from_case(comm, off)
     static = solve_static(model)
     n = min(n_modes, free_dofs(model))
@@ -205,9 +206,11 @@ def _auto_span_bending(comm: MPI.Comm, case: Case, n_modes: int | None):
     size = float(abs(shifts[worst])) if np.isfinite(shifts[worst]) else 0.0
     record = {"largest_shift": size, "mode": worst + 1, "threshold": AUTO_THRESHOLD}
     if size > AUTO_THRESHOLD:
-        log.info("span bending: on (it would move mode %d by %.3g %%, above %.3g %%)",
-                 worst + 1, 100 * size, 100 * AUTO_THRESHOLD)
+        log.info("span bending: on (it would move mode %d by %.3g %%, above %.3g %%): "
+                 "solving again with it", worst + 1, 100 * size, 100 * AUTO_THRESHOLD)
         return with_bending(True), None, {"decision": "on", **record}
+    log.info("span bending: off (it would move mode %d by %.3g %%, at most %.3g %%)",
+             worst + 1, 100 * size, 100 * AUTO_THRESHOLD)
     return off, _Probe(model, static, modal, shifts), {"decision": "off", **record}
 
 
