@@ -74,8 +74,8 @@ def error_estimate(delta: np.ndarray, tension: np.ndarray, EI: float, EA: float,
                    length: float | None, period_ratio: np.ndarray | None = None,
                    outer_order: int = 0, amplification: float = 1.0,
                    moment: np.ndarray | None = None, static_moment: float | None = None,
-                   mass: float | None = None, resonant_omega: float | None = None
-                   ) -> np.ndarray:
+                   mass: float | None = None, resonant_omega: float | None = None,
+                   resonant_shift: float | None = None) -> np.ndarray:
     """Estimated relative error of the anchor moment (docs/theory.md §5), per row.
 
     ``e_outer = HINGED_ENDS h / (lambda l)`` (``lambda = 1 + T/EA``: the stretched
@@ -97,8 +97,11 @@ def error_estimate(delta: np.ndarray, tension: np.ndarray, EI: float, EA: float,
     resonant mode's circular frequency, when the outer problem has no span bending) and the
     ``mass`` per length, that mode's own frequency error from the span's bending,
     ``EI m omega_n^2 / (2 T^2)`` (a taut beam's first correction), is amplified likewise and
-    added to the dynamic part. The estimate is at most 1: an
-    error of the size of the moment itself (a history whose phase is not determined).
+    added to the dynamic part; ``resonant_shift``, when given, is that error measured on
+    the mode itself (:func:`cablefem.span_bending.frequency_shifts`, any shape: a sagging
+    cable's in-plane modes bend far more than a taut beam's) and replaces the formula. The
+    estimate is at most 1: an error of the size of the moment itself (a history whose
+    phase is not determined).
     """
     h, _ = asymptotics.virtual_hinge(delta, tension, EI, EA)
     with np.errstate(invalid="ignore"):
@@ -110,7 +113,9 @@ def error_estimate(delta: np.ndarray, tension: np.ndarray, EI: float, EA: float,
             Ms = abs(static_moment)
             dyn = amplification * np.abs(M - static_moment) / np.maximum(M, Ms)
             e = e * (Ms / np.maximum(M, Ms) + dyn)
-            if resonant_omega and mass:
+            if resonant_shift is not None and np.isfinite(resonant_shift):
+                e = e + abs(resonant_shift) * dyn
+            elif resonant_omega and mass:
                 T = np.asarray(tension, float)
                 e = e + EI * mass * resonant_omega**2 / (2.0 * T * T) * dyn
         if period_ratio is not None:
@@ -134,7 +139,8 @@ def anchor_moments(forces: np.ndarray, direction: np.ndarray, EI: float, EA: flo
                    omega: float | None = None, form: str = "exact",
                    outer_order: int = 0, amplification: float = 1.0,
                    static_moment: float | None = None,
-                   resonant_omega: float | None = None) -> dict[str, np.ndarray]:
+                   resonant_omega: float | None = None,
+                   resonant_shift: float | None = None) -> dict[str, np.ndarray]:
     """Anchor moment columns for one clamped anchor over ``n`` times.
 
     Rows with ``delta`` above :data:`MAX_ANCHOR_ANGLE` are invalid; ``invalid_reason``
@@ -152,7 +158,8 @@ def anchor_moments(forces: np.ndarray, direction: np.ndarray, EI: float, EA: flo
         order of ``error_estimate`` (:func:`error_estimate`); ``amplification`` and
         ``static_moment`` (N m) its resonance factor and the static moment it applies to;
         ``resonant_omega`` the resonant mode's circular frequency (its span-bending
-        frequency error is amplified too; None when the outer problem bends).
+        frequency error is amplified too; None when the outer problem bends) and
+        ``resonant_shift`` that error measured on the mode (None: the taut beam's).
     """
     N = np.atleast_2d(np.asarray(forces, float))
     qs = (mass, omega) if omega else None
@@ -188,7 +195,7 @@ def anchor_moments(forces: np.ndarray, direction: np.ndarray, EI: float, EA: flo
             "error_estimate": error_estimate(lay.delta, lay.tension, EI, EA, length,
                                              lay.period_ratio, outer_order, amplification,
                                              np.linalg.norm(M, axis=1), static_moment,
-                                             mass, resonant_omega),
+                                             mass, resonant_omega, resonant_shift),
             "invalid_reason": reason, "tension": lay.tension, "normal": lay.normal,
             "slack": lay.slack}
 
@@ -303,7 +310,7 @@ class AnchorMoments:
         #: resonance factor of the error estimate and static moment per anchor
         #: (:meth:`set_resonance`)
         self.amplification, self.static_moments = 1.0, {}
-        self.resonant_omega = None
+        self.resonant_omega = self.resonant_shift = None
         self._by_name = {a.name: a for a in self.anchors}
 
     @classmethod
@@ -325,18 +332,20 @@ class AnchorMoments:
         return cls(clamped, model.g_vec, model.length, loads, omega, form, order, buoyancy)
 
     def set_resonance(self, amplification: float, static_forces,
-                      resonant_omega: float | None = None) -> None:
+                      resonant_omega: float | None = None,
+                      resonant_shift: float | None = None) -> None:
         """Let the error estimate of the dynamic part of the moments grow by
         ``amplification`` (:func:`resonance`) about the static moments of the anchor
         forces ``static_forces`` (n_anchors, 3+) in the model's anchor order;
         ``resonant_omega``: the resonant mode's circular frequency, whose span-bending
-        frequency error is amplified too (None when the outer problem has span bending)."""
-        self.amplification, self.resonant_omega = 1.0, None
+        frequency error is amplified too (None when the outer problem has span bending);
+        ``resonant_shift``: that error measured on the mode (None: the taut beam's)."""
+        self.amplification, self.resonant_omega, self.resonant_shift = 1.0, None, None
         F = np.asarray(static_forces, float)
         self.static_moments = {a.name: float(self.anchor(a.name, [0.0], F[a.index, None, :3])[
             "moment"][0]) for a in self.anchors}
         self.amplification = float(amplification)
-        self.resonant_omega = resonant_omega
+        self.resonant_omega, self.resonant_shift = resonant_omega, resonant_shift
 
     @property
     def names(self) -> list[str]:
@@ -370,7 +379,8 @@ class AnchorMoments:
                               a.mass, a.acceleration(times), load,
                               self.length if a.length is None else a.length, self.omega,
                               self.form, self.outer_order, self.amplification,
-                              self.static_moments.get(name), self.resonant_omega)
+                              self.static_moments.get(name), self.resonant_omega,
+                              self.resonant_shift)
 
     def compute(self, times: np.ndarray, forces) -> dict[str, dict[str, np.ndarray]]:
         """Columns of every clamped anchor: ``{name: {column: (n,) array}}``. ``forces``:

@@ -333,6 +333,7 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
         write_json(outdir / "summary.json", summary, comm)
 
     n_modes = n_asked
+    shifts = None  # each mode's span-bending shift, when the string runs without it
     free = free_dofs(model)
     if n_modes and n_modes > free:
         warn(summary, "modal.modes", f"{n_modes} modes asked for, but the model has "
@@ -397,8 +398,12 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
     if n_modes and omega and kind != "beam":  # the error estimate near a resonance
         amp, w_r = resonance(omega, modal.omegas, _damping_ratio(case))
         bends = is_on(case.solver.span_bending)  # the outer problem has the span's bending
+        shift = None  # the resonant mode's own span-bending error, measured on it
+        if not bends and w_r is not None and shifts is not None:
+            shift = float(shifts[int(np.argmin(np.abs(modal.omegas - w_r)))])
+            summary["error_resonance_shift"] = shift
         emitter.moment_columns.set_resonance(amp, static.anchor_forces,
-                                             None if bends else w_r)
+                                             None if bends else w_r, shift)
         summary["error_resonance_factor"] = amp
     if resume is not None:  # after the emitter, which takes its reference from the statics
         model.scatter_nodal(resume["u"], model.u)
