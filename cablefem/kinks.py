@@ -234,6 +234,10 @@ class KinkMoments:
         #: the distributed load at a time (weight, loads, buoyancy), as at the anchors
         self._loads = AnchorMoments.from_model(model, omega) if n else None
         self._local = None
+        #: the model's damping (its model, alpha, beta): the elements' damping forces
+        damp = model.case.damping
+        self.damping = (damp.model, float(damp.alpha), float(damp.beta))
+        self._static = None  # rayleigh_k0: the static state's positions (first use)
 
     @property
     def names(self) -> list[str]:
@@ -282,16 +286,18 @@ class KinkMoments:
         load = np.array([self._loads.load_at(t, m, d) for m, d in zip(self.m, self.D)]
                         ).reshape(-1, 3)
         r = self.positions() if r is None else r
-        return self.columns(r, self._nodal(self.model.a), load)
+        return self.columns(r, self._nodal(self.model.a), load, self._nodal(self.model.v))
 
     def side_forces(self, r: np.ndarray, a: np.ndarray | None = None,
-                    load: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+                    load: np.ndarray | None = None, v: np.ndarray | None = None
+                    ) -> tuple[np.ndarray, np.ndarray]:
         """The force each of a kink's two elements transmits at its node, pointing away
         from the node into the element (n_kinks, 2, 3): ``T e`` plus the load on the half
         element next to the node, ``(h/2) (q - m (2 a_node + a_other)/3)`` (the element's
-        share of the nodal equation, consistent mass); zero on a slack element. Also the
-        elements' unit vectors ``e`` (n_kinks, 2, 3), along the cable (before -> node ->
-        after)."""
+        share of the nodal equation, consistent mass); zero on a slack element. With the
+        velocities ``v`` (same shape as ``r``), the element's share of the damping force
+        too (:meth:`damping_forces`). Also the elements' unit vectors ``e`` (n_kinks, 2,
+        3), along the cable (before -> node -> after)."""
         d = np.diff(r, axis=1)  # (n, 2, 3): the two elements
         length = np.linalg.norm(d, axis=2)
         e = d / length[..., None]
@@ -299,21 +305,60 @@ class KinkMoments:
         T2 = self.EA[:, None] * (np.maximum(strain, 0.0) if self.model.tension_only else strain)
         away = np.stack([-e[:, 0], e[:, 1]], axis=1)
         F = T2[..., None] * away
-        if a is not None or load is not None:
+        if a is not None or load is not None or v is not None:
             q = np.zeros((len(r), 3)) if load is None else np.asarray(load, float)
             acc = np.zeros_like(r) if a is None else np.asarray(a, float)
             near = (2.0 * acc[:, 1][:, None] + acc[:, [0, 2]]) / 3.0  # (n, 2, 3)
             half = 0.5 * self.h[..., None] * (q[:, None, :] - self.m[:, None, None] * near)
+            if v is not None:
+                half = half + self.damping_forces(r, np.asarray(v, float), T2)
             F = np.where((T2 > 0.0)[..., None], F + half, 0.0)
         return F, e
 
+    def damping_forces(self, r: np.ndarray, v: np.ndarray, T: np.ndarray) -> np.ndarray:
+        """(n_kinks, 2, 3) the damping force each element transmits at the kink's node
+        (away from the node), its share of the model's damping residual ``C v``: Rayleigh's
+        ``alpha M`` on the half element (consistent mass), ``-alpha m (h/2) (2 v_node +
+        v_other)/3``; ``beta K_t v = beta d/dt f_int`` on the current tangent (model
+        "rayleigh"), ``beta d(T e)/dt = beta [(EA/h) dL/dt e + T (dd - (e.dd) e)/L]`` with
+        ``dd`` the other node's velocity relative to the node's; on the static tangent
+        ("rayleigh_k0") the same with the static ``T``, ``e`` and ``L``; the axial
+        strain-rate model ("axial") its axial part ``beta (EA/h) dL/dt e``. ``T``: the
+        elements' tensions (n_kinks, 2). Collective (the first call on "rayleigh_k0" reads
+        the static state)."""
+        model, alpha, beta = self.damping
+        out = np.zeros((len(r), 2, 3))
+        if model == "none" or not (alpha > 0 or beta > 0):
+            return out
+        if model in ("rayleigh", "rayleigh_k0") and alpha > 0:
+            near = (2.0 * v[:, 1][:, None] + v[:, [0, 2]]) / 3.0
+            out -= alpha * 0.5 * self.h[..., None] * self.m[:, None, None] * near
+        if beta > 0 and model in ("rayleigh", "rayleigh_k0", "axial"):
+            if model == "rayleigh_k0" and self._static is None:  # collective, once
+                self._static = (self._nodal(self.model.u_static)
+                                + self.model.geometry.points[self.nodes])
+            geo = r if model != "rayleigh_k0" else self._static
+            d = np.stack([geo[:, 0] - geo[:, 1], geo[:, 2] - geo[:, 1]], axis=1)
+            L = np.linalg.norm(d, axis=2)
+            e = d / L[..., None]  # away from the node, in that state
+            dd = np.stack([v[:, 0] - v[:, 1], v[:, 2] - v[:, 1]], axis=1)
+            Ldot = np.einsum("ijk,ijk->ij", e, dd)
+            rate = (self.EA[:, None] / self.h * Ldot)[..., None] * e
+            if model != "axial":
+                Tg = T if model == "rayleigh" else self.EA[:, None] * (L / self.h - 1.0)
+                rate = rate + (Tg / L)[..., None] * (dd - Ldot[..., None] * e)
+            out += beta * rate
+        return out
+
     def columns(self, r: np.ndarray, a: np.ndarray | None = None,
-                load: np.ndarray | None = None) -> dict[str, np.ndarray]:
+                load: np.ndarray | None = None, v: np.ndarray | None = None
+                ) -> dict[str, np.ndarray]:
         """The columns for positions ``r`` (n_kinks, 3, 3) of each kink's three nodes,
-        their accelerations ``a`` (same shape) and the distributed load ``load`` (n_kinks,
-        3) (both None: the elements' own forces, no half-element load)."""
+        their accelerations ``a`` and velocities ``v`` (same shape) and the distributed
+        load ``load`` (n_kinks, 3) (all None: the elements' own forces, no half-element
+        load, no damping)."""
         n = len(self.kinks)
-        F, e = self.side_forces(r, a, load)
+        F, e = self.side_forces(r, a, load, v)
         size = np.linalg.norm(F, axis=2)  # (n, 2) the tension at the node on each side
         away = np.stack([-e[:, 0], e[:, 1]], axis=1)
         with np.errstate(invalid="ignore", divide="ignore"):  # slack: the element's
