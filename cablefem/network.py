@@ -367,22 +367,17 @@ class NetworkModel(CableModel):
         outer string's) at each."""
         geo = self.geometry
         cells = np.asarray(geo.cells, np.int64)
-        cable = geo.is_cable
-        degree = np.bincount(cells[cable].ravel(), minlength=len(geo.points))
+        at = self._cable_cells_at()
         stops = ({int(k) for k in geo.anchor_nodes.values()} | set(self._node_tag)
-                 | {int(k) for k in cells[~cable].ravel()})
-        at: dict[int, list[int]] = {}
-        for e in np.nonzero(cable)[0]:
-            for n in cells[e]:
-                at.setdefault(int(n), []).append(int(e))
+                 | {int(k) for k in cells[~geo.is_cable].ravel()})
         secs = self.case.network.sections
         length = np.asarray(geo.cell_c, float) * np.linalg.norm(
             geo.points[cells[:, 1]] - geo.points[cells[:, 0]], axis=1)
         rows, EI, hbar = [], [], []
-        for k in np.nonzero(degree == 2)[0].tolist():
-            if k in stops:
+        for k, es in enumerate(at):
+            if len(es) != 2 or k in stops:
                 continue
-            e0, e1 = at[k]
+            e0, e1 = es
             rows.append((int(cells[e0][cells[e0] != k][0]), k,
                          int(cells[e1][cells[e1] != k][0])))
             EI.append(0.5 * (secs[geo.cell_section[e0]].EI + secs[geo.cell_section[e1]].EI))
@@ -406,7 +401,7 @@ class NetworkModel(CableModel):
         cells = np.asarray(geo.cells, np.int64)
         cable = geo.is_cable
         n = len(geo.points)
-        degree = np.bincount(cells[cable].ravel(), minlength=n)
+        degree = np.array([len(es) for es in self._cable_cells_at()])
         clamped = {int(a.node) for a in self.anchors if a.kind == "clamped"}
         hand = (degree >= 2) | np.isin(np.arange(n), sorted(clamped))
         hand[self._bending_nodes()] = False
@@ -436,18 +431,23 @@ class NetworkModel(CableModel):
             self.forms.add("end_moments", density / h * ufl.dx, kind="static")
         return energy
 
-    def chain(self, k: int) -> tuple[list[int], int]:
-        """The chain of cable elements from node ``k`` (the end of one cable element)
-        through nodes of two cable elements that hold no anchor, up to a junction, a free
-        end or an anchor: its cells, in order from ``k``, and the node it ends at."""
-        geo = self.geometry
+    def _cable_cells_at(self) -> list[list[int]]:
+        """The cable cells (not the dampers') at every node, in cell order (cached)."""
         if getattr(self, "_at_node", None) is None:
+            geo = self.geometry
             cells = np.asarray(geo.cells, np.int64)
             self._at_node = [[] for _ in range(len(geo.points))]
             for e in np.nonzero(geo.is_cable)[0]:
                 for n in cells[e]:
                     self._at_node[int(n)].append(int(e))
-        at, cells = self._at_node, np.asarray(geo.cells, np.int64)
+        return self._at_node
+
+    def chain(self, k: int) -> tuple[list[int], int]:
+        """The chain of cable elements from node ``k`` (the end of one cable element)
+        through nodes of two cable elements that hold no anchor, up to a junction, a free
+        end or an anchor: its cells, in order from ``k``, and the node it ends at."""
+        geo = self.geometry
+        at, cells = self._cable_cells_at(), np.asarray(geo.cells, np.int64)
         anchored = {int(n) for n in geo.anchor_nodes.values()}
         chain, node, prev = [], int(k), -1
         while True:
