@@ -224,11 +224,10 @@ class VirtualHinges:
         geo = model.geometry
         X = model.V.tabulate_dof_coordinates()
         cells_g = np.asarray(geo.cells, np.int64)
-        cable = geo.is_cable  # the dampers' cells are no part of a chain
-        degree = np.bincount(cells_g[cable].ravel(), minlength=len(geo.points))
+        # the dampers' cells are no part of a chain
+        degree = np.array([len(es) for es in model._cable_cells_at()])
         anchored = {int(k) for k in geo.anchor_nodes.values()}
-        length = np.asarray(geo.cell_c, float) * np.linalg.norm(
-            geo.points[cells_g[:, 1]] - geo.points[cells_g[:, 0]], axis=1)
+        length = geo.cell_lengths
         idx = np.asarray(model._cell_index, np.int64)  # network cell of each local cell
         cell_of = np.full(len(cells_g), -1, np.int64)
         cell_of[idx] = np.arange(idx.size)

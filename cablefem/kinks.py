@@ -129,8 +129,7 @@ def network_kinks(model) -> list[Kink]:
     net, case = geo.net, model.case
     cells = np.asarray(geo.cells, np.int64)
     n = len(geo.points)
-    h = np.asarray(geo.cell_c, float) * np.linalg.norm(
-        geo.points[cells[:, 1]] - geo.points[cells[:, 0]], axis=1)
+    h = geo.cell_lengths
     at_node: list[list[int]] = [[] for _ in range(n)]
     for e, (a, b) in enumerate(cells):
         at_node[a].append(e)
@@ -157,6 +156,13 @@ def network_kinks(model) -> list[Kink]:
     model.kink_gaps = []
     candidates = [] if which == "none" else sorted(
         (set(label) | (junctions if which == "all" else set())) - clamped)
+
+    def add_kink(name, k, es):  # the cable through node k on its two elements es
+        before, after = (int(cells[e][cells[e] != k][0]) for e in es)
+        out.append(Kink(name, k, np.nan, (before, k, after), (float(h[es[0]]), float(h[es[1]])),
+                        section=geo.cell_section[es[0]], cells=tuple(es),
+                        anchor=label[k] if k in anchored else None))
+
     for k in candidates:
         # a damper's cells are no cable: a cable kinks where a damper pulls at it
         cab = [e for e in at_node[k] if not damper_cell[e]]
@@ -168,25 +174,15 @@ def network_kinks(model) -> list[Kink]:
                                                   "meet there in line (the layer straddles "
                                                   "a change of section)"))
                 continue
-            before, after = (int(cells[e][cells[e] != k][0]) for e in cab)
-            out.append(Kink(f"{label[k]}/{where}", k, np.nan, (before, k, after),
-                            (float(h[cab[0]]), float(h[cab[1]])),
-                            section=geo.cell_section[cab[0]], cells=tuple(cab),
-                            anchor=label[k] if k in anchored else None))
+            add_kink(f"{label[k]}/{where}", k, cab)
             continue
         for g in sorted({int(net.cell_group[e]) for e in cab}):
             es = [e for e in at_node[k] if net.cell_group[e] == g]
             if len(es) > 2:
                 model.kink_gaps.append((k, net.groups[g], f"the group meets itself with "
                                                           f"{len(es)} elements there"))
-            if len(es) != 2:
-                continue
-            before, after = (int(cells[e][cells[e] != k][0]) for e in es)
-            name = f"{label.get(k, f'node{k}')}/{net.groups[g]}"
-            out.append(Kink(name, k, np.nan, (before, k, after),
-                            (float(h[es[0]]), float(h[es[1]])),
-                            section=geo.cell_section[es[0]], cells=tuple(es),
-                            anchor=label[k] if k in anchored else None))
+            if len(es) == 2:
+                add_kink(f"{label.get(k, f'node{k}')}/{net.groups[g]}", k, es)
     stops = anchored | junctions | {k.node for k in out}
     for kink in out:  # walk each way along the side's group until a stop or a branch
         dist = []

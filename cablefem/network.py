@@ -159,6 +159,13 @@ class NetworkGeometry:
         return np.asarray(self.cell_damper) < 0
 
     @property
+    def cell_lengths(self) -> np.ndarray:
+        """The stress-free length of every cell, ``cell_c`` times its mesh length, m."""
+        cells = np.asarray(self.cells, np.int64)
+        return np.asarray(self.cell_c, float) * np.linalg.norm(
+            self.points[cells[:, 1]] - self.points[cells[:, 0]], axis=1)
+
+    @property
     def stations(self) -> np.ndarray:  # node numbering, for gathers
         return np.arange(len(self.points), dtype=float)
 
@@ -371,8 +378,7 @@ class NetworkModel(CableModel):
         stops = ({int(k) for k in geo.anchor_nodes.values()} | set(self._node_tag)
                  | {int(k) for k in cells[~geo.is_cable].ravel()})
         secs = self.case.network.sections
-        length = np.asarray(geo.cell_c, float) * np.linalg.norm(
-            geo.points[cells[:, 1]] - geo.points[cells[:, 0]], axis=1)
+        length = geo.cell_lengths
         rows, EI, hbar = [], [], []
         for k, es in enumerate(at):
             if len(es) != 2 or k in stops:
@@ -462,11 +468,8 @@ class NetworkModel(CableModel):
         """The stress-free length of clamped anchor ``name``'s chain of elements
         (:meth:`chain`): the span its layer's validity and error estimate are measured
         against (a single cable's is its length), m."""
-        geo = self.geometry
-        chain, _ = self.chain(geo.anchor_nodes[name])
-        cells = np.asarray(geo.cells, np.int64)[chain]
-        h = np.linalg.norm(geo.points[cells[:, 1]] - geo.points[cells[:, 0]], axis=1)
-        return float(np.sum(np.asarray(geo.cell_c, float)[chain] * h))
+        chain, _ = self.chain(self.geometry.anchor_nodes[name])
+        return float(np.sum(self.geometry.cell_lengths[chain]))
 
     def _item_nodes(self, item) -> list[int]:
         return [int(k) for k in self.geometry.net.vertex_groups[item.s]]

@@ -225,8 +225,7 @@ def network_contact(model) -> dict | None:
         g = np.asarray(model.g_vec, float)
         pen = sb.z - r @ (-g / np.linalg.norm(g))
         cells = np.asarray(geo.cells, np.int64)
-        h = np.asarray(geo.cell_c, float) * np.linalg.norm(
-            geo.points[cells[:, 1]] - geo.points[cells[:, 0]], axis=1)
+        h = geo.cell_lengths
         out = {}
         for e in np.nonzero(geo.is_cable)[0]:
             a, b = (int(k) for k in cells[e])
