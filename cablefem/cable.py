@@ -24,7 +24,7 @@ from ufl.algorithms import expand_derivatives
 
 from cablefem import catenary, forms
 from cablefem.anchor import AnchorBC
-from cablefem.dampers import damper_stations, damper_work
+from cablefem.dampers import damper_stations, damper_work, layer_length
 from cablefem.description import CableDescription
 from cablefem.errors import CaseError
 from cablefem.fluid import add_fluid_terms, submerged_weight
@@ -694,7 +694,27 @@ class CableModel:
         node, from the ground)."""
         return damper_work(self.mesh, self.case.dampers,
                            [self._node_tag[k] for k in self.damper_nodes],
-                           u_t, v_t, us_t, du_t, self.t0, self.dS)
+                           u_t, v_t, us_t, du_t, self.t0, self.dS, ell=self._kink_layer(us_t))
+
+    #: the string's dampers act at the rod's node, inside the string's corner (the kinks'
+    #: first-order correction, with the hinges' ``solver.outer_correction = "hinge"``);
+    #: the rod resolves its layers
+    kink_offsets = True
+
+    def _kink_layer(self, us_t):
+        """The kink layer's length at a damper's node from the static state (UFL on
+        :attr:`dS`, :func:`cablefem.dampers.layer_length`), or None at leading order
+        (``solver.outer_correction = "none"``) and for a model that resolves its layers
+        (:attr:`kink_offsets` false: the rod)."""
+        if not self.kink_offsets or self.case.solver.outer_correction != "hinge":
+            return None
+        T = forms.tension(us_t, self.t0, self.EA, c=self.c)
+
+        def mean(f):
+            return 0.5 * (f("+") + f("-"))
+        EA = mean(self.EA) if isinstance(self.EA, fem.Function) else self.EA
+        EI = fem.Constant(self.mesh, PETSc.ScalarType(self.case.section.EI))
+        return layer_length(mean(T), EA, EI)
 
     def compile(self) -> None:
         """Derive every residual, Jacobian and mass form from the terms of :attr:`forms`

@@ -23,10 +23,11 @@ import numpy as np
 import ufl
 from dolfinx import fem
 from petsc4py import PETSc
+from ufl.algorithms import expand_derivatives
 
 from cablefem import forms
 
-__all__ = ["damper_stations", "damper_work", "link_work"]
+__all__ = ["damper_stations", "damper_work", "kink_offset", "layer_length", "link_work"]
 
 
 def damper_stations(description, length: float) -> list[float]:
@@ -57,21 +58,65 @@ def _projector(d, u_t, t0):
     return ufl.Identity(3) - 0.5 * (ufl.outer(e[0], e[0]) + ufl.outer(e[1], e[1]))
 
 
-def damper_work(mesh, dampers, tags, u_t, v_t, us_t, du_t, t0, dS):
+def kink_offset(u_t, t0, mesh, ell):
+    """Where the rod's node is against the string's corner at an interior vertex (``dS``
+    restrictions of its two cells): ``r = (ℓ/2)(e₊ − e₋)``, ``e₋``, ``e₊`` the current unit
+    tangents of the element before and after, written as the sum of the two elements' unit
+    tangents pointing away from the vertex (``−(n·t0) g/|g|`` on each side, ``n`` the
+    cell's outward normal at the vertex, ``t0`` its reference tangent and ``g`` its stretch
+    vector), so it does not depend on how the cells are oriented. ``ell``: the layer length,
+    a UFL scalar. The rod's bending rounds the corner over ``ℓ`` on each side, and its node
+    lies inside the corner by ``(ℓ/2)|e₊ − e₋|`` (the tensioned beam's ``P ℓ/(2T)`` under a
+    point load ``P``, docs/kinks.md)."""
+    n = ufl.FacetNormal(mesh)
+    away = []
+    for side in ("+", "-"):
+        g = forms.stretch_vector(u_t, t0)(side)
+        away.append(-ufl.dot(n(side), t0(side)) * g / ufl.sqrt(ufl.dot(g, g)))
+    return 0.5 * ell * (away[0] + away[1])
+
+
+def layer_length(T, EA, EI):
+    """The kink layer's length at an interior vertex, ``ℓ = sqrt(EI/(T (1 + T/EA)))``, from
+    UFL scalars on ``dS`` (``T``, ``EA``: the means of the two elements' restrictions, the
+    static state's tension); 0 where that tension is not positive (slack, or statics not
+    solved yet: no correction)."""
+    ok = ufl.gt(T, 0.0)
+    T_pos = ufl.conditional(ok, T, 1.0)
+    return ufl.conditional(ok, ufl.sqrt(EI / (T_pos * (1.0 + T_pos / EA))), 0.0)
+
+
+def damper_work(mesh, dampers, tags, u_t, v_t, us_t, du_t, t0, dS, ell=None):
     """The dampers' virtual work at their vertices (``dS(tag)``, one tag per damper in
-    ``tags``): ``sum (c P v + k P (u - u_s)) . du``; None without dampers. ``u_t``, ``v_t``,
-    ``us_t``, ``du_t``: the translational parts of displacement, velocity, static
-    displacement and test function."""
+    ``tags``): ``sum (c P v_n + k P (u_n - u_s,n)) . du``; None without dampers. ``u_t``,
+    ``v_t``, ``us_t``, ``du_t``: the translational parts of displacement, velocity, static
+    displacement and test function.
+
+    With ``ell`` (the string's, a UFL scalar on ``dS``: :func:`layer_length`) the damper
+    acts on the motion of the rod's node, which the kink's layer places inside the string's
+    corner by :func:`kink_offset` ``r``: ``u_n = u + r(u)``, ``v_n = v + r'(u)[v]`` (the
+    first-order correction of the asymptotics, docs/kinks.md), while its force still acts on
+    the string at the corner (the outer solution sees a point force there). Without it
+    (the rod, which resolves its layer) ``u_n = u``."""
     work = None
+    r_u = r_s = r_v = None
+    if ell is not None:
+        r_u = kink_offset(u_t, t0, mesh, ell)
+        r_s = kink_offset(us_t, t0, mesh, ell)
+        r_v = expand_derivatives(ufl.derivative(r_u, u_t, v_t))
     for d, tag in zip(dampers, tags):
         direction = (None if d.direction is None else
                      fem.Constant(mesh, np.asarray(d.direction, dtype=PETSc.ScalarType)))
         P = _projector(direction, u_t, t0)
         c = fem.Constant(mesh, PETSc.ScalarType(d.coefficient))
-        f = c * ufl.dot(P, v_t("+"))
+        v_n = v_t("+") if r_v is None else v_t("+") + r_v
+        f = c * ufl.dot(P, v_n)
         if d.stiffness > 0:
             k = fem.Constant(mesh, PETSc.ScalarType(d.stiffness))
-            f = f + k * ufl.dot(P, u_t("+") - us_t("+"))
+            disp = u_t("+") - us_t("+")
+            if r_u is not None:
+                disp = disp + r_u - r_s
+            f = f + k * ufl.dot(P, disp)
         term = ufl.inner(f, du_t("+")) * dS(tag)
         work = term if work is None else work + term
     return work

@@ -79,6 +79,10 @@ class Kink:
     cells: tuple = ()
     #: the anchor of a pinned support's kink (its ``<group>:<i>``)
     anchor: str | None = None
+    #: a network's: the stress-free distances along the group to the next kink, anchor,
+    #: junction or end on each side, and whether a damper's cell ends at the node
+    sides: tuple = ()
+    damper: bool = False
 
 
 def kink_points(model) -> list[Kink]:
@@ -141,6 +145,7 @@ def network_kinks(model) -> list[Kink]:
         for i, k in enumerate(net.vertex_groups[item.s]):
             label.setdefault(int(k), f"{item.s}:{i}")
     damper_cell = ~geo.is_cable
+    damper_nodes = {int(k) for k in cells[damper_cell].ravel()}
     count: dict[int, int] = {}
     for e in np.nonzero(damper_cell)[0]:  # a damper cell's ends: <damper group>:<j>.<0|1>
         i = int(geo.cell_damper[e])
@@ -161,7 +166,7 @@ def network_kinks(model) -> list[Kink]:
         before, after = (int(cells[e][cells[e] != k][0]) for e in es)
         out.append(Kink(name, k, np.nan, (before, k, after), (float(h[es[0]]), float(h[es[1]])),
                         section=geo.cell_section[es[0]], cells=tuple(es),
-                        anchor=label[k] if k in anchored else None))
+                        anchor=label[k] if k in anchored else None, damper=k in damper_nodes))
 
     for k in candidates:
         # a damper's cells are no cable: a cable kinks where a damper pulls at it
@@ -198,6 +203,7 @@ def network_kinks(model) -> list[Kink]:
                 node = int(cells[e][cells[e] != node][0])
             dist.append(d)
         kink.spacing = float(min(dist))
+        kink.sides = tuple(float(d) for d in dist)
     return out
 
 
@@ -447,3 +453,16 @@ def rod_kink_moments(model, kinks: list[Kink]) -> np.ndarray:
             sides.append(np.polyval(coef, 0.0))
         out.append(0.5 * (sides[0] + sides[1]))
     return np.array(out)
+
+
+def damper_offset_estimate(kink: Kink, layer_length: float) -> float | None:
+    """The relative error of a network damper's effect (its damping ratios, its force and
+    the kink's moment) from acting at the string's corner rather than at the rod's node,
+    which lies ``(ℓ/2)|e₊ − e₋|`` inside it (a single cable's dampers act there,
+    docs/dampers.md): the cable's local flexibility at the node is ``(d₁ d₂/(d₁ + d₂))/T``
+    with ``d₁``, ``d₂`` the spans to the next fixed points each way, and the offset takes
+    ``ℓ/2`` of it: ``(ℓ/2)(1/d₁ + 1/d₂)`` (the nearest kink, anchor or junction stands for
+    a fixed point: an upper bound). None if the kink is not at a damper."""
+    if not kink.damper or len(kink.sides) != 2 or not np.isfinite(layer_length):
+        return None
+    return 0.5 * layer_length * (1.0 / kink.sides[0] + 1.0 / kink.sides[1])

@@ -222,6 +222,7 @@ class BeamModel(CableModel):
 
     bs = 6
     is_beam = True
+    kink_offsets = False  # the rod resolves its kinks' layers
 
     def has_hinges(self) -> bool:
         """The rod resolves its layers: no virtual hinge (``outer_correction`` is ignored)."""

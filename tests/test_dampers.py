@@ -260,11 +260,12 @@ def test_network_damper_bad_input(mpi_tmp_path, defect, key):
 
 
 def _tie_network(path, grounded: bool, c: float, k: float, n: int = 50, a: int = 5,
-                 slant: float = 0.0, direction=None, **extra):
+                 slant: float = 0.0, direction=None, EI: float = 1e-6, **extra):
     """Network dampers: a taut cable along x (nodes (x_i, 0, 0), n elements, pinned ends)
     with a damper cell (group "tie") from its node a along y: to the same node of a second,
     identical cable at y = 1 m, or (``grounded``) to an anchor at y = -1 m (and ``slant``
-    m along x); ``direction``: the damper's line of action (default: its cell's)."""
+    m along x); ``direction``: the damper's line of action (default: its cell's); ``EI``:
+    the section's."""
     from test_network import case_dict, write_mesh  # noqa: E402  (tests/ is on the path)
 
     x = np.linspace(0.0, L, n + 1)
@@ -287,7 +288,7 @@ def _tie_network(path, grounded: bool, c: float, k: float, n: int = 50, a: int =
                       vgroups)
     d = case_dict(mesh, [{"group": "c", "section": "s", "pretension": T}],
                   ["ends"] + (["ground"] if ground else []),
-                  sections=[{"name": "s", "EA": EA, "EI": 1e-6, "mass": M}],
+                  sections=[{"name": "s", "EA": EA, "EI": EI, "mass": M}],
                   dampers=[{"group": "tie", "coefficient": c, "stiffness": k,
                             **({"direction": direction} if direction else {})}], **extra)
     for anc in d["anchors"]:
@@ -419,3 +420,24 @@ def test_network_damper_in_dynamics_by_superposition(mpi_tmp_path):
             assert np.max(np.abs(got - ref)) < 1e-3 * np.max(np.abs(ref))
         # the damper matters: the damped and undamped references differ by far more
         assert np.max(np.abs(refs[0] - refs[1])) > 0.1 * np.max(np.abs(refs[1]))
+
+
+@pytest.mark.parametrize("EI, warns", [(1e-6, False), (10.0, True)])
+def test_network_damper_at_the_corner_is_flagged(mpi_tmp_path, EI, warns):
+    """A network's damper acts at the string's corner, not at the rod's node (l/2 inside
+    it, as a single cable's damper does): the run records, per damper kink, the error
+    estimate (l/2)(1/d1 + 1/d2), d1 = 1 m and d2 = 9 m the spans to the pinned ends, and
+    warns, naming the kink, above 1 %: l = 0.032 m (EI = 10 N m^2) gives 1.8 %; l = 1e-5 m
+    (EI = 1e-6) 6e-6, no warning. 1e-3: the spans are stress-free lengths, T/EA = 1e-4."""
+    from cablefem.app.run import run_case
+
+    case = _tie_network(mpi_tmp_path / "tie.msh", True, 500.0, 0.0, EI=EI)
+    res = run_case(case, mpi_tmp_path / "out", comm, figures=False, progress=False,
+                   modes=0)
+    entry = res.summary["kinks"]["tie:0.0/c"]
+    ell = entry["layer_length"]
+    assert ell == pytest.approx(np.sqrt(EI / T), rel=1e-3)
+    assert entry["damper_offset_estimate"] == pytest.approx(0.5 * ell * (1 / 1.0 + 1 / 9.0),
+                                                            rel=1e-3)
+    keys = [w["key"] for w in res.summary.get("warnings", [])]
+    assert ("kinks.tie:0.0/c" in keys) == warns, keys

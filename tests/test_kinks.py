@@ -176,13 +176,45 @@ def test_the_sides_balance_the_kink_node_in_dynamics(damping):
     assert worst < 1e-9 * T0
 
 
+
+def _damped_ratios(model) -> np.ndarray:
+    """The damping ratios of the damped modes of ``model`` (its z-plane pairs: the damper
+    acts along z) among the first six, ascending in frequency."""
+    from cablefem.modal import solve_modes
+
+    solve_static(model)
+    res = solve_modes(model, 6)
+    z = res.damping_ratios[np.argsort(res.omegas)]
+    return z[z > 1e-8]
+
+
+def test_a_damper_acts_at_the_rods_node():
+    """Krenk's optimal damper for mode 1 at a = 0.198 m = 20 ell from a pinned anchor (no
+    other damping): the damping ratios of the string's three lowest damped modes against
+    the rod's (which resolves the kink's layer; its mesh graded to ell/8 there). The rod's
+    node lies (ell/2)|e+ - e-| inside the string's corner (the tensioned beam's P ell/(2T)),
+    which makes the cable ell/(2a) = 2.5 % stiffer where the damper holds it: at the
+    string's corner (leading order) the ratios were -2.5, -4.2 and -4.7 % off the rod's;
+    acting at the rod's node they are measured -0.03, -0.07 and -0.11 % off. Allowed 0.3 %:
+    the next order, (ell/a)^2 = 0.26 %."""
+    d = taut(0.0, elements=200)
+    d.pop("point_loads")
+    d["dampers"] = [{"anchor": "p", "distance": 0.198, "coefficient": 1592.0,
+                     "direction": [0.0, 0, 1]}]
+    d["solver"]["outer_correction"] = "hinge"  # the first-order route (the default)
+    string = _damped_ratios(CableModel(comm, parse_case(d)))
+    rod = _damped_ratios(BeamModel(comm, parse_case(d)))
+    assert string.size == rod.size == 3
+    np.testing.assert_allclose(string, rod, rtol=3e-3)
+
 @pytest.mark.slow
 def test_damper_kink_against_the_rod_in_dynamics(mpi_tmp_path):
     """A taut cable (200 elements) with Krenk's optimal damper at a/L = 0.02 and its far
     anchor moving across at 0.95 of the first frequency, Rayleigh 2 %: the moment at the
-    damper over the last third of 4 s against the rod's: measured peak -1.0 %, RMS -1.1 %,
-    history error 1.4 %; allowed 2 %, 2 % and 5 % (the anchors' aims, RMS relaxed to 2 %:
-    the rod's nodal moment is extrapolated, about 0.3 % at ell/8)."""
+    damper over the last third of 4 s against the rod's: measured peak +0.1 %, RMS +0.1 %,
+    history error 1.0 % with the damper acting at the rod's node (at the string's corner:
+    -1.0 %, -1.1 %, 1.1 %); allowed 0.5 % in peak and RMS (the anchors' aim for statics,
+    the rod's nodal moment extrapolated, about 0.3 % at ell/8) and 2 % in history."""
     d = taut(0.0, elements=200)
     d.pop("point_loads")
     d["anchors"][1]["motion"] = {"type": "harmonic", "amplitude": [0.0, 0, 0.01],
@@ -191,6 +223,7 @@ def test_damper_kink_against_the_rod_in_dynamics(mpi_tmp_path):
                      "direction": [0.0, 0, 1]}]
     d["damping"] = {"ratio": 0.02, "frequencies": [31.4, 94.2]}
     d["dynamics"] = {"t_end": 4.0, "dt": 0.001}
+    d["solver"]["outer_correction"] = "hinge"  # the first-order route (the default)
     out = {}
     for model in ("string", "beam"):
         case = parse_case(d)
@@ -198,8 +231,16 @@ def test_damper_kink_against_the_rod_in_dynamics(mpi_tmp_path):
                        modes=0, model=model)
         out[model] = res.summary["kinks"]["damper0"]["steady_state_moment"]
     a, b = out["string"], out["beam"]
-    assert abs(a["peak"] / b["peak"] - 1) < 0.02
-    assert abs(a["rms"] / b["rms"] - 1) < 0.02
+    assert abs(a["peak"] / b["peak"] - 1) < 5e-3
+    assert abs(a["rms"] / b["rms"] - 1) < 5e-3
+    from cablefem.app.fatigue import read_kinks
+
+    hist = {m: read_kinks(mpi_tmp_path / m / "kinks.csv")["damper0"]
+            for m in ("string", "beam")}
+    t = hist["string"]["time"]
+    last = t >= t[-1] - (t[-1] - t[0]) / 3
+    x, y = (hist[m]["moment"][last] for m in ("string", "beam"))
+    assert np.sqrt(np.mean((x - y) ** 2) / np.mean(y ** 2)) < 0.02
 
 
 def test_fatigue_covers_the_kinks(mpi_tmp_path):

@@ -575,6 +575,8 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
                 warn(summary, f"kinks.{name}", f"{100 * (1 - frac):.3g} % of the rows are "
                      "invalid (the layer at this kink is slack, not quasi-static, or overlaps "
                      "a neighbouring kink or anchor): see valid in kinks.csv")
+        if getattr(model, "is_network", False) and kind != "beam":
+            _warn_network_damper_offsets(summary, emitter.kinkout.kinks)
     gaps = getattr(model, "kink_gaps", [])
     if gaps:  # network nodes where a cable kinks but has no kink moment
         k, where, why = gaps[0]
@@ -628,6 +630,36 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
         raise RunError(f"{error} -- results up to t = {times[-1] if times.size else 0:g} "
                        f"are in {outdir}") from error
     return result
+
+
+#: a network damper's corner error (cablefem.kinks.damper_offset_estimate) above which the
+#: run warns: the anchors' aim
+DAMPER_OFFSET_WARN = 0.01
+
+
+def _warn_network_damper_offsets(summary: dict, kinks) -> None:
+    """A network's dampers act at the string's corner (leading order): record each damper
+    kink's estimate of the error that makes (``damper_offset_estimate`` in its summary
+    entry) and warn where it exceeds :data:`DAMPER_OFFSET_WARN`."""
+    from cablefem.kinks import damper_offset_estimate
+
+    worst = []
+    for k in kinks:
+        entry = summary["kinks"].get(k.name, {})
+        est = damper_offset_estimate(k, entry.get("layer_length", float("nan")))
+        if est is None:
+            continue
+        entry["damper_offset_estimate"] = est
+        if est > DAMPER_OFFSET_WARN:
+            worst.append((est, k.name))
+    if worst:
+        est, name = max(worst)
+        warn(summary, f"kinks.{name}", f"{len(worst)} damper(s) of the network act at the "
+             f"string's corner, not at the rod's node (l/2 inside it): their damping "
+             f"ratios, forces and kink moments may be off by about {100 * est:.2g} % "
+             f"(here, the largest; damper_offset_estimate in summary.json). A damper from "
+             "the ground to one cable, as a single cable's [[dampers]] entry, acts at the "
+             "rod's node (docs/dampers.md)")
 
 
 def _whole_run(base: dict, stats: DynamicsStats, wall: float) -> dict:
