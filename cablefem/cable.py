@@ -714,7 +714,8 @@ class CableModel:
             return 0.5 * (f("+") + f("-"))
         EA = mean(self.EA) if isinstance(self.EA, fem.Function) else self.EA
         EI = fem.Constant(self.mesh, PETSc.ScalarType(self.case.section.EI))
-        return layer_length(mean(T), EA, EI)
+        h = ufl.CellVolume(self.mesh)  # the elements' stress-free lengths (the mesh's)
+        return layer_length(mean(T), EA, EI, ufl.min_value(h("+"), h("-")))
 
     def compile(self) -> None:
         """Derive every residual, Jacobian and mass form from the terms of :attr:`forms`

@@ -76,14 +76,25 @@ def kink_offset(u_t, t0, mesh, ell):
     return 0.5 * ell * (away[0] + away[1])
 
 
-def layer_length(T, EA, EI):
+#: the offset's length at most the shorter element's over this ratio: the node's own
+#: velocity keeps a weight 1 - 2 ℓ/h >= 0.2 in the damper's (a zigzag of the nodes, the
+#: mesh's shortest wave, would otherwise be fed energy: at h = ℓ a damper without other
+#: damping blew up; see docs/dampers.md)
+MESH_RATIO = 2.5
+
+
+def layer_length(T, EA, EI, h=None):
     """The kink layer's length at an interior vertex, ``ℓ = sqrt(EI/(T (1 + T/EA)))``, from
     UFL scalars on ``dS`` (``T``, ``EA``: the means of the two elements' restrictions, the
     static state's tension); 0 where that tension is not positive (slack, or statics not
-    solved yet: no correction)."""
+    solved yet: no correction). With ``h`` (the shorter element's length) it is capped at
+    ``h /`` :data:`MESH_RATIO`."""
     ok = ufl.gt(T, 0.0)
     T_pos = ufl.conditional(ok, T, 1.0)
-    return ufl.conditional(ok, ufl.sqrt(EI / (T_pos * (1.0 + T_pos / EA))), 0.0)
+    ell = ufl.sqrt(EI / (T_pos * (1.0 + T_pos / EA)))
+    if h is not None:
+        ell = ufl.min_value(ell, h / MESH_RATIO)
+    return ufl.conditional(ok, ell, 0.0)
 
 
 def damper_work(mesh, dampers, tags, u_t, v_t, us_t, du_t, t0, dS, ell=None):

@@ -103,10 +103,13 @@ def kink_points(model) -> list[Kink]:
         out.append(Kink(name, k, float(st[k]), (k - 1, k, k + 1),
                         (float(st[k] - st[k - 1]), float(st[k + 1] - st[k])),
                         cells=(k - 1, k)))
-    # the distance from each kink to its nearest other kink or anchor
+    # the distance from each kink to its nearest other kink or anchor (each way)
     marks = np.array(sorted({0.0, float(st[-1])} | {k.s for k in out}))
+    dampers = {geo.node_at(s) for s in getattr(model, "damper_s", ())}
     for k in out:
         k.spacing = float(np.min(np.abs(marks[marks != k.s] - k.s)))
+        k.sides = (float(k.s - marks[marks < k.s].max()), float(marks[marks > k.s].min() - k.s))
+        k.damper = k.node in dampers
     return out
 
 
@@ -455,14 +458,17 @@ def rod_kink_moments(model, kinks: list[Kink]) -> np.ndarray:
     return np.array(out)
 
 
-def damper_offset_estimate(kink: Kink, layer_length: float) -> float | None:
-    """The relative error of a network damper's effect (its damping ratios, its force and
-    the kink's moment) from acting at the string's corner rather than at the rod's node,
-    which lies ``(ℓ/2)|e₊ − e₋|`` inside it (a single cable's dampers act there,
-    docs/dampers.md): the cable's local flexibility at the node is ``(d₁ d₂/(d₁ + d₂))/T``
-    with ``d₁``, ``d₂`` the spans to the next fixed points each way, and the offset takes
-    ``ℓ/2`` of it: ``(ℓ/2)(1/d₁ + 1/d₂)`` (the nearest kink, anchor or junction stands for
-    a fixed point: an upper bound). None if the kink is not at a damper."""
+def damper_offset_estimate(kink: Kink, layer_length: float, corrected: float = 0.0):
+    """The relative error of a damper's effect (its damping ratios, its force and the
+    kink's moment) from acting at the string's corner rather than at the rod's node, which
+    lies ``(ℓ/2)|e₊ − e₋|`` inside it: the cable's local flexibility at the node is
+    ``(d₁ d₂/(d₁ + d₂))/T`` with ``d₁``, ``d₂`` the spans to the next fixed points each way,
+    and the offset changes ``ℓ/2`` of it: ``((ℓ − ℓ_c)/2)(1/d₁ + 1/d₂)``, ``ℓ_c`` the part
+    of the offset the model applies (``corrected``: a single cable's damper on the default
+    route, ``min(ℓ, h/2.5)``, docs/dampers.md; 0 in a network and at leading order). The
+    nearest kink, anchor or junction stands for a fixed point: an upper bound. None if the
+    kink is not at a damper."""
     if not kink.damper or len(kink.sides) != 2 or not np.isfinite(layer_length):
         return None
-    return 0.5 * layer_length * (1.0 / kink.sides[0] + 1.0 / kink.sides[1])
+    missing = max(layer_length - corrected, 0.0)
+    return 0.5 * missing * (1.0 / kink.sides[0] + 1.0 / kink.sides[1])

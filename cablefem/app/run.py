@@ -575,8 +575,8 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
                 warn(summary, f"kinks.{name}", f"{100 * (1 - frac):.3g} % of the rows are "
                      "invalid (the layer at this kink is slack, not quasi-static, or overlaps "
                      "a neighbouring kink or anchor): see valid in kinks.csv")
-        if getattr(model, "is_network", False) and kind != "beam":
-            _warn_network_damper_offsets(summary, emitter.kinkout.kinks)
+        if kind != "beam":  # the rod resolves its layers
+            _warn_damper_offsets(summary, model, emitter.kinkout.kinks)
     gaps = getattr(model, "kink_gaps", [])
     if gaps:  # network nodes where a cable kinks but has no kink moment
         k, where, why = gaps[0]
@@ -632,21 +632,28 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
     return result
 
 
-#: a network damper's corner error (cablefem.kinks.damper_offset_estimate) above which the
+#: a damper's estimated corner error (cablefem.kinks.damper_offset_estimate) above which the
 #: run warns: the anchors' aim
 DAMPER_OFFSET_WARN = 0.01
 
 
-def _warn_network_damper_offsets(summary: dict, kinks) -> None:
-    """A network's dampers act at the string's corner (leading order): record each damper
-    kink's estimate of the error that makes (``damper_offset_estimate`` in its summary
-    entry) and warn where it exceeds :data:`DAMPER_OFFSET_WARN`."""
+def _warn_damper_offsets(summary: dict, model, kinks) -> None:
+    """A damper acts at the string's corner where the model does not apply the rod node's
+    offset (a network's, the leading order's) or applies part of it (elements shorter
+    than 2.5 layer lengths next to the damper, cablefem.dampers.MESH_RATIO): record each
+    damper kink's estimate of the error that makes (``damper_offset_estimate`` in its
+    summary entry) and warn where it exceeds :data:`DAMPER_OFFSET_WARN`."""
+    from cablefem.dampers import MESH_RATIO
     from cablefem.kinks import damper_offset_estimate
 
+    applies = (not getattr(model, "is_network", False) and model.kink_offsets
+               and model.case.solver.outer_correction == "hinge")
     worst = []
     for k in kinks:
         entry = summary["kinks"].get(k.name, {})
-        est = damper_offset_estimate(k, entry.get("layer_length", float("nan")))
+        ell = entry.get("layer_length", float("nan"))
+        corrected = min(ell, min(k.h) / MESH_RATIO) if applies else 0.0
+        est = damper_offset_estimate(k, ell, corrected)
         if est is None:
             continue
         entry["damper_offset_estimate"] = est
@@ -654,12 +661,14 @@ def _warn_network_damper_offsets(summary: dict, kinks) -> None:
             worst.append((est, k.name))
     if worst:
         est, name = max(worst)
-        warn(summary, f"kinks.{name}", f"{len(worst)} damper(s) of the network act at the "
-             f"string's corner, not at the rod's node (l/2 inside it): their damping "
-             f"ratios, forces and kink moments may be off by about {100 * est:.2g} % "
-             f"(here, the largest; damper_offset_estimate in summary.json). A damper from "
-             "the ground to one cable, as a single cable's [[dampers]] entry, acts at the "
-             "rod's node (docs/dampers.md)")
+        why = ("the network's dampers act at the string's node" if getattr(
+            model, "is_network", False) else "at leading order the dampers act at the "
+            "string's node" if not applies else "the elements next to the damper are "
+            f"shorter than {MESH_RATIO:g} layer lengths, which limits the offset")
+        warn(summary, f"kinks.{name}", f"{len(worst)} damper(s) are not held at the rod's "
+             f"node, l/2 inside the string's kink ({why}): their damping ratios, forces "
+             f"and kink moments may be off by about {100 * est:.2g} % (the largest; "
+             "damper_offset_estimate in summary.json; docs/dampers.md)")
 
 
 def _whole_run(base: dict, stats: DynamicsStats, wall: float) -> dict:
