@@ -230,9 +230,14 @@ class KinkMoments:
         self.EI = np.array([sec.EI for sec in secs], float)
         self.EA = np.array([sec.EA for sec in secs], float)
         self.m = np.array([sec.mass for sec in secs], float)
+        #: the fluid's and the seabed's terms, assembled (their share of the kink nodes'
+        #: equations, buoyancy included): None without them
+        self._medium = _medium_form(model) if n else None
         fluid = getattr(model.case, "fluid", None)
-        #: the fluid's diameter at each kink (its buoyancy), None without a fluid
-        self.D = [None if fluid is None else fluid.diameter_on(sec) for sec in secs]
+        #: the fluid's diameter at each kink (the buoyancy in the half elements' load when
+        #: the fluid's terms are not assembled), None without a fluid
+        self.D = [None if fluid is None or self._medium is not None else
+                  fluid.diameter_on(sec) for sec in secs]
         self.nodes = np.array([k.nodes for k in self.kinks], dtype=np.int64).reshape(-1, 3)
         self.h = np.array([k.h for k in self.kinks], float).reshape(-1, 2)
         self.spacing = np.array([k.spacing for k in self.kinks], float)
@@ -291,18 +296,43 @@ class KinkMoments:
         load = np.array([self._loads.load_at(t, m, d) for m, d in zip(self.m, self.D)]
                         ).reshape(-1, 3)
         r = self.positions() if r is None else r
-        return self.columns(r, self._nodal(self.model.a), load, self._nodal(self.model.v))
+        return self.columns(r, self._nodal(self.model.a), load, self._nodal(self.model.v),
+                            self.medium_forces())
+
+    def medium_forces(self) -> np.ndarray | None:
+        """(n_kinks, 3) the force the fluid and the seabed put on each kink's two half
+        elements, at the current state: their terms of the residual (``fluid_static``,
+        ``fluid_dynamic``, ``seabed``, ``seabed_dynamic``: drag, buoyancy, added mass and
+        fluid inertia, contact, its damping and friction) assembled, at the kink's node,
+        with the sign of a force on the cable; None without a fluid or a seabed.
+        Collective."""
+        if self._medium is None:
+            return None
+        from dolfinx import fem
+        from dolfinx.fem.petsc import assemble_vector
+        from petsc4py import PETSc
+
+        m = self.model
+        vec = assemble_vector(self._medium)
+        vec.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        f = fem.Function(m.V)
+        n_owned = m.V.dofmap.index_map.size_local * m.V.dofmap.index_map_bs
+        f.x.array[:n_owned] = -vec.array_r[:n_owned]
+        vec.destroy()
+        return self._nodal(f)[:, 1]
 
     def side_forces(self, r: np.ndarray, a: np.ndarray | None = None,
-                    load: np.ndarray | None = None, v: np.ndarray | None = None
-                    ) -> tuple[np.ndarray, np.ndarray]:
+                    load: np.ndarray | None = None, v: np.ndarray | None = None,
+                    medium: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
         """The force each of a kink's two elements transmits at its node, pointing away
         from the node into the element (n_kinks, 2, 3): ``T e`` plus the load on the half
         element next to the node, ``(h/2) (q - m (2 a_node + a_other)/3)`` (the element's
         share of the nodal equation, consistent mass); zero on a slack element. With the
         velocities ``v`` (same shape as ``r``), the element's share of the damping force
-        too (:meth:`damping_forces`). Also the elements' unit vectors ``e`` (n_kinks, 2,
-        3), along the cable (before -> node -> after)."""
+        too (:meth:`damping_forces`); with ``medium`` (n_kinks, 3: :meth:`medium_forces`,
+        the fluid's and the seabed's force on both half elements together), each
+        element's share of it in proportion to its length. Also the elements' unit
+        vectors ``e`` (n_kinks, 2, 3), along the cable (before -> node -> after)."""
         d = np.diff(r, axis=1)  # (n, 2, 3): the two elements
         length = np.linalg.norm(d, axis=2)
         e = d / length[..., None]
@@ -318,6 +348,10 @@ class KinkMoments:
             if v is not None:
                 half = half + self.damping_forces(r, np.asarray(v, float), T2)
             F = np.where((T2 > 0.0)[..., None], F + half, 0.0)
+        if medium is not None:  # the sides' shares: exact for a force uniform along them
+            share = self.h / self.h.sum(axis=1, keepdims=True)
+            F = F + np.where((T2 > 0.0)[..., None],
+                             share[..., None] * np.asarray(medium, float)[:, None, :], 0.0)
         return F, e
 
     def damping_forces(self, r: np.ndarray, v: np.ndarray, T: np.ndarray) -> np.ndarray:
@@ -356,14 +390,15 @@ class KinkMoments:
         return out
 
     def columns(self, r: np.ndarray, a: np.ndarray | None = None,
-                load: np.ndarray | None = None, v: np.ndarray | None = None
-                ) -> dict[str, np.ndarray]:
+                load: np.ndarray | None = None, v: np.ndarray | None = None,
+                medium: np.ndarray | None = None) -> dict[str, np.ndarray]:
         """The columns for positions ``r`` (n_kinks, 3, 3) of each kink's three nodes,
-        their accelerations ``a`` and velocities ``v`` (same shape) and the distributed
-        load ``load`` (n_kinks, 3) (all None: the elements' own forces, no half-element
-        load, no damping)."""
+        their accelerations ``a`` and velocities ``v`` (same shape), the distributed
+        load ``load`` (n_kinks, 3) and the fluid's and seabed's force on the half elements
+        ``medium`` (all None: the elements' own forces, no half-element load, no
+        damping)."""
         n = len(self.kinks)
-        F, e = self.side_forces(r, a, load, v)
+        F, e = self.side_forces(r, a, load, v, medium)
         size = np.linalg.norm(F, axis=2)  # (n, 2) the tension at the node on each side
         away = np.stack([-e[:, 0], e[:, 1]], axis=1)
         with np.errstate(invalid="ignore", divide="ignore"):  # slack: the element's
@@ -411,6 +446,30 @@ class KinkMoments:
                 "Mx": Mv[:, 0], "My": Mv[:, 1], "Mz": Mv[:, 2],
                 "layer_length": lay.layer_length, "valid": valid.astype(int),
                 "normal": normal}
+
+
+#: the terms of the residual that hold the fluid's and the seabed's forces on the cable
+MEDIUM_TERMS = ("fluid_static", "fluid_dynamic", "seabed", "seabed_dynamic")
+
+
+def _medium_form(model):
+    """The compiled sum of the model's :data:`MEDIUM_TERMS` (their cell integrals: the
+    forces along the elements), or None when it has none."""
+    terms = getattr(model.forms, "user", {})
+    parts = [terms[name][0] for name in MEDIUM_TERMS if name in terms]
+    if not parts:
+        return None
+    integrals = [itg for form in parts for itg in form.integrals()
+                 if itg.integral_type() == "cell"]
+    if not integrals:
+        return None
+    import ufl
+    from dolfinx import fem
+
+    from cablefem.jit import quiet_compiler
+
+    with quiet_compiler():
+        return fem.form(ufl.Form(integrals))
 
 
 def rod_moments_along(model) -> tuple[np.ndarray, np.ndarray]:

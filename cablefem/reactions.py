@@ -75,6 +75,20 @@ class AnchorReactions:
             self.ksp.setFromOptions()
         self.rhs = self.R.duplicate()
         self.da = model.a.vector.duplicate()  # ghosted, like the Function's vector
+        #: the mass turns with the cable (a fluid's added mass is normal to it): the mass
+        #: matrices are assembled again at each evaluation
+        self._mass_moves = "fluid_dynamic" in getattr(model.forms, "user", {})
+
+    def _assemble_mass(self) -> None:
+        """The mass matrices at the current state (in place; the KSP refactors)."""
+        m = self.model
+        for A, bcs, diagonal in ((self.M, m.bcs, 1.0), (self.M_full, [], None)):
+            A.zeroEntries()
+            if diagonal is None:
+                fpetsc.assemble_matrix(A, m.m_form)
+            else:
+                fpetsc.assemble_matrix(A, m.m_form, bcs, diagonal=diagonal)
+            A.assemble()
 
     def _assemble(self) -> None:
         with self.R.localForm() as loc:
@@ -86,6 +100,8 @@ class AnchorReactions:
         """Set ``model.a`` to the acceleration that satisfies the equations of motion at
         ``t`` for the current ``model.u`` and ``model.v`` (anchors: prescribed)."""
         m = self.model
+        if self._mass_moves:
+            self._assemble_mass()
         m.a.x.array[:] = 0.0
         for anc in m.anchors:
             if anc.dofs.size and anc.motion is not None:  # the others: zero, set above
