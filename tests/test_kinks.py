@@ -212,6 +212,27 @@ def test_the_sides_balance_the_kink_node_in_water():
     assert without > 1e-4 * T0  # the fluid's share is not negligible here
 
 
+def test_the_sides_balance_a_kink_on_the_seabed():
+    """A point load pressing a heavy taut cable (1 kg/m, sag 12 mm) into a seabed 5 mm
+    below its chord: the seabed's contact force on the two half elements is in the sides,
+    so with the load they balance the node's static equation to 1e-9 of T0 (Newton's
+    tolerance; measured 2e-13); without it they missed the contact force on the half
+    elements, 70 N of the 100 N load (7e-3 of T0; asserted larger than 1e-4)."""
+    d = taut(100.0, elements=40)
+    d["gravity"] = {"g": 9.81}
+    d["seabed"] = {"z": -0.005, "stiffness": 1.0e6}
+    model = CableModel(comm, parse_case(d))
+    solve_static(model)
+    km = KinkMoments(model)
+    r = km.positions()
+    q = np.array([[0.0, 0.0, -9.81 * M]])
+    P = np.array([0.0, 0.0, -100.0])
+    F, _ = km.side_forces(r, np.zeros_like(r), q, None, km.medium_forces())
+    assert np.linalg.norm(F[0].sum(axis=0) + P) < 1e-9 * T0
+    F, _ = km.side_forces(r, np.zeros_like(r), q)
+    assert np.linalg.norm(F[0].sum(axis=0) + P) > 1e-4 * T0
+
+
 def _damped_ratios(model) -> np.ndarray:
     """The damping ratios of the damped modes of ``model`` (its z-plane pairs: the damper
     acts along z) among the first six, ascending in frequency."""
