@@ -242,7 +242,7 @@ class CableModel:
             g = polyline_cable(poly, case.mesh.elements, case.mesh.grading, names, tuple(extra))
         else:
             stations = graded_stations(length, case.mesh.elements, case.mesh.grading,
-                                       tuple(extra))
+                                       tuple(extra), self._damper_clearance(p, q, length, gdir))
             g = straight_cable(p, (q - p) / np.linalg.norm(q - p), stations, names)
         # initial shape: the elastic catenary through the anchors (exact for the bare cable;
         # with a seabed it crosses, the catenary with its grounded part)
@@ -532,6 +532,28 @@ class CableModel:
         g = forms.stretch_vector(self.u, self.t0)
         law.cos = ufl.dot(self.turn_dir, g) / ufl.sqrt(ufl.dot(g, g))
         self.law = law
+
+    def _damper_clearance(self, p, q, length, gdir) -> dict[float, float]:
+        """The least length of the elements next to each damper's station (the rod node's
+        offset is applied in full on elements at least :data:`cablefem.dampers.MESH_RATIO`
+        layer lengths long): 1.1 times that, from the layer length at the elastic
+        catenary's tension there (an estimate before statics); none at leading order, for
+        the rod, or without a catenary."""
+        case = self.case
+        if (not self.damper_s or not self.kink_offsets
+                or case.solver.outer_correction != "hinge"):
+            return {}
+        from cablefem.dampers import MESH_RATIO
+
+        sec = case.section
+        try:
+            shape = catenary.catenary_between(p, q, length, self.weight, sec.EA, gdir)
+            T = np.asarray(shape.tension(np.asarray(self.damper_s, float)), float)
+        except ValueError:
+            return {}
+        ok = T > 0
+        ell = np.where(ok, np.sqrt(sec.EI / np.where(ok, T * (1 + T / sec.EA), 1.0)), 0.0)
+        return {s: 1.1 * MESH_RATIO * float(e) for s, e in zip(self.damper_s, ell) if e > 0}
 
     def _item_nodes(self, item) -> list[int]:
         """Nodes of a point mass or point load (a single cable: the node at ``item.s``)."""

@@ -45,13 +45,16 @@ class CableGeometry:
 
 
 def graded_stations(length: float, elements: int, grading: float = 1.0,
-                    extra: tuple[float, ...] | list[float] = ()) -> np.ndarray:
+                    extra: tuple[float, ...] | list[float] = (),
+                    clearance: dict[float, float] | None = None) -> np.ndarray:
     """Stress-free node stations on ``[0, length]``.
 
     ``grading`` >= 1 is the ratio of the largest (mid-span) element to the two end elements:
     sizes follow a symmetric geometric progression. ``extra`` stations (point masses, point
     loads, polyline corners) are inserted as nodes; a graded station closer than a quarter of
     the local element size to an extra one is dropped, so that no sliver element appears.
+    ``clearance``: for some extra stations (a damper's), the least length of the elements
+    next to them: the graded stations closer than that are dropped too (never an anchor's).
     """
     if elements < 1:
         raise ValueError(f"mesh.elements must be >= 1, got {elements}")
@@ -68,15 +71,27 @@ def graded_stations(length: float, elements: int, grading: float = 1.0,
     s = np.concatenate([[0.0], np.cumsum(sizes)])
     s *= length / s[-1]
     s[-1] = length
-    extra_arr = np.array(sorted(float(e) for e in extra if 0.0 < e < length))
+    h = np.diff(s)
+    extra = [float(e) for e in extra if 0.0 < e < length]
+    # a clearance: the graded nodes inside it go, and a node stands at each of its ends
+    # (if clear of the other extra stations and of the cable's ends by a quarter element)
+    inside = [(e, w) for e, w in (clearance or {}).items() if w > 0.0 and 0.0 < e < length]
+    for e, w in inside:
+        for b in (e - w, e + w):
+            j = int(np.clip(np.searchsorted(s, b), 1, s.size - 1))
+            if (0.25 * h[j - 1] < b < length - 0.25 * h[j - 1]
+                    and all(abs(b - x) >= 0.25 * h[j - 1] for x in extra)):
+                extra.append(b)
+    extra_arr = np.array(sorted(extra))
     if extra_arr.size:
-        h = np.diff(s)
         keep = np.ones(s.size, dtype=bool)
         for e in extra_arr:
             i = int(np.clip(np.searchsorted(s, e), 1, s.size - 1))
             for j in (i - 1, i):
                 if 0 < j < s.size - 1 and abs(s[j] - e) < 0.25 * h[min(j, h.size - 1)]:
                     keep[j] = False
+        for e, w in inside:
+            keep[1:-1] &= np.abs(s[1:-1] - e) >= w
         s = np.unique(np.concatenate([s[keep], extra_arr]))
     return s
 

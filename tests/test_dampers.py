@@ -441,3 +441,33 @@ def test_network_damper_at_the_corner_is_flagged(mpi_tmp_path, EI, warns):
                                                             rel=1e-3)
     keys = [w["key"] for w in res.summary.get("warnings", [])]
     assert ("kinks.tie:0.0/c" in keys) == warns, keys
+
+
+def test_the_mesh_leaves_the_damper_room_for_its_offset():
+    """The rod node's offset is applied in full on elements at least 2.5 layer lengths
+    long (cablefem.dampers.MESH_RATIO): a single cable's mesh keeps its nodes 1.1 x 2.5 ell
+    (ell at the elastic catenary's tension, before statics) away from a damper, with a node
+    at each end of that clearance. On the stay of demos/stay_damper.toml, 2000 elements of
+    7.5 cm: the two elements next to the damper are at least 2.5 times the static layer
+    length (ell = 0.381 m; margin 1.1: the catenary's tension is the static one to 0.1 %
+    here) and at most 1.1 times that, the next ones back to the mesh's size (without the
+    clearance the 7.5 cm elements would cap the offset to 8 % of its length)."""
+    from dataclasses import replace
+    from pathlib import Path
+
+    from cablefem.case import load_case
+    from cablefem.dampers import MESH_RATIO
+    from cablefem.kinks import KinkMoments
+
+    case = load_case(Path(__file__).resolve().parents[1] / "demos" / "stay_damper.toml")
+    case = replace(case, mesh=replace(case.mesh, elements=2000))
+    model = CableModel(comm, case)
+    solve_static(model)
+    st = np.asarray(model.geometry.stations)
+    k = int(np.argmin(np.abs(st - case.dampers[0].distance)))
+    ell = KinkMoments(model).measure()["layer_length"][0]
+    near = np.diff(st[k - 1:k + 2])
+    assert np.all(near >= MESH_RATIO * ell), (near, ell)
+    assert np.all(near <= 1.1 * MESH_RATIO * ell * (1 + 1e-3))
+    h = 149.74 / 2000  # about the mesh's size elsewhere (the stress-free length / 2000)
+    assert np.all(np.abs(np.diff(st[k + 2:k + 6]) / h - 1) < 0.3)

@@ -658,13 +658,15 @@ def _warn_damper_offsets(summary: dict, model, kinks) -> None:
             continue
         entry["damper_offset_estimate"] = est
         if est > DAMPER_OFFSET_WARN:
-            worst.append((est, k.name))
+            worst.append((est, k.name, MESH_RATIO * ell))
     if worst:
-        est, name = max(worst)
+        est, name, needed = max(worst)
         why = ("the network's dampers act at the string's node" if getattr(
             model, "is_network", False) else "at leading order the dampers act at the "
             "string's node" if not applies else "the elements next to the damper are "
-            f"shorter than {MESH_RATIO:g} layer lengths, which limits the offset")
+            f"shorter than {MESH_RATIO:g} layer lengths, which limits the offset: "
+            f"elements of at least {needed:.3g} {unit(model.case.units, 'length')} there "
+            "apply it in full")
         warn(summary, f"kinks.{name}", f"{len(worst)} damper(s) are not held at the rod's "
              f"node, l/2 inside the string's kink ({why}): their damping ratios, forces "
              f"and kink moments may be off by about {100 * est:.2g} % (the largest; "
