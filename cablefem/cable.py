@@ -540,8 +540,7 @@ class CableModel:
         catenary's tension there (an estimate before statics); none at leading order, for
         the rod, or without a catenary."""
         case = self.case
-        if (not self.damper_s or not self.kink_offsets
-                or case.solver.outer_correction != "hinge"):
+        if not self.damper_s or not self.applies_damper_offsets():
             return {}
         from cablefem.dampers import MESH_RATIO
 
@@ -723,12 +722,17 @@ class CableModel:
     #: the rod resolves its layers
     kink_offsets = True
 
+    def applies_damper_offsets(self) -> bool:
+        """Whether the dampers act at the rod's node (:attr:`kink_offsets` and the
+        first-order route; a network's dampers do not, cablefem.network)."""
+        return self.kink_offsets and self.case.solver.outer_correction == "hinge"
+
     def _kink_layer(self, us_t):
         """The kink layer's length at a damper's node from the static state (UFL on
         :attr:`dS`, :func:`cablefem.dampers.layer_length`), or None at leading order
         (``solver.outer_correction = "none"``) and for a model that resolves its layers
         (:attr:`kink_offsets` false: the rod)."""
-        if not self.kink_offsets or self.case.solver.outer_correction != "hinge":
+        if not self.applies_damper_offsets():
             return None
         T = forms.tension(us_t, self.t0, self.EA, c=self.c)
 

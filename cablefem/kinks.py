@@ -79,8 +79,8 @@ class Kink:
     cells: tuple = ()
     #: the anchor of a pinned support's kink (its ``<group>:<i>``)
     anchor: str | None = None
-    #: a network's: the stress-free distances along the group to the next kink, anchor,
-    #: junction or end on each side, and whether a damper's cell ends at the node
+    #: the stress-free distances along the cable (a network's: its group) to the next
+    #: kink, anchor, junction or end on each side, and whether a damper acts at the node
     sides: tuple = ()
     damper: bool = False
 
@@ -233,6 +233,7 @@ class KinkMoments:
         #: the fluid's and the seabed's terms, assembled (their share of the kink nodes'
         #: equations, buoyancy included): None without them
         self._medium = _medium_form(model) if n else None
+        self._medium_out = None  # its vector and field (medium_forces)
         fluid = getattr(model.case, "fluid", None)
         #: the fluid's diameter at each kink (the buoyancy in the half elements' load when
         #: the fluid's terms are not assembled), None without a fluid
@@ -309,16 +310,19 @@ class KinkMoments:
         if self._medium is None:
             return None
         from dolfinx import fem
-        from dolfinx.fem.petsc import assemble_vector
+        from dolfinx.fem.petsc import assemble_vector, create_vector
         from petsc4py import PETSc
 
         m = self.model
-        vec = assemble_vector(self._medium)
+        if self._medium_out is None:  # the vector and the field, made once
+            self._medium_out = (create_vector(self._medium), fem.Function(m.V))
+        vec, f = self._medium_out
+        with vec.localForm() as loc:
+            loc.set(0.0)
+        assemble_vector(vec, self._medium)
         vec.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-        f = fem.Function(m.V)
         n_owned = m.V.dofmap.index_map.size_local * m.V.dofmap.index_map_bs
         f.x.array[:n_owned] = -vec.array_r[:n_owned]
-        vec.destroy()
         return self._nodal(f)[:, 1]
 
     def side_forces(self, r: np.ndarray, a: np.ndarray | None = None,

@@ -296,6 +296,11 @@ class NetworkModel(CableModel):
         n_owned = self.mesh.topology.index_map(1).size_local
         return self.geometry.is_cable[self._cell_index[:n_owned]]
 
+    def applies_damper_offsets(self) -> bool:
+        """A network's dampers act at the string's node: their cells do not reach the two
+        cable elements at their ends (the run estimates what that costs, docs/dampers.md)."""
+        return False
+
     def _damper_work(self, u_t, v_t, us_t, du_t):
         """The dampers' virtual work: each cell of a damper's group a dashpot (and spring)
         between its nodes (:func:`cablefem.dampers.link_work`), on the owned cells."""

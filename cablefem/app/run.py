@@ -646,8 +646,7 @@ def _warn_damper_offsets(summary: dict, model, kinks) -> None:
     from cablefem.dampers import MESH_RATIO
     from cablefem.kinks import damper_offset_estimate
 
-    applies = (not getattr(model, "is_network", False) and model.kink_offsets
-               and model.case.solver.outer_correction == "hinge")
+    applies = model.applies_damper_offsets()
     worst = []
     for k in kinks:
         entry = summary["kinks"].get(k.name, {})
