@@ -95,6 +95,23 @@ _TS_REASONS = {-1: "Newton failed (TS_DIVERGED_NONLINEAR_SOLVE)",
                    "times (TS_DIVERGED_STEP_REJECTED)"}
 
 
+def bc_row_scale(model) -> float:
+    """The weight of the anchors' rows ``x − g`` in the time integrator's residual, N/m:
+    the largest force per metre of the cable, its force scale over its shortest element.
+    The rows hold a length; Newton's tolerance is a force. Unweighted, a prescribed motion
+    smaller than ``snes_atol`` (in metres) per step was not applied at all: Newton stopped
+    at its predictor, the anchor lagged until the gap exceeded the tolerance, then caught
+    up in one step, a jolt (a 192 m stay on 2000 elements, its deck starting a slow
+    harmonic motion: held still for 0.41 s, then a jump of 0.17 mm that Newton's divergence
+    test refused, and the run failed). Weighted, a gap of ``snes_atol/κ`` (1e-11 m there)
+    is seen."""
+    geo = model.mesh.geometry  # 1D cells of two nodes: their lengths
+    ends = geo.x[geo.dofmap.array.reshape(-1, 2)]
+    h = np.linalg.norm(ends[:, 1] - ends[:, 0], axis=1)
+    h_min = model.comm.allreduce(float(np.min(h, initial=np.inf)), op=MPI.MIN)
+    return float(model.force_scale / h_min)
+
+
 def _make_ts(model, dt: float, rho_inf: float, history: SNESHistory,
              prefix: str | None = None, petsc_options: dict | None = None):
     prefix = model.prefix if prefix is None else prefix
@@ -115,6 +132,7 @@ def _make_ts(model, dt: float, rho_inf: float, history: SNESHistory,
     bc_rows = np.concatenate([a.flat_dofs for a in model.anchors]).astype(np.int32)
     bc_rows = bc_rows[bc_rows < model.bs * n_owned]  # owned rows; each rank zeroes its own
     F_vec = fpetsc.create_vector(model.f_dynamic)
+    kappa = bc_row_scale(model)
 
     def I2Function(ts, t, U, V, A, F):
         model.set_time(t)
@@ -122,12 +140,14 @@ def _make_ts(model, dt: float, rho_inf: float, history: SNESHistory,
         copy_in(V, model.v)
         copy_in(A, model.a)
         assemble_residual_rows(F, model.f_dynamic, model.bcs, U)
+        with F.localForm() as loc:  # the anchors' rows x - g, in newtons (bc_row_scale)
+            loc.array[bc_rows] *= kappa
 
     def I2Jacobian(ts, t, U, V, A, shift_v, shift_a, J, P):
         model.shift_v.value = shift_v
         model.shift_a.value = shift_a
         # SNES evaluates the residual at the same state just before: model.u/v/a are current
-        assemble_jacobian_rows(J, model.j_dynamic, bc_rows)
+        assemble_jacobian_rows(J, model.j_dynamic, bc_rows, diag=kappa)
 
     ts = PETSc.TS().create(model.comm)
     ts.setOptionsPrefix(prefix)

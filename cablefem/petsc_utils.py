@@ -149,13 +149,15 @@ def assemble_residual_rows(b: PETSc.Vec, F: fem.FormMetaClass, bcs, x: PETSc.Vec
     fpetsc.set_bc(b, bcs, x, -1.0)
 
 
-def assemble_jacobian_rows(A: PETSc.Mat, J: fem.FormMetaClass, rows: np.ndarray) -> None:
+def assemble_jacobian_rows(A: PETSc.Mat, J: fem.FormMetaClass, rows: np.ndarray,
+                           diag: float = 1.0) -> None:
     """Jacobian assembled without boundary conditions, then the constrained *rows* (local
-    unrolled indices of owned dofs) replaced by identity rows; their columns are kept."""
+    unrolled indices of owned dofs) replaced by ``diag`` times identity rows (the residual's
+    rows scaled alike); their columns are kept."""
     A.zeroEntries()
     fpetsc.assemble_matrix(A, J)
     A.assemble()
-    A.zeroRowsLocal(rows, diag=1.0)
+    A.zeroRowsLocal(rows, diag=diag)
 
 
 def assemble_jacobian(A: PETSc.Mat, J: fem.FormMetaClass, bcs) -> None:
