@@ -27,7 +27,8 @@ from ufl.algorithms import expand_derivatives
 
 from cablefem import forms
 
-__all__ = ["damper_stations", "damper_work", "kink_offset", "layer_length", "link_work"]
+__all__ = ["applied_offset", "damper_stations", "damper_work", "kink_offset",
+           "layer_length", "link_work"]
 
 
 def damper_stations(description, length: float) -> list[float]:
@@ -81,6 +82,12 @@ def kink_offset(u_t, t0, mesh, ell):
 #: mesh's shortest wave, would otherwise be fed energy: at h = ℓ a damper without other
 #: damping blew up; see docs/dampers.md)
 MESH_RATIO = 2.5
+
+
+def applied_offset(ell: float, h_min: float) -> float:
+    """The part of a layer length ``ell`` the string applies as the damper's offset on
+    elements whose shorter one is ``h_min`` long (NumPy; :func:`layer_length`'s cap)."""
+    return min(ell, h_min / MESH_RATIO)
 
 
 def layer_length(T, EA, EI, h=None):

@@ -643,7 +643,7 @@ def _warn_damper_offsets(summary: dict, model, kinks) -> None:
     than 2.5 layer lengths next to the damper, cablefem.dampers.MESH_RATIO): record each
     damper kink's estimate of the error that makes (``damper_offset_estimate`` in its
     summary entry) and warn where it exceeds :data:`DAMPER_OFFSET_WARN`."""
-    from cablefem.dampers import MESH_RATIO
+    from cablefem.dampers import MESH_RATIO, applied_offset
     from cablefem.kinks import damper_offset_estimate
 
     applies = model.applies_damper_offsets()
@@ -651,7 +651,7 @@ def _warn_damper_offsets(summary: dict, model, kinks) -> None:
     for k in kinks:
         entry = summary["kinks"].get(k.name, {})
         ell = entry.get("layer_length", float("nan"))
-        corrected = min(ell, min(k.h) / MESH_RATIO) if applies else 0.0
+        corrected = applied_offset(ell, min(k.h)) if applies else 0.0
         est = damper_offset_estimate(k, ell, corrected)
         if est is None:
             continue
