@@ -9,9 +9,10 @@ The ``moment`` column is ``|M|``: a plane bending that changes sign folds it (ra
 frequency doubled), a turning bending plane hides the reversal at every fibre: ``|M|``
 underestimates the damage. Pass the vector ``(Mx, My, Mz)``: the stress is then taken at
 ``fibres`` fibres around the section (``M . w / W``, ``w`` unit vectors in the plane of the
-moment vectors) and the most damaged fibre is reported. Invalid samples (``valid = 0``,
-empty/NaN moment: slack) are NaN, never zero stress; the fatigue functions refuse them
-unless dropped (``invalid="drop"``: the remaining samples are joined across the gaps).
+moment vectors) and the continuous worst direction (:mod:`cablefem.fibres`) is reported.
+Invalid samples (``valid = 0``, empty/NaN moment: slack) are NaN, never zero stress; the
+fatigue functions refuse them unless dropped (``invalid="drop"``: the remaining samples are
+joined across the gaps into one history).
 """
 
 from __future__ import annotations
@@ -27,9 +28,16 @@ import numpy as np
 import rainflow
 from numpy.typing import ArrayLike
 
+from cablefem.fibres import fibre_plane, scan_angles, scan_bound, worst_angle
+
 __all__ = ["StressSection", "SNCurve", "axial_stress", "bending_stress", "fibre_directions",
            "anchor_stress", "rainflow_cycles", "miner_damage", "equivalent_stress_range",
-           "time_to_failure", "fatigue_report", "write_report"]
+           "damage_equivalent_range", "time_to_failure", "YEAR_SECONDS", "fatigue_report",
+           "write_report"]
+
+
+#: the year of ``damage_per_year``: 365.25 days of 86400 s [s]
+YEAR_SECONDS = 365.25 * 86400.0
 
 
 def _number(name: str, value: object, low: float = 0.0, inclusive: bool = False) -> float:
@@ -49,7 +57,7 @@ def _finite(name: str, a: np.ndarray) -> None:
     if bad.size:
         raise ValueError(f"{name}: {bad.size} non-finite (NaN/inf) values, first at index "
                          f"{bad[0]}: invalid samples (e.g. a slack anchor) must be dropped "
-                         f"explicitly (fatigue_report(..., invalid='drop'))")
+                         "explicitly (--invalid drop, or fatigue_report(..., invalid='drop'))")
 
 
 @dataclass(frozen=True)
@@ -143,6 +151,16 @@ class SNCurve:
                 N = np.where(s < sl, np.inf, N)
         return float(N) if N.ndim == 0 else N
 
+    def stress_range_at(self, N: float) -> float | None:
+        """The curve's inverse: the range of which ``N`` (> 0) cycles make ``D = 1``; None
+        for ``N > N_cutoff`` with a knee (no range at or above the cut-off lasts so long)."""
+        N = _number("N", N)
+        if not self.knee or N <= self.N_knee:
+            return self.detail_category * (self.N_C / N) ** (1 / self.m1)
+        if N <= self.N_cutoff:
+            return self.delta_sigma_D * (self.N_knee / N) ** (1 / self.m2)
+        return None
+
     def as_dict(self) -> dict:
         return {**asdict(self), "knee": bool(self.knee), "delta_sigma_D": self.delta_sigma_D,
                 "delta_sigma_L": self.delta_sigma_L}
@@ -160,21 +178,17 @@ def bending_stress(M: ArrayLike, section: StressSection) -> np.ndarray:
 
 def fibre_directions(M: ArrayLike, valid: ArrayLike | None = None, fibres: int = 36
                      ) -> np.ndarray:
-    """``fibres`` unit vectors ``w_k = cos(a_k) e1 + sin(a_k) e2``, ``a_k = 2 pi k/fibres``,
-    in the plane of the moment vectors ``M`` (n, 3) (``e1``, ``e2``: the two leading
-    eigenvectors of ``sum M M^T`` over the valid samples; for a plane bending ``e1`` is the
-    moment's direction). The bending stress at fibre ``k`` is ``M . w_k / W``; the spacing
-    ``2 pi/fibres`` misses a fibre by at most ``pi/fibres`` (36: cos 5 deg = 0.9962)."""
+    """The scanned fibre directions ``w = cos(a) e1 + sin(a) e2`` (rows), ``a`` in
+    :func:`cablefem.fibres.scan_angles` (``2 pi k/fibres`` and the opposites: ``fibres`` rows
+    for an even count, ``2 fibres`` for an odd one), in the plane ``e1, e2`` of the moment
+    vectors ``M`` (n, 3) over the valid samples (:func:`cablefem.fibres.fibre_plane`). The
+    bending stress at direction ``w`` is ``M . w / W``."""
     M = np.asarray(M, float).reshape(-1, 3)
-    if int(fibres) != fibres or fibres < 1:
-        raise ValueError(f"fibres must be an integer >= 1 (got {fibres!r})")
     ok = np.all(np.isfinite(M), axis=1)
     if valid is not None:
         ok &= np.asarray(valid, float) > 0
-    _, vec = np.linalg.eigh(M[ok].T @ M[ok] if ok.any() else np.eye(3))
-    e1, e2 = vec[:, 2], vec[:, 1]
-    e1 = e1 if e1[np.argmax(np.abs(e1))] > 0 else -e1  # a reproducible sign
-    a = 2 * np.pi * np.arange(int(fibres)) / int(fibres)
+    e1, e2 = fibre_plane(M, ok)
+    a = scan_angles(fibres)
     return np.cos(a)[:, None] * e1 + np.sin(a)[:, None] * e2
 
 
@@ -183,8 +197,9 @@ def anchor_stress(T: ArrayLike, M: ArrayLike, valid: ArrayLike | None, section: 
     """Stress ``T/A + M/W`` [Pa] at a clamped anchor and the mask of the valid samples.
 
     ``T`` (n,) tension [N]; ``M`` (n,) signed moment or (n, 3) moment vector [N m];
-    ``valid`` (n,) 0/1 or None. Returns ``sigma``: (n,), or (n, fibres) at the fibres of
-    :func:`fibre_directions` for a moment vector, NaN (never zero) at invalid samples; and
+    ``valid`` (n,) 0/1 or None. Returns ``sigma``: (n,), or (n, k) at the k scanned
+    directions of :func:`fibre_directions` for a moment vector, NaN (never zero) at invalid
+    samples; and
     ``ok`` (n,) bool: ``T`` and ``M`` finite and ``valid`` nonzero.
     """
     T, M = np.asarray(T, float), np.asarray(M, float)
@@ -237,11 +252,30 @@ def equivalent_stress_range(ranges: ArrayLike, counts: ArrayLike, m: float,
     """Damage-equivalent constant range ``(sum n_i ds_i^m / n_ref)^(1/m)`` [stress unit].
     ``n_ref=None``: the total number of cycles (same damage in as many cycles); ``n_ref=2e6``
     (``N_C``): the range to compare with the detail category (single slope: ``D =
-    (ds_E/ds_C)^m``). All ranges count, even below a cut-off. 0 without cycles."""
+    (ds_E/ds_C)^m``). The moment of a single slope ``m``: all ranges count, even below a
+    cut-off, so with a knee it does not give the curve's damage (the reports use
+    :func:`damage_equivalent_range` and ``ds_C D^(1/m1)``). 0 without cycles."""
     r, n = _cycles(ranges, counts)
     m, total = _number("m", m), float(np.sum(n))
     nref = total if n_ref is None else _number("n_ref", n_ref)
     return float((np.sum(n * r**m) / nref) ** (1 / m)) if total > 0 else 0.0
+
+
+def damage_equivalent_range(ranges: ArrayLike, counts: ArrayLike, curve: SNCurve
+                            ) -> tuple[float | None, float]:
+    """``(ds_eq, n_d)``: ``n_d`` the number of damaging cycles (ranges with a finite ``N``:
+    at or above the cut-off, and nonzero), ``ds_eq`` the constant range of which ``n_d``
+    cycles give the spectrum's damage ``D`` under ``curve``: ``N(ds_eq) = n_d / D``, on the
+    slope ``m2`` if ``n_d / D > N_knee``. None if D = 0. (``n_d / D <= N_cutoff`` since every
+    damaging cycle has ``N <= N_cutoff``: the inverse exists; the clip is for rounding.)"""
+    r, n = _cycles(ranges, counts)
+    N = np.atleast_1d(curve.cycles_to_failure(r))
+    hit = np.isfinite(N)
+    nd, D = float(np.sum(n[hit])), float(np.sum(n[hit] / N[hit]))
+    if not D > 0:
+        return None, nd
+    target = min(nd / D, curve.N_cutoff) if curve.knee else nd / D
+    return curve.stress_range_at(target), nd
 
 
 def time_to_failure(D: float, duration: float) -> float:
@@ -271,21 +305,63 @@ def _stats(x: np.ndarray) -> dict:
             "range": float(np.ptp(x))}
 
 
+def _direction_stress(T, M, ok, section, curve, fibres):
+    """The stress history at the reported direction, over the valid samples: the fibre
+    search of :mod:`cablefem.fibres` for a moment vector (and its description), else
+    ``T/A + M/W``."""
+    axial = axial_stress(T[ok], section)
+    if M.ndim == 1:
+        return axial + bending_stress(M[ok], section), None
+    e1, e2 = fibre_plane(M, ok)
+    X, Y = bending_stress(M[ok] @ e1, section), bending_stress(M[ok] @ e2, section)
+
+    def damage(a: float) -> float:
+        return miner_damage(*rainflow_cycles(axial + math.cos(a) * X
+                                             + math.sin(a) * Y)[::2], curve)
+
+    w = worst_angle(damage, fibres)
+    slope = max(curve.m1, curve.m2) if curve.knee else curve.m1
+    fib = {"angle_deg": math.degrees(w.angle), "direction": (math.cos(w.angle) * e1
+                                                             + math.sin(w.angle) * e2).tolist(),
+           "plane": [e1.tolist(), e2.tolist()], "fibres": int(fibres),
+           "scanned": int(scan_angles(fibres).size),
+           "damage_scan": w.scan_damage, "scan_angle_deg": math.degrees(w.scan_angle),
+           "damage_min_over_fibres": w.scan_min,
+           "scan_bound": scan_bound(fibres, slope), "evaluations": w.evaluations}
+    return axial + math.cos(w.angle) * X + math.sin(w.angle) * Y, fib
+
+
+def _window_mask(t, T, M, v, window, invalid, anchor):
+    sel = _window(t, window)
+    t, T, M, v = t[sel], T[sel], M[sel], v[sel]
+    ok = np.isfinite(T) & (np.all(np.isfinite(M), axis=1) if M.ndim == 2 else np.isfinite(M))
+    ok &= np.nan_to_num(v) != 0  # NaN: invalid
+    n_bad = int(np.count_nonzero(~ok))
+    if n_bad and invalid == "raise":
+        raise ValueError(f"anchor {anchor!r}: {n_bad} of {ok.size} samples invalid (valid = 0 "
+                         f"or empty/NaN tension or moment, e.g. slack), first at t = "
+                         f"{t[~ok][0]:g}; drop them with --invalid drop (cablefem fatigue) "
+                         "or invalid='drop' (fatigue_report)")
+    if not ok.any():
+        raise ValueError(f"anchor {anchor!r}: no valid sample in the window")
+    return t, T, M, ok, n_bad
+
+
 def fatigue_report(times: ArrayLike, T: ArrayLike, M: ArrayLike, valid: ArrayLike | None,
                    section: StressSection, curve: SNCurve, *, invalid: str = "raise",
                    window: str | tuple[float, float] | None = None, fibres: int = 36,
-                   bins: int = 20, anchor: str = "anchor") -> dict:
+                   bins: int = 20, anchor: str = "anchor", year: float | None = None) -> dict:
     """Fatigue of one anchor: stresses, rainflow, Miner's damage, time to failure.
 
     ``times`` (n,) strictly increasing [time unit]; ``T`` (n,) [N]; ``M`` (n,) signed or
-    (n, 3) vector [N m] (prefer the vector, see the module docstring: the most damaged of
-    ``fibres`` fibres is reported); ``valid`` (n,) 0/1 or None; ``invalid``: "raise" or
-    "drop"; ``window``: None (all), "steady" (last third of the time span) or (t0, t1);
-    ``bins``: of the range histogram; ``anchor``: name for the messages.
-    Returns a JSON-ready dict: ``damage`` over the window, ``time_to_failure`` = duration /
-    damage [time unit] (None and ``time_to_failure_infinite`` if D = 0), cycle counts,
-    stress statistics, the axial and bending parts alone, equivalent ranges (slope ``m1``,
-    over the number of cycles and over ``N_C``), histogram, ``dropped_invalid_samples``.
+    (n, 3) vector [N m] (prefer the vector, see the module docstring: the damage is that of
+    the continuous worst direction, :mod:`cablefem.fibres`, scanned first at ``fibres``
+    directions and their opposites); ``valid`` (n,) 0/1 or None; ``invalid``: "raise" or
+    "drop" (the valid samples are then joined across the gaps into one history);
+    ``window``: None (all), "steady" (``t >= t_end - (t_end - t_0)/3``) or (t0, t1)
+    (``t0 <= t <= t1``); ``bins``: of the range histogram; ``anchor``: name for the
+    messages; ``year``: a year's length in the time unit (None: no ``damage_per_year``).
+    Returns a JSON-ready dict whose fields ``docs/fatigue.md`` defines.
     """
     t, T, M = (np.asarray(a, float) for a in (times, T, M))
     n = t.size
@@ -299,46 +375,37 @@ def fatigue_report(times: ArrayLike, T: ArrayLike, M: ArrayLike, valid: ArrayLik
         raise ValueError(f"anchor {anchor!r}: times must be >= 2 strictly increasing values")
     if invalid not in ("raise", "drop"):
         raise ValueError(f"invalid must be 'raise' or 'drop' (got {invalid!r})")
-    sel = _window(t, window)
-    t, T, M, v = t[sel], T[sel], M[sel], v[sel]
-    sigma, ok = anchor_stress(T, M, v, section, fibres=fibres)
-    n_bad = int(np.count_nonzero(~ok))
-    if n_bad and invalid == "raise":
-        raise ValueError(f"anchor {anchor!r}: {n_bad} of {ok.size} samples invalid (valid = 0 "
-                         f"or empty/NaN tension or moment, e.g. slack), first at t = "
-                         f"{t[~ok][0]:g}; pass invalid='drop' to drop them")
-    if not ok.any():
-        raise ValueError(f"anchor {anchor!r}: no valid sample in the window")
-    sig = sigma[ok].reshape(np.count_nonzero(ok), -1)
-    cyc = [rainflow_cycles(sig[:, k]) for k in range(sig.shape[1])]
-    dam = [miner_damage(r, c, curve) for r, _, c in cyc]
-    k = int(np.argmax(dam))
-    r, _, c = cyc[k]
+    if year is not None:
+        year = _number("year", year)
+    t, T, M, ok, n_bad = _window_mask(t, T, M, v, window, invalid, anchor)
+    sig, fib = _direction_stress(T, M, ok, section, curve, fibres)
+    r, _, c = rainflow_cycles(sig)
+    D = miner_damage(r, c, curve)
     axial = axial_stress(T[ok], section)
-    bend = sig[:, k] - axial
+    bend = sig - axial
     duration = float(t[-1] - t[0])
-    ttf = time_to_failure(dam[k], duration)
+    ttf = time_to_failure(D, duration)
+    eq, n_dam = damage_equivalent_range(r, c, curve)
     hist, edges = np.histogram(r, bins=bins, range=(0.0, float(r.max()) if r.size else 1.0),
                                weights=c)
-    rep = {"anchor": anchor, "window": [float(t[0]), float(t[-1])], "duration": duration,
-           "samples": int(ok.size), "dropped_invalid_samples": n_bad,
-           "stress": _stats(sig[:, k]), "axial_stress": _stats(axial),
-           "bending_stress": _stats(bend), "damage": dam[k],
-           "damage_axial_only": miner_damage(*rainflow_cycles(axial)[::2], curve),
-           "damage_bending_only": miner_damage(*rainflow_cycles(bend)[::2], curve),
-           "cycles": float(c.sum()), "full_cycles": int(np.count_nonzero(c == 1.0)),
-           "half_cycles": int(np.count_nonzero(c == 0.5)),
-           "max_range": float(r.max()) if r.size else 0.0,
-           "equivalent_range": equivalent_stress_range(r, c, curve.m1),
-           "equivalent_range_N_C": equivalent_stress_range(r, c, curve.m1, curve.N_C),
-           "time_to_failure": None if math.isinf(ttf) else ttf,
-           "time_to_failure_infinite": math.isinf(ttf),
-           "histogram": {"edges": edges.tolist(), "counts": hist.tolist()}, "fibre": None}
-    if M.ndim == 2:
-        w = fibre_directions(M, ok, fibres)[k]
-        rep["fibre"] = {"index": k, "fibres": int(fibres), "angle_deg": 360.0 * k / fibres,
-                        "direction": w.tolist(), "damage_min_over_fibres": float(min(dam))}
-    return rep
+    return {"anchor": anchor, "window": [float(t[0]), float(t[-1])], "duration": duration,
+            "samples": int(ok.size), "valid_samples": int(np.count_nonzero(ok)),
+            "dropped_invalid_samples": n_bad,
+            "section": {"area": section.area, "modulus": section.modulus},
+            "stress": _stats(sig), "axial_stress": _stats(axial),
+            "bending_stress": _stats(bend), "damage": D,
+            "damage_axial_only": miner_damage(*rainflow_cycles(axial)[::2], curve),
+            "damage_bending_only": miner_damage(*rainflow_cycles(bend)[::2], curve),
+            "cycles": float(c.sum()), "damaging_cycles": n_dam,
+            "full_cycles": int(np.count_nonzero(c == 1.0)),
+            "half_cycles": int(np.count_nonzero(c == 0.5)),
+            "max_range": float(r.max()) if r.size else 0.0,
+            "equivalent_range": eq,
+            "equivalent_range_N_C": curve.detail_category * D ** (1 / curve.m1),
+            "time_to_failure": None if math.isinf(ttf) else ttf,
+            "time_to_failure_infinite": math.isinf(ttf), "year": year,
+            "damage_per_year": None if year is None else D * year / duration,
+            "histogram": {"edges": edges.tolist(), "counts": hist.tolist()}, "fibre": fib}
 
 
 def _atomic(path: Path, write: Callable[[BinaryIO], object]) -> None:
@@ -353,7 +420,7 @@ def _atomic(path: Path, write: Callable[[BinaryIO], object]) -> None:
 
 
 def _g(*xs: float | None) -> str:
-    return " / ".join("inf" if x is None else f"{x:.4g}" for x in xs)
+    return " / ".join("-" if x is None else f"{x:.4g}" for x in xs)  # None: not defined
 
 
 def _sn_text(curve: SNCurve, u: str) -> str:
@@ -364,26 +431,40 @@ def _sn_text(curve: SNCurve, u: str) -> str:
             f"m1 = {curve.m1:g}, {knee}.")
 
 
+def _years(x: float | None) -> str:
+    return "" if x is None else f" ({x / YEAR_SECONDS:.3g} years of 365.25 d)"
+
+
 def write_report(outdir: str | Path, reports: dict[str, dict], curve: SNCurve,
-                 section: StressSection, units: str = "Pa", time_unit: str = "s") -> list[str]:
+                 section: StressSection | None = None, units: str = "Pa",
+                 time_unit: str = "s") -> list[str]:
     """Write ``fatigue.json``, ``fatigue.md`` and ``fatigue_histogram.png`` into ``outdir``
-    (atomically); ``reports``: anchor name -> :func:`fatigue_report`. Returns file names."""
+    (atomically); ``reports``: anchor name -> :func:`fatigue_report` (each with its own
+    ``section``). The top-level ``section`` is the reports' common one, None where they
+    differ (``section``: for reports without one). Returns the file names."""
     out = Path(outdir)
     out.mkdir(parents=True, exist_ok=True)
-    data = {"units": {"stress": units, "time": time_unit},
-            "section": {"area": section.area, "modulus": section.modulus},
+    given = None if section is None else {"area": section.area, "modulus": section.modulus}
+    secs = [r.get("section", given) for r in reports.values()]
+    common = secs[0] if secs and all(x == secs[0] for x in secs) else None
+    data = {"units": {"stress": units, "time": time_unit}, "section": common,
             "sn_curve": curve.as_dict(), "anchors": reports}
     text = json.dumps(data, indent=2, allow_nan=False) + "\n"
     _atomic(out / "fatigue.json", lambda fh: fh.write(text.encode()))
     lines = ["# Fatigue at the clamped anchors", "", _sn_text(curve, units),
-             f"Section: A = {section.area:.4g}, W = {section.modulus:.4g}. Stresses in "
-             f"{units}, times in {time_unit}; rainflow + Miner over the window.", ""]
+             f"Stresses in {units}, times in {time_unit}; rainflow + Miner over the window "
+             "(fields: docs/fatigue.md).", ""]
     for name, r in reports.items():
-        fib = f" (worst of {r['fibre']['fibres']} fibres: {r['fibre']['angle_deg']:g} deg)" \
-            if r.get("fibre") else ""
+        f = r.get("fibre")
+        fib = (f" (worst direction {f['angle_deg']:.6g} deg from e1; best of the "
+               f"{f['scanned']} scanned: {f['damage_scan']:.4g})") if f else ""
+        sec = r.get("section", given) or {"area": None, "modulus": None}
+        s_yr = "" if time_unit != "s" else _years(r["time_to_failure"])
         rows = [("window t0 / t1", _g(*r["window"])), ("damage D", _g(r["damage"]) + fib),
-                ("time to failure", _g(r["time_to_failure"])),
-                ("cycles (full + half)", _g(r["cycles"])),
+                ("damage per year", _g(r.get("damage_per_year"))),
+                ("time to failure", "inf (no damaging cycle)" if r["time_to_failure_infinite"]
+                 else _g(r["time_to_failure"]) + s_yr),
+                ("cycles (all / damaging)", _g(r["cycles"], r.get("damaging_cycles"))),
                 ("max range / equivalent range / at N_C",
                  _g(r["max_range"], r["equivalent_range"], r["equivalent_range_N_C"])),
                 ("stress min / max", _g(r["stress"]["min"], r["stress"]["max"])),
@@ -391,6 +472,7 @@ def write_report(outdir: str | Path, reports: dict[str, dict], curve: SNCurve,
                  _g(r["axial_stress"]["range"], r["bending_stress"]["range"])),
                 ("D axial only / bending only",
                  _g(r["damage_axial_only"], r["damage_bending_only"])),
+                ("section A / W", _g(sec["area"], sec["modulus"])),
                 ("dropped invalid samples", _g(r["dropped_invalid_samples"]))]
         lines += [f"## Anchor {name}", "", "| quantity | value |", "|---|---|"]
         lines += [f"| {k} | {x} |" for k, x in rows] + [""]

@@ -327,9 +327,14 @@ def test_report_numbers_and_window():
     tail = 9.5 / 1e7 + 0.5 / (2e6 * (DS_C / (DS_C + a2)) ** 3)
     assert steady["damage"] == pytest.approx(tail, rel=RTOL)
     assert steady["time_to_failure"] == pytest.approx(10.0 / tail, rel=RTOL)
-    # equivalent range, m = 3 over the 10 cycles: ((9.5 DS_MID^3 + 0.5 (100 + a2)^3)/10)^(1/3)
-    eq = ((9.5 * DS_MID**3 + 0.5 * (DS_C + a2) ** 3) / 10) ** (1 / 3)
-    assert steady["equivalent_range"] == pytest.approx(eq, rel=RTOL)
+    # equivalent range: the 10 cycles (all damaging: DS_MID and 100 + a2 >= ds_L) of one range
+    # giving D = tail: N(eq) = 10/tail = 6.55e6 > N_knee, on the m2 = 5 slope:
+    # eq = ds_D (5e6 tail/10)^(1/5) (the first-slope moment ((9.5 DS_MID^3 + 0.5 (100 +
+    # a2)^3)/10)^(1/3) = 71.5 gave 10/N(71.5) = 1.59e-6, 4 % above D); at N_C: 100 tail^(1/3)
+    assert steady["damaging_cycles"] == 10.0
+    assert steady["equivalent_range"] == pytest.approx(DS_D * (5e6 * tail / 10) ** 0.2,
+                                                       rel=RTOL)
+    assert steady["equivalent_range_N_C"] == pytest.approx(DS_C * tail ** (1 / 3), rel=RTOL)
     first = fat.fatigue_report(t, T, M, None, UNIT, c, window=(0.0, 20.0))
     assert first["damage"] == pytest.approx(8e-5, rel=RTOL) and first["cycles"] == 20
     # below the cut-off: D = 0, time to failure infinite -> None with the flag

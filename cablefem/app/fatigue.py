@@ -17,7 +17,7 @@ import numpy as np
 from mpi4py import MPI
 
 from cablefem.case import Case, CaseError, startup_time
-from cablefem.fatigue import SNCurve, StressSection, fatigue_report, write_report
+from cablefem.fatigue import YEAR_SECONDS, SNCurve, StressSection, fatigue_report, write_report
 from cablefem.io.anchorcsv import read_moments
 from cablefem.units import unit
 
@@ -164,6 +164,8 @@ def run_fatigue(case: Case, rundir: Path, outdir: Path | None = None, *,
                                  f"start-up at t = {win[0]:g} ({rule['reason']}) that the "
                                  "fatigue window 'after_startup' leaves out: run longer, or "
                                  "set fatigue.window = 'all'")
+            tu = unit(case.units, "time")
+            year = YEAR_SECONDS if tu == "s" else None  # sqrt(l/g): no fixed length
             reports = {}
             for name in clamped:
                 d = data[name]
@@ -171,7 +173,8 @@ def run_fatigue(case: Case, rundir: Path, outdir: Path | None = None, *,
                 reports[name] = fatigue_report(
                     d["time"], d["tension"], M, d["valid"], _stress_section(spec,
                                                                             sections[name]),
-                    curve, invalid=invalid, window=win, fibres=spec.fibres, anchor=name)
+                    curve, invalid=invalid, window=win, fibres=spec.fibres, anchor=name,
+                    year=year)
                 reports[name]["window_rule"] = rule
             kink_sections = {}
             for name, d in read_kinks(Path(rundir) / "kinks.csv").items():
@@ -182,23 +185,22 @@ def run_fatigue(case: Case, rundir: Path, outdir: Path | None = None, *,
                 reports[f"kink:{name}"] = fatigue_report(
                     d["time"], d["tension"], M, d["valid"],
                     _stress_section(spec, kink_sections[name]), curve, invalid=invalid,
-                    window=win, fibres=spec.fibres, anchor=f"kink:{name}")
+                    window=win, fibres=spec.fibres, anchor=f"kink:{name}", year=year)
                 reports[f"kink:{name}"]["window_rule"] = rule
             if not reports:
                 raise ValueError(f"{rundir}: no clamped anchor and no interior kink: no "
                                  "bending moment to assess")
             outdir.mkdir(parents=True, exist_ok=True)
-            first = _stress_section(spec, sections[clamped[0]] if clamped
-                                    else next(iter(kink_sections.values())))
-            write_report(outdir, reports, curve, first, spec.units)
-            tu = unit(case.units, "time")
+            write_report(outdir, reports, curve, units=spec.units, time_unit=tu)
             for name, rep in reports.items():
                 ttf = rep.get("time_to_failure")
-                log.info("fatigue at %s: damage %.3g over %.4g %s, time to failure %s", name,
+                per_year = rep.get("damage_per_year")
+                log.info("fatigue at %s: damage %.3g over %.4g %s%s, time to failure %s", name,
                          rep.get("damage", np.nan), rep.get("duration", np.nan), tu,
+                         "" if per_year is None else f" ({per_year:.3g} per year)",
                          "infinite (no damaging cycle)" if ttf is None
-                         else f"{ttf:.3g} {tu}" + (f" ({ttf / 3.15576e7:.3g} years)"
-                                                    if tu == "s" else ""))
+                         else f"{ttf:.3g} {tu}" + (f" ({ttf / YEAR_SECONDS:.3g} years of "
+                                                    "365.25 d)" if tu == "s" else ""))
         except (ValueError, OSError) as err:
             error = str(err)
     error = comm.bcast(error, root=0)

@@ -610,8 +610,8 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
                                          for n, e in summary["anchors"].items()
                                          if e["kind"] == "clamped"})
             summary["fatigue"] = {n: {k: r.get(k) for k in (
-                "damage", "time_to_failure", "equivalent_range_N_C", "max_range",
-                "dropped_invalid_samples")} for n, r in reps.items()}
+                "damage", "damage_per_year", "time_to_failure", "equivalent_range_N_C",
+                "max_range", "dropped_invalid_samples")} for n, r in reps.items()}
         except ValueError as err:  # a step the case asks for failed: so did the run
             error = RunError(f"fatigue: {err}")
             log.error("%s", error)
