@@ -498,3 +498,107 @@ def test_default_window_leaves_out_the_start_up(mpi_tmp_path):
     write(mpi_tmp_path / "short", 400)  # t <= 9.975: within the start-up
     with pytest.raises(ValueError, match="after_startup"):
         run_fatigue(case(), mpi_tmp_path / "short", comm=comm)
+
+
+# ------------------------------------------------------------------ the worst direction
+
+def _spatial_history(k=6, per=40):
+    """A non-planar moment vector with a mean, and a tension partly in phase with the
+    bending: sigma at a direction is not the mirror image of the opposite one's, so an
+    uneven set of directions sees the two differently."""
+    t = np.arange(per * k + 1) / per
+    th = 2 * np.pi * t
+    T = 100 + 30 * np.cos(th) + 20 * np.cos(2 * th)
+    u, v = np.array([0.3, 1.0, 0.2]), np.array([0.9, -0.25, 0.4])
+    M = np.array([5.0, -40.0, 12.0]) + np.outer(60 * np.cos(th), u / np.linalg.norm(u)) \
+        + np.outer(25 * np.sin(3 * th + 0.4), v / np.linalg.norm(v))
+    return t, T, M
+
+
+def test_mirror_anchors_equal_damage_for_every_count():
+    """Anchor q is the mirror image of anchor p (reflection R = I - 2 n n^T; a moment is an
+    axial vector: M_q = -R M_p), so the damage at direction R w of q is that at w of p. The
+    scanned set (2 pi k/N and opposites, about the principal axes) is its own mirror image,
+    so its best damage agrees to round-off (1e-12: eigenvectors to 1e-15 times m = 4 and
+    the sums); the refined worst direction is the same maximum found from mirrored brackets,
+    to the search's bracket of 1e-7 rad: this maximum is smooth (no two samples tie there),
+    so D is found to ~(1e-7)^2 m: 1e-12 covers it at every count, and for every count.
+    Before: the N fibres 2 pi k/N from a signed e1; for odd N the anchors differed."""
+    t, T, Mp = _spatial_history()
+    n = np.array([1.0, 2.0, -0.5]) / np.linalg.norm([1.0, 2.0, -0.5])
+    c = fat.SNCurve(160.0, m1=4, knee=False)
+    damages = []
+    for N in range(4, 38):
+        p = fat.fatigue_report(t, T, Mp, None, UNIT, c, fibres=N)
+        for sign in (-1, 1):  # -R M: an axial vector's image; R M: the other convention
+            Mq = sign * (Mp - 2 * np.outer(Mp @ n, n))
+            q = fat.fatigue_report(t, T, Mq, None, UNIT, c, fibres=N)
+            assert q["damage"] == pytest.approx(p["damage"], rel=1e-12), (N, sign)
+            if "damage_scan" in p["fibre"]:
+                assert q["fibre"]["damage_scan"] == pytest.approx(p["fibre"]["damage_scan"],
+                                                                  rel=1e-12), (N, sign)
+        damages.append(p["damage"])
+    np.testing.assert_allclose(damages, max(damages), rtol=1e-12)
+
+
+def test_count_within_its_bound_of_the_worst_direction():
+    """A constant moment M0 (any direction: it moves no range) plus a bending B cos(2 pi t)
+    along u in another direction, constant tension: the stress at direction w has the
+    ranges |w . u| 2B, so D(w) = |w . u|^m D*, D* = k/N(2B) = k/(2e6 (ds_C/2B)^m) the worst
+    (w = u). The reported damage is D* (smooth maximum: the search's 1e-7 rad gives
+    1e-14; RTOL); the scan's best is |cos d|^m D*, d the smallest angle from u to a
+    scanned direction, and d <= pi/n (n scanned directions) gives D_scan >= cos(pi/n)^m D*
+    (fat.scan_bound). Before, the damage reported was that of the best of the N fibres."""
+    k, B, m = 5, 70.0, 4.0
+    t = np.arange(40 * k + 1) / 40
+    u = np.array([np.cos(0.37), np.sin(0.37), 0.0])
+    M = np.array([30.0, -10.0, 0.0]) + np.outer(B * np.cos(2 * np.pi * t), u)
+    c = fat.SNCurve(160.0, m1=m, knee=False)
+    worst = k / (2e6 * (160.0 / (2 * B)) ** m)
+    for N in range(4, 38):
+        rep = fat.fatigue_report(t, 0 * t + 50.0, M, None, UNIT, c, fibres=N)
+        assert rep["damage"] == pytest.approx(worst, rel=RTOL), N
+        assert abs(np.dot(rep["fibre"]["direction"], u)) == pytest.approx(1.0, abs=1e-12)
+        w = fat.fibre_directions(M, None, N)
+        scan = worst * np.max(np.abs(w @ u)) ** m
+        assert rep["fibre"]["damage_scan"] == pytest.approx(scan, rel=RTOL), N
+        bound = math.cos(math.pi / (N if N % 2 == 0 else 2 * N)) ** m
+        assert fibres_bound(N, m) == pytest.approx(bound, rel=1e-15)
+        assert rep["fibre"]["damage_scan"] >= bound * worst * (1 - RTOL), N
+
+
+def fibres_bound(N, m):
+    from cablefem.fibres import scan_bound
+
+    return scan_bound(N, m)
+
+
+def test_equivalent_range_reproduces_the_damage_with_knee_and_cut_off():
+    """Cycles 10 x 200 (N = 2.5e5), 400 x DS_MID (N = 1e7), 1000 x 30 (below ds_L = 40.5: no
+    damage): D = 4e-5 + 4e-5 = 8e-5 over n_d = 410 damaging cycles; N(ds_eq) = 410/8e-5 =
+    5.125e6 > N_knee: ds_eq = ds_D (5e6/5.125e6)^(1/5) on the m2 slope, and 410 cycles of it
+    give D again (1e-14: rounding of the powers). At N_C: ds_C D^(1/3) = 100 * 0.0431."""
+    c = fat.SNCurve(DS_C)
+    r, n = [200.0, DS_MID, 30.0], [10.0, 400.0, 1000.0]
+    eq, nd = fat.damage_equivalent_range(r, n, c)
+    assert nd == 410.0
+    assert eq == pytest.approx(DS_D * (5e6 / 5.125e6) ** 0.2, rel=1e-14)
+    assert 410 / c.cycles_to_failure(eq) == pytest.approx(8e-5, rel=1e-14)
+    # single slope: the m-th moment over the cycles, as equivalent_stress_range
+    one = fat.SNCurve(DS_C, knee=False)
+    assert fat.damage_equivalent_range(r, n, one)[0] == pytest.approx(
+        fat.equivalent_stress_range(r, n, 3), rel=1e-14)
+    assert fat.damage_equivalent_range([30.0], [5.0], c) == (None, 0.0)  # D = 0: none
+    # the same in a report: 3 blocks of cosines (their transitions add half cycles); the
+    # report's equivalent range reproduces its damage over its damaging cycles
+    M = np.r_[cos_history(100.0, 10), cos_history(DS_MID / 2, 40)[1:],
+              cos_history(15.0, 100)[1:]]
+    t = np.arange(M.size) / 40
+    rep = fat.fatigue_report(t, 0 * t, M, None, UNIT, c)
+    rr, _, cc = fat.rainflow_cycles(M)
+    nd = float(np.sum(cc[rr >= c.delta_sigma_L]))
+    # 10 of 200, 39.5 of DS_MID, the halves 100 + DS_MID/2 and DS_MID/2 + 15 = 51.8 >= ds_L
+    assert nd == pytest.approx(10 + 39.5 + 0.5 + 0.5, abs=1e-12)
+    assert nd / c.cycles_to_failure(rep["equivalent_range"]) == pytest.approx(
+        rep["damage"], rel=1e-13)
+    assert (rep["equivalent_range_N_C"] / DS_C) ** 3 == pytest.approx(rep["damage"], rel=1e-13)
