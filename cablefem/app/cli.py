@@ -122,11 +122,18 @@ def _parser() -> argparse.ArgumentParser:
     post.add_argument("--moment-form", choices=["exact", "explicit"], default="exact")
     post.add_argument("--quiet", "-q", action="store_true")
 
-    fat = sub.add_parser("fatigue", help="fatigue damage at the clamped anchors of a run",
+    fat = sub.add_parser("fatigue", help="fatigue damage at the clamped anchors and kinks "
+                         "of a run",
                          description="Axial + bending stress at the clamped anchors from DIR/"
-                         "anchors.csv, rainflow counting, Miner's damage with the S-N curve of "
+                         "anchors.csv and at the interior kinks from DIR/kinks.csv (if there; "
+                         "reported as 'kink:<name>'), at the worst direction round the "
+                         "section, rainflow counting, Miner's damage with the S-N curve of "
                          "the case's [fatigue] table; writes fatigue.json, fatigue.md and "
-                         "fatigue_histogram.png.")
+                         "fatigue_histogram.png. Area and modulus: fatigue.area and "
+                         "fatigue.modulus if given (for every location), else the solid "
+                         "circle of the section's diameter: in a network, the section of the "
+                         "anchor's cable (from DIR/summary.json) or of the cable group a "
+                         "kink's name ends with. Fields: docs/fatigue.md.")
     fat.add_argument("rundir", type=Path, help="folder of a run (with anchors.csv)")
     fat.add_argument("--case", type=Path, required=True, help="case file (TOML) with [fatigue]")
     fat.add_argument("--output", "-o", type=Path, help="output folder (default: rundir)")
@@ -135,7 +142,8 @@ def _parser() -> argparse.ArgumentParser:
                           "(default: fatigue.window)")
     fat.add_argument("--invalid", choices=["raise", "drop"], default="raise",
                      help="samples without a valid moment (slack anchor): stop (default) or "
-                          "leave them out")
+                          "leave them out (the valid samples are then joined into one "
+                          "history)")
     fat.add_argument("--quiet", "-q", action="store_true")
 
     cmp_ = sub.add_parser("compare", help="compare two runs of a case (e.g. string and beam)",

@@ -294,8 +294,8 @@ CASE_KEYS: dict[str, KeyDoc | TableDoc] = {
                          "longest anchor-motion ramp (a motion with ramp = 0 that jumps at "
                          f"t = 0: {DEFAULT_RAMP_PERIODS:g} of its periods) to the end | 'all' "
                          "the whole run | 'steady' its last third."),
-        "fibres": KeyDoc("integer", 36, "-", "Fibres around the section where stresses are "
-                         "evaluated, >= 4."),
+        "fibres": KeyDoc("integer", 36, "-", "Directions round the section scanned (with "
+                         "their opposites) before the search for the worst one, >= 4."),
         "units": KeyDoc("string", "Pa", "", "Name of the stress unit in the reports."),
     }),
     "modal": TableDoc("table", None, "", "Modal analysis about the static equilibrium.", {
