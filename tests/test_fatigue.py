@@ -488,8 +488,12 @@ def test_default_window_leaves_out_the_start_up(mpi_tmp_path):
         assert reps[name]["damage"] == pytest.approx(tail, rel=RTOL)
         assert reps[name]["window_rule"]["rule"] == "after_startup"
         assert reps[name]["window_rule"]["start"] == pytest.approx(ramp, rel=1e-15)
+        # an SI case: a year of 365.25 d in s; damage per year over the window's 10 s
+        assert reps[name]["year"] == 31557600.0
+        assert reps[name]["damage_per_year"] == pytest.approx(tail * 3155760.0, rel=RTOL)
     saved = json.loads((mpi_tmp_path / "run" / "fatigue.json").read_text())
     assert saved["anchors"]["q"]["window_rule"]["rule"] == "after_startup"
+    assert saved["units"]["time"] == "s" and saved["section"] == {"area": 1.0, "modulus": 1.0}
     assert "ramp" in saved["anchors"]["q"]["window_rule"]["reason"]
     reps = run_fatigue(case(window="all"), mpi_tmp_path / "run", mpi_tmp_path / "all",
                        comm=comm)
@@ -602,3 +606,46 @@ def test_equivalent_range_reproduces_the_damage_with_knee_and_cut_off():
     assert nd / c.cycles_to_failure(rep["equivalent_range"]) == pytest.approx(
         rep["damage"], rel=1e-13)
     assert (rep["equivalent_range_N_C"] / DS_C) ** 3 == pytest.approx(rep["damage"], rel=1e-13)
+
+
+def test_report_definitions_duration_samples_window_year():
+    """docs/fatigue.md's definitions. 100 cos over 5 periods (t = 0..5, 40 per period) with
+    the last 11 samples (t = 4.75..5) invalid and dropped: `duration` is still the window's
+    last minus first sample time, 5 - 1 = 4 for the window (1, 5) (its start is a sample:
+    in); `samples` counts the dropped rows (161 in the window, 11 invalid, 150 valid). The
+    valid history 1..4.725 holds the peaks at t = 1, 1.5, ..., 4.5: 7 halves of 200
+    (3.5 cycles: D = 3.5/2.5e5) and the half -100 -> 100 cos(2 pi 4.725) = -15.6 at the end.
+    Damage per year: D times 365.25 * 86400 / duration. The error message names the
+    command line's --invalid drop."""
+    t = np.arange(201) / 40
+    M = cos_history(100.0, 5)
+    v = np.where(t >= 4.75, 0.0, 1.0)
+    c = fat.SNCurve(DS_C, knee=False)
+    rep = fat.fatigue_report(t, 0 * t, M, v, UNIT, c, window=(1.0, 5.0), invalid="drop",
+                             year=fat.YEAR_SECONDS)
+    assert rep["window"] == [1.0, 5.0] and rep["duration"] == 4.0
+    assert (rep["samples"], rep["valid_samples"], rep["dropped_invalid_samples"]) == \
+        (161, 150, 11)
+    last = 100 + 100 * np.cos(2 * np.pi * 4.725)  # the final half from the trough -100
+    hand = 3.5 / 2.5e5 + 0.5 / (2e6 * (DS_C / last) ** 3)
+    assert rep["damage"] == pytest.approx(hand, rel=RTOL)
+    assert fat.YEAR_SECONDS == 31557600.0  # 365.25 * 86400, exact
+    assert rep["year"] == 31557600.0
+    assert rep["damage_per_year"] == pytest.approx(hand * 31557600.0 / 4.0, rel=RTOL)
+    assert rep["section"] == {"area": 1.0, "modulus": 1.0}
+    plain = fat.fatigue_report(t, 0 * t, M, None, UNIT, c)
+    assert plain["year"] is None and plain["damage_per_year"] is None  # no year given
+    with pytest.raises(ValueError, match="--invalid drop"):
+        fat.fatigue_report(t, 0 * t, M, v, UNIT, c)
+
+
+def test_dropped_samples_are_joined_into_one_history():
+    """0 -> 100 (valid), gap, -100 -> 0 (valid): joined, the reversals 0, 100, -100, 0 give
+    the halves 100, 200, 100 (1.5 cycles, D = 0.5/N(200) + 2 * 0.5/N(100), single slope
+    100, m = 3); the pieces counted apart would give two halves of 100 and miss the 200."""
+    t = np.arange(5.0)
+    M = np.array([0.0, 100.0, np.nan, -100.0, 0.0])
+    rep = fat.fatigue_report(t, 0 * t, M, None, UNIT, fat.SNCurve(DS_C, knee=False),
+                             invalid="drop")
+    assert rep["max_range"] == 200.0 and rep["cycles"] == 1.5
+    assert rep["damage"] == pytest.approx(0.5 / 2.5e5 + 2 * 0.5 / 2e6, rel=1e-15)
