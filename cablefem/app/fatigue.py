@@ -2,9 +2,11 @@
 
 Reads ``DIR/anchors.csv`` (written by ``cablefem run`` or ``cablefem post``), takes the S-N
 curve and the section from the case's ``[fatigue]`` table (and ``section.diameter``), and
-writes ``fatigue.json``, ``fatigue.md`` and ``fatigue_histogram.png``. Stresses use the
-moment *vector* (``Mx, My, Mz``) at fibres around the section: the magnitude alone would fold
-a moment that changes sign or turns, and underestimate the damage. No dolfinx.
+writes ``fatigue.json``, ``fatigue.md`` and ``fatigue_histogram.png``; the interior kinks
+of ``DIR/kinks.csv`` are reported as ``kink:<name>``. Stresses use the moment *vector*
+(``Mx, My, Mz``) at the worst direction round the section (``docs/fatigue.md``: the steps
+and every field): the magnitude alone would fold a moment that changes sign or turns, and
+underestimate the damage. No dolfinx.
 """
 
 from __future__ import annotations
