@@ -330,7 +330,7 @@ def test_report_numbers_and_window():
     # equivalent range: the 10 cycles (all damaging: DS_MID and 100 + a2 >= ds_L) of one range
     # giving D = tail: N(eq) = 10/tail = 6.55e6 > N_knee, on the m2 = 5 slope:
     # eq = ds_D (5e6 tail/10)^(1/5) (the first-slope moment ((9.5 DS_MID^3 + 0.5 (100 +
-    # a2)^3)/10)^(1/3) = 71.5 gave 10/N(71.5) = 1.59e-6, 4 % above D); at N_C: 100 tail^(1/3)
+    # a2)^3)/10)^(1/3) = 71.5 gave 10/N(71.5) = 1.72e-6, 13 % above D); at N_C: 100 tail^(1/3)
     assert steady["damaging_cycles"] == 10.0
     assert steady["equivalent_range"] == pytest.approx(DS_D * (5e6 * tail / 10) ** 0.2,
                                                        rel=RTOL)
