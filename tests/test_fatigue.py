@@ -360,6 +360,14 @@ def test_write_report_files(tmp_path):
     assert "## Anchor p" in md and "## Anchor q" in md and "| damage D |" in md
     assert (tmp_path / "fatigue_histogram.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert sorted(p.name for p in tmp_path.iterdir()) == sorted(names)  # no temporary left
+    assert data["section"] == {"area": s.area, "modulus": s.modulus}  # common to p and q
+    assert "| damage per year | - |" in md  # no year given: not defined, not 0
+    # locations of different sections (a network): no top-level section, each its own
+    other = fat.StressSection.solid_circle(0.03)
+    reports["r"] = fat.fatigue_report(t, 1000 + 0 * t, M, None, other, c, anchor="r")
+    fat.write_report(tmp_path, reports, c, units="Pa")
+    data = json.loads((tmp_path / "fatigue.json").read_text())
+    assert data["section"] is None and data["anchors"]["r"]["section"]["area"] == other.area
 
 
 # ------------------------------------------------------------------ CSV
