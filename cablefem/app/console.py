@@ -1,0 +1,81 @@
+"""The static state on the console: each anchor's tension and, at a clamped anchor, its
+moment (the tool's main result), each kink's moment, and the sag, logged once the statics
+have converged and before the dynamics start (rank 0 only, through the log)."""
+
+from __future__ import annotations
+
+import logging
+
+import numpy as np
+
+from cablefem.app.output import rod_moment_columns
+from cablefem.moments import anchor_moments
+from cablefem.units import unit
+
+__all__ = ["static_anchor_entries", "log_static_state"]
+
+log = logging.getLogger(__name__)
+
+
+def static_anchor_entries(model, static, emitter, form: str, kind: str) -> dict[str, dict]:
+    """Per anchor: its static tension and, at a clamped anchor, the static moment and its
+    layer (the entries of ``summary.json``'s ``anchors.<name>``): the composite moment of
+    the static anchor force or, for the rod (``kind == "beam"``), the rod's own moment with
+    the composite beside it. ``emitter`` (:class:`~cablefem.app.output.RunOutput`) gives
+    the loads at t = 0."""
+    out = {}
+    for i, a in enumerate(model.anchors):
+        F = np.asarray(static.anchor_forces[i], float)
+        entry = {"static_tension": float(np.linalg.norm(F[:3]))}
+        if a.kind == "clamped":
+            st = anchor_moments(F[None, :3], a.direction, a.section.EI, a.section.EA,
+                                a.section.mass, np.zeros((1, 3)),
+                                emitter.load_at(0.0, a.section), model.anchor_span(a.name),
+                                None, form, 1 if getattr(model, "hinges", None) else 0)
+            if kind == "beam":  # the rod's own; the composite with the beam's force beside
+                entry["static_moment_composite"] = float(st["moment"][0])
+                st = rod_moment_columns(st, F[None, 3:6], a.direction)
+                entry["static_moment_vector"] = F[3:6]
+            entry["static_moment"] = float(st["moment"][0])
+            entry["static_moment_layer"] = float(st["moment_layer"][0])
+            entry["static_delta"] = float(st["delta"][0])
+            entry["layer_length"] = float(st["layer_length"][0])
+            entry["static_error_estimate"] = float(st["error_estimate"][0])
+        out[a.name] = entry
+    return out
+
+
+def static_state_lines(entries: dict[str, dict], kinks: dict[str, float], sag: float | None,
+                       units: str | None, kind: str) -> list[str]:
+    """The lines :func:`log_static_state` prints: one per anchor (tension; moment and
+    estimated error at a clamped one), one per kink (moment), and the sag ratio."""
+    force, moment = unit(units, "force"), unit(units, "moment")
+    source = "the rod's own" if kind == "beam" else "inner solution"
+    lines = []
+    for name, e in entries.items():
+        text = f"static: anchor {name}: tension {e['static_tension']:.6g} {force}"
+        if "static_moment" in e:
+            text += f", moment {e['static_moment']:.6g} {moment} ({source}"
+            err = e.get("static_error_estimate")
+            if kind != "beam" and err is not None and np.isfinite(err):
+                text += f", estimated error {100 * err:.2g} %"
+            text += ")"
+        lines.append(text)
+    for name, m in kinks.items():
+        if np.isfinite(m):
+            lines.append(f"static: kink {name}: moment {m:.6g} {moment}")
+    if sag is not None and np.isfinite(sag):
+        lines.append(f"static: sag {sag:.6g} of the chord (mid-span, along gravity)")
+    return lines
+
+
+def log_static_state(entries: dict[str, dict], kinkout, sag: float | None,
+                     units: str | None, kind: str) -> None:
+    """Log the static state (:func:`static_state_lines`); ``kinkout`` the run's
+    :class:`~cablefem.app.kinkout.KinkOutput` (its static columns)."""
+    kinks = {}
+    if kinkout is not None and kinkout.kinks:
+        kinks = {k.name: float(kinkout.static["moment"][i])
+                 for i, k in enumerate(kinkout.kinks)}
+    for line in static_state_lines(entries, kinks, sag, units, kind):
+        log.info("%s", line)
