@@ -126,11 +126,14 @@ def run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, **
     from cablefem.app.resources import check_memory
     from cablefem.io.outdir import output_lock
 
-    check_memory(case, comm, kwargs.get("model", "string"))
+    kwargs.setdefault("model", getattr(case.solver, "model", "string"))  # solver.model
+    runner = _runner(kwargs["model"])
+    check_memory(case, comm, "string" if runner is not _run_case else
+                 kwargs["model"])  # "auto" runs the string first
     with output_lock(outdir, comm), _StopOnSignal() as stop:
         try:
             with quiet_compiler():  # no compiler lines on the console
-                return _run_case(case, outdir, comm, **kwargs)
+                return runner(case, outdir, comm, **kwargs)
         except (RunInterrupted, CaseError):
             raise
         except BaseException as err:  # noqa: BLE001 - a signal may surface as any error
@@ -141,6 +144,18 @@ def run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, **
                 f"(build, statics, modes or the final output): {outdir} holds no complete "
                 "result; run again ('--restart' continues from a checkpoint of the "
                 "dynamics only)", stop.signal) from err
+
+
+def _runner(model: str):
+    """What runs a case for ``model``: :func:`_run_case`, or for ``"auto"`` the string and
+    where needed the rod (:func:`cablefem.app.automodel.run_auto`)."""
+    if model != "auto":
+        return _run_case
+    from functools import partial
+
+    from cablefem.app.automodel import run_auto
+
+    return partial(run_auto, _run_case)
 
 
 class _Stopped(BaseException):
