@@ -12,7 +12,7 @@ from cablefem.app.output import rod_moment_columns
 from cablefem.moments import anchor_moments
 from cablefem.units import unit
 
-__all__ = ["static_anchor_entries", "log_static_state"]
+__all__ = ["static_anchor_entries", "log_static_state", "log_touchdown"]
 
 log = logging.getLogger(__name__)
 
@@ -79,3 +79,29 @@ def log_static_state(entries: dict[str, dict], kinkout, sag: float | None,
                  for i, k in enumerate(kinkout.kinks)}
     for line in static_state_lines(entries, kinks, sag, units, kind):
         log.info("%s", line)
+
+
+def log_touchdown(td: dict) -> None:
+    """The static touchdown on the console: the contact's end, the rigid seabed's
+    equivalent and the anchors on the seabed (cablefem.seabed.rigid_touchdown)."""
+    from cablefem.seabed import penalty_offset_factor
+
+    c = penalty_offset_factor()
+    log.info("touchdown (the penalty contact's end) at s = %.6g (%s), grounded length %.6g",
+             td["s"], ", ".join(f"{x:.6g}" for x in td["position"]), td["grounded_length"])
+    if "rigid" in td:
+        log.info("touchdown of the equivalent rigid seabed (suspended length V/w) at s = "
+                 "%.6g, grounded length %.6g; the contact ends %.3g beyond it (penalty "
+                 "offset %.4g sqrt(H/k) = %.3g)", td["rigid"]["s"],
+                 td["rigid"]["grounded_length"], abs(td["s"] - td["rigid"]["s"]), c,
+                 td["penalty_offset"])
+    elif "rigid_missing" in td:
+        log.info("touchdown of the equivalent rigid seabed: not computed (%s)",
+                 td["rigid_missing"])
+    for name, a in td.get("anchors_on_seabed", {}).items():
+        log.info("anchor %s on the seabed: vertical force %.4g; the penalty contact alone "
+                 "gives %.4g (the weight of %.4g sqrt(H/k) of line that the anchor holds "
+                 "up, none on a rigid seabed; docs/seabed.md)%s", name, a["vertical_force"],
+                 a["penalty_force"], c, "" if a["layer_elements"] >= 2 else
+                 f"; sqrt(H/k) spans {a['layer_elements']:.2g} of the anchor's element: "
+                 "unresolved, the anchor carries up to half that element's weight instead")

@@ -334,13 +334,14 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
     elif getattr(case, "seabed", None) is not None:  # where the line leaves the seabed
         from cablefem.seabed import touchdown
 
-        td = touchdown(model)
+        td = touchdown(model, static.anchor_forces)
         if td is None:
             warn(summary, "seabed", "the cable does not touch the seabed in the static state")
         else:
             summary["static"]["touchdown"] = td
-            log.info("touchdown at s = %.6g (%s), grounded length %.6g", td["s"],
-                     ", ".join(f"{x:.6g}" for x in td["position"]), td["grounded_length"])
+            from cablefem.app.console import log_touchdown
+
+            log_touchdown(td)
     # a folder found after a kill says what happened: running, last checkpoint (none yet)
     summary["checkpoint"] = None
     if not restart:
