@@ -285,7 +285,8 @@ def _main(argv: list[str] | None = None) -> int:
                                  ("outer_correction", "")):
                 stored = type(default)(ck[key]) if key in ck else default
                 given = getattr(args, key)
-                if given is not None and given != stored:
+                if given is not None and given != stored and not (
+                        key == "model" and given == "auto"):  # auto ran one of them
                     return _input_error(f"--{key} {given} differs from the checkpoint's "
                                         f"({stored}): restart with the same model")
                 setattr(args, key, stored)
