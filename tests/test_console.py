@@ -112,3 +112,17 @@ def test_the_console_shows_the_static_anchor_moments_and_the_sag(make_case, mpi_
     m = re.search(r"static: sag (\S+) of the chord", text)
     assert m, text
     assert float(m.group(1)) == pytest.approx(res.summary["static"]["sag_ratio"], rel=5e-6)
+
+
+def test_static_state_lines_show_the_most_loaded_of_many_anchors():
+    """A network with 20 clamped anchors: the console shows the 12 largest moments
+    (console.MAX_LINES) and says how many more summary.json has."""
+    from cablefem.app.console import MAX_LINES, static_state_lines
+
+    entries = {f"a{i}": {"static_tension": 100.0 + i, "static_moment": float(i),
+                         "static_error_estimate": 1e-3} for i in range(20)}
+    lines = static_state_lines(entries, {}, None, "SI", "string")
+    shown = [ln.split(":")[1].split()[-1] for ln in lines if ln.startswith("static: anchor")]
+    assert MAX_LINES == 12 and shown == [f"a{i}" for i in range(19, 7, -1)]
+    assert lines[-1] == "static: 8 more anchors (those with smaller moments or tensions) " \
+        "in summary.json"

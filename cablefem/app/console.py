@@ -16,6 +16,10 @@ __all__ = ["static_anchor_entries", "log_static_state", "log_touchdown"]
 
 log = logging.getLogger(__name__)
 
+#: at most this many anchors (and kinks) on the console, the most loaded; all are in
+#: summary.json
+MAX_LINES = 12
+
 
 def static_anchor_entries(model, static, emitter, form: str, kind: str) -> dict[str, dict]:
     """Per anchor: its static tension and, at a clamped anchor, the static moment and its
@@ -48,11 +52,19 @@ def static_anchor_entries(model, static, emitter, form: str, kind: str) -> dict[
 def static_state_lines(entries: dict[str, dict], kinks: dict[str, float], sag: float | None,
                        units: str | None, kind: str) -> list[str]:
     """The lines :func:`log_static_state` prints: one per anchor (tension; moment and
-    estimated error at a clamped one), one per kink (moment), and the sag ratio."""
+    estimated error at a clamped one), one per kink (moment), and the sag ratio; of more
+    than :data:`MAX_LINES` anchors or kinks, the most loaded and their number."""
     force, moment = unit(units, "force"), unit(units, "moment")
     source = "the rod's own" if kind == "beam" else "inner solution"
     lines = []
-    for name, e in entries.items():
+    shown = entries
+    if len(entries) > MAX_LINES:  # a large network: the most loaded anchors
+        def load(name):
+            e = entries[name]
+            return (e.get("static_moment", -1.0), e["static_tension"])
+
+        shown = {n: entries[n] for n in sorted(entries, key=load, reverse=True)[:MAX_LINES]}
+    for name, e in shown.items():
         text = f"static: anchor {name}: tension {e['static_tension']:.6g} {force}"
         if "static_moment" in e:
             text += f", moment {e['static_moment']:.6g} {moment} ({source}"
@@ -61,9 +73,14 @@ def static_state_lines(entries: dict[str, dict], kinks: dict[str, float], sag: f
                 text += f", estimated error {100 * err:.2g} %"
             text += ")"
         lines.append(text)
-    for name, m in kinks.items():
-        if np.isfinite(m):
-            lines.append(f"static: kink {name}: moment {m:.6g} {moment}")
+    if len(shown) < len(entries):
+        lines.append(f"static: {len(entries) - len(shown)} more anchors (those with smaller "
+                     "moments or tensions) in summary.json")
+    finite = {n: m for n, m in kinks.items() if np.isfinite(m)}
+    for name in sorted(finite, key=finite.get, reverse=True)[:MAX_LINES]:
+        lines.append(f"static: kink {name}: moment {finite[name]:.6g} {moment}")
+    if len(finite) > MAX_LINES:
+        lines.append(f"static: {len(finite) - MAX_LINES} more kinks in summary.json")
     if sag is not None and np.isfinite(sag):
         lines.append(f"static: sag {sag:.6g} of the chord (mid-span, along gravity)")
     return lines
