@@ -14,6 +14,11 @@ tangent is horizontal, up to the fairlead, and straight along the seabed to the 
 With the fairlead ``h`` above the seabed and the horizontal tension ``H``: suspended length
 ``l_s = sqrt(h² + 2 h H/w)``, its horizontal span ``(H/w) asinh(l_s w/H)``, grounded length
 ``l − l_s``, fairlead tension ``H + w h``.
+
+The touchdown is reported twice (:func:`touchdown`): where the penalty contact ends, and
+the rigid seabed's equivalent from the suspended length ``V/w``; the contact ends
+``1.048 sqrt(H/k)`` beyond it (:func:`penalty_offset_factor`), and an anchor on the plane
+carries the weight of that length of line (:func:`anchor_penalty_force`).
 """
 
 from __future__ import annotations
