@@ -227,6 +227,10 @@ class SolverSpec:
     #: the span's own EI in the string (docs/theory.md §6.1): True, False or "auto" (on
     #: where it matters, resolved by run_case; a model built directly takes it as off)
     span_bending: bool | str = False
+    #: the route: "string" (+ asymptotics), "beam" (the reference rod, single straight
+    #: cables) or "auto" (the string, and the rod where the string's estimate says it is
+    #: outside its range: cablefem.app.automodel); ``--model`` overrides it
+    model: str = "string"
 
 
 @dataclass

@@ -69,7 +69,7 @@ from cablefem.errors import CaseError
 from cablefem.geometry import straight_cable
 
 __all__ = ["BeamModel", "beam_stations", "cayley_from_rotation", "cayley_rotation",
-           "p1_product", "rotation_matrix", "virtual_rotation_map", "rod_strains"]
+           "p1_product", "rotation_matrix", "virtual_rotation_map", "rod_strains", "rod_problems"]
 
 log = logging.getLogger(__name__)
 
@@ -212,6 +212,22 @@ def energy_density(G, K, EA, GA, EI, GJ):
 
 
 # ----------------------------------------------------------------------------- the model
+def rod_problems(case) -> list[tuple[str, str]]:
+    """Why the rod cannot run ``case`` (``[(key, reason)]``; empty when it can): it takes a
+    single cable with a straight stress-free reference, without seabed or fluid."""
+    if case.network is not None:
+        return [("network", "the beam model takes single cables, not networks")]
+    if getattr(case, "seabed", None) is not None:
+        return [("seabed", "the beam model has no seabed contact")]
+    if getattr(case, "fluid", None) is not None:
+        return [("fluid", "the beam model has no fluid forces: compare the string with the "
+                 "rod in air without [fluid]")]
+    if case.geometry.kind == "polyline":
+        return [("geometry.polyline", "the beam model needs a straight stress-free "
+                 "reference: give length, horizontal_tension or sag_ratio")]
+    return []
+
+
 class BeamModel(CableModel):
     """The rod counterpart of :class:`~cablefem.cable.CableModel` (same attributes, with six
     components per node: ``u`` holds displacement and Cayley vector).
@@ -236,17 +252,7 @@ class BeamModel(CableModel):
     def __init__(self, comm: MPI.Comm, description: CableDescription, prefix: str = "cable_",
                  refine: float = 1.0):
         comm, case = comm_first(comm, description)
-        problems = []
-        if case.network is not None:
-            problems.append(("network", "the beam model takes single cables, not networks"))
-        elif getattr(case, "seabed", None) is not None:
-            problems.append(("seabed", "the beam model has no seabed contact"))
-        elif getattr(case, "fluid", None) is not None:
-            problems.append(("fluid", "the beam model has no fluid forces: compare the "
-                             "string with the rod in air without [fluid]"))
-        elif case.geometry.kind == "polyline":
-            problems.append(("geometry.polyline", "the beam model needs a straight stress-free "
-                             "reference: give length, horizontal_tension or sag_ratio"))
+        problems = rod_problems(case)
         if not refine > 0:
             problems.append(("refine", f"must be > 0, got {refine}"))
         if problems:

@@ -14,6 +14,11 @@ tangent is horizontal, up to the fairlead, and straight along the seabed to the 
 With the fairlead ``h`` above the seabed and the horizontal tension ``H``: suspended length
 ``l_s = sqrt(h² + 2 h H/w)``, its horizontal span ``(H/w) asinh(l_s w/H)``, grounded length
 ``l − l_s``, fairlead tension ``H + w h``.
+
+The touchdown is reported twice (:func:`touchdown`): where the penalty contact ends, and
+the rigid seabed's equivalent from the suspended length ``V/w``; the contact ends
+``1.048 sqrt(H/k)`` beyond it (:func:`penalty_offset_factor`), and an anchor on the plane
+carries the weight of that length of line (:func:`anchor_penalty_force`).
 """
 
 from __future__ import annotations
@@ -28,7 +33,8 @@ from petsc4py import PETSc
 from scipy.optimize import brentq
 
 __all__ = ["PENETRATION_BLEND", "GroundedCatenary", "add_seabed_terms", "network_contact",
-           "touchdown", "without_friction"]
+           "touchdown", "without_friction", "penalty_offset_factor", "anchor_penalty_force",
+           "rigid_touchdown"]
 
 #: the smoothing length of the contact law as a fraction of the static penetration w/k
 PENETRATION_BLEND = 0.1
@@ -165,12 +171,96 @@ def without_friction(model):
         mu.value = saved
 
 
-def touchdown(model) -> dict | None:
+def penalty_offset_factor(blend: float = PENETRATION_BLEND) -> float:
+    """``c`` in the penalty seabed's offset ``c sqrt(H/k)``: how far beyond the rigid
+    seabed's touchdown the contact ends (and the length of line whose weight an anchor on
+    the seabed's plane carries). From the first integral of ``H p'' = k s(p) - w`` across
+    the contact's edge (small slopes): ``(H/2) p'^2 = int_0^{p_r} (w - k s) dq =
+    (w^2/2k) (1 + blend - blend^2/12)`` with ``p_r`` the lying line's penetration; the
+    suspended catenary's vertex lies ``H |p'| / w`` back from the edge (docs/seabed.md)."""
+    return math.sqrt(1.0 + blend - blend * blend / 12.0)
+
+
+def anchor_penalty_force(H: float, w: float, k: float, p: float,
+                         blend: float = PENETRATION_BLEND) -> float:
+    """The vertical force that holds a line's anchor at the penetration ``p`` (< 0: above
+    the plane) while the line beyond it lies on the penalty seabed under the horizontal
+    tension ``H``: ``sqrt(2 H int_p^{p_r} (w - k s(q)) dq)``, ``p_r = w/k + b/2`` the lying
+    line's penetration (small slopes; the weight of about ``penalty_offset_factor()
+    sqrt(H/k)`` of line for an anchor on the plane, ``p = 0``). 0 at ``p >= p_r``."""
+    b = blend * w / k
+    p_r = w / k + b / 2
+
+    def F(q):  # int_0^q k s(t) dt (q >= 0)
+        return k * q**3 / (6 * b) if q <= b else k * (b * b / 6 + ((q - b / 2) ** 2
+                                                                    - b * b / 4) / 2)
+
+    if p >= p_r:
+        return 0.0
+    integral = w * (p_r - p) - (F(p_r) - F(max(p, 0.0)))
+    return math.sqrt(max(2.0 * H * integral, 0.0))
+
+
+def rigid_touchdown(case, r, st, forces, anchors, w: float, up) -> dict:
+    """The rigid seabed's equivalent of the touchdown (rank 0): the suspended catenary
+    carries its own weight only, so its stress-free length from the fairlead is ``V/w``
+    (``V`` the vertical force at the fairlead, the higher end), its vertex (the rigid
+    touchdown) at the station ``s_f -+ V/w``; with the penalty seabed it sits
+    ``penalty_offset_factor() sqrt(H/k)`` short of the contact's end. Also the anchors
+    near the seabed's plane and the vertical force the penalty contact puts on them
+    (:func:`anchor_penalty_force`). Entries absent, with ``rigid_missing`` saying why,
+    where the suspended part carries more than its weight."""
+    sb = case.seabed
+    out = {}
+    ends = [r[0], r[-1]]
+    F = {a.name: np.asarray(f[:3], float) for a, f in zip(anchors, forces)}
+    at_end = {a.name: int(np.argmin([np.linalg.norm(np.asarray(a.position) - e)
+                                     for e in ends])) for a in anchors}
+    top = max(anchors, key=lambda a: float(np.asarray(a.position) @ up))
+    Ff = F[top.name]
+    V = abs(float(Ff @ up))
+    H = float(np.linalg.norm(Ff - (Ff @ up) * up))
+    out["horizontal_tension"] = H
+    out["penalty_offset"] = penalty_offset_factor() * math.sqrt(H / sb.stiffness)
+    extra = [name for name, present in (
+        ("loads", case.loads), ("point_masses", case.point_masses),
+        ("point_loads", case.point_loads), ("dampers", case.dampers),
+        ("fluid.current", case.fluid is not None and (
+            np.linalg.norm(case.fluid.current) > 0 or case.fluid.profile is not None)))
+        if present]
+    length = float(st[-1] - st[0])
+    if extra:
+        out["rigid_missing"] = (f"the suspended part carries more than its own weight "
+                                f"({', '.join(extra)}): V/w is not its length")
+    elif not V / w < length:
+        out["rigid_missing"] = "V/w exceeds the line's length: the line is not grounded"
+    else:
+        s_r = float(st[-1] - V / w) if at_end[top.name] == 1 else float(st[0] + V / w)
+        pos = [float(np.interp(s_r, st, r[:, i])) for i in range(r.shape[1])]
+        out["rigid"] = {"s": s_r, "position": pos, "suspended_length": V / w,
+                        "grounded_length": length - V / w}
+    near = {}
+    p_r = (1 + PENETRATION_BLEND / 2) * w / sb.stiffness
+    for a in anchors:
+        p = float(sb.z - np.asarray(a.position, float) @ up)
+        if abs(p) <= p_r and a is not top:
+            h = float(st[1] - st[0] if at_end[a.name] == 0 else st[-1] - st[-2])
+            near[a.name] = {"penetration": p, "vertical_force": float(F[a.name] @ up),
+                            "penalty_force": -anchor_penalty_force(H, w, sb.stiffness, p),
+                            "layer_elements": math.sqrt(H / sb.stiffness) / h}
+    if near:
+        out["anchors_on_seabed"] = near
+    return out
+
+
+def touchdown(model, forces=None) -> dict | None:
     """The touchdown point at the model's current state (collective; every rank gets it):
     where the penetration crosses zero between the last node in contact and the suspended
     part (towards the higher end, the fairlead), its stress-free station ``s`` and
     position, and the grounded length (stress-free, from the nodes in contact; linear
-    between a node in contact and one not). None when nothing touches."""
+    between a node in contact and one not): the penalty contact's end. With the static
+    anchor ``forces`` (rows in the order of ``model.anchors``), also the rigid seabed's
+    equivalent (:func:`rigid_touchdown`). None when nothing touches."""
     sb = model.case.seabed
     r = model.gather_nodal(model.u)
     out = None
@@ -198,6 +288,9 @@ def touchdown(model) -> dict | None:
                 x_td = r[k] + f * (r[n] - r[k])
             out = {"s": s_td, "position": np.asarray(x_td).tolist(), "node": k,
                    "grounded_length": float(grounded)}
+            if forces is not None:
+                out.update(rigid_touchdown(model.case, r, st, forces, model.anchors,
+                                           model.submerged_weight, up))
     return model.comm.bcast(out, root=0)
 
 

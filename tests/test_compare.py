@@ -345,3 +345,53 @@ def test_network_anchor_matches_the_single_cable(mpi_tmp_path):
                   anchors=(("p:0", "clamped"), ("p:1", "clamped"), ("q:0", "pinned")))
     with pytest.raises(ValueError, match="different anchors"):
         compare_runs(a, c)
+
+
+def _add_kink(folder: Path, scale: float, case: dict, name: str = "damper") -> None:
+    """Give a run folder of :func:`write_run` a kink ``name`` (kinks.csv at the times of its
+    anchors.csv, ``moment = scale (M0 + A sin(W t))``, static moment ``scale M0``) and the
+    echoed case ``case``. Rank 0 writes; collective."""
+    if MPI.COMM_WORLD.rank == 0:
+        times = sorted({float(line.split(",")[0]) for line in
+                        (folder / "anchors.csv").read_text().splitlines()[1:]})
+        lines = ["time,kink,s,tension,delta,moment,Mx,My,Mz,layer_length,valid"]
+        for t in times:
+            m = scale * (M0 + A * np.sin(W * t))
+            lines.append(f"{t!r},{name},0.3,100.0,0.1,{m!r},0.0,{m!r},0.0,0.01,1")
+        (folder / "kinks.csv").write_text("\n".join(lines) + "\n")
+        summary = json.loads((folder / "summary.json").read_text())
+        summary["case"] = case
+        summary["kinks"] = {name: {"s": 0.3, "static_valid": True,
+                                   "static_moment": scale * M0}}
+        (folder / "summary.json").write_text(json.dumps(summary))
+    MPI.COMM_WORLD.Barrier()
+
+
+def test_compare_kinks_and_the_model_keys(mpi_tmp_path):
+    """A damper stay run by the string and by the rod: pinned anchors, the moment at the
+    damper's kink only. The echoed cases differ only in solver.span_bending (the string
+    resolves "auto" to false, the rod keeps "auto") and solver.model: the same case. The
+    kink is compared as a clamped anchor is: b = 1.1 a sample by sample, so every relative
+    difference is 0.1 up to round-off, and the steady peak is M0 + A as in
+    test_compare_known_differences (the same window [2, 3])."""
+    pinned = (("p", "pinned"), ("q", "pinned"))
+    case = {"title": "stay", "section": {"EI": 1.0}}
+    a = write_run(mpi_tmp_path / "a", model="string", scale=1.0, t_end=3.0, anchors=pinned)
+    b = write_run(mpi_tmp_path / "b", model="beam", scale=1.1, t_end=3.0, anchors=pinned)
+    _add_kink(a, 1.0, {**case, "solver": {"span_bending": False, "model": "string"}})
+    _add_kink(b, 1.1, {**case, "solver": {"span_bending": "auto", "model": "auto"}})
+    res = compare_runs(a, b)
+    assert res["same_case"] is True
+    assert res["anchors"] == {} and list(res["kinks"]) == ["damper"]
+    k = res["kinks"]["damper"]
+    assert k["window"] == [2.0, 3.0]
+    assert k["steady_peak"]["a"] == pytest.approx(M0 + A, rel=1e-14)
+    for key in ("static_moment", "steady_peak", "steady_rms", "steady_mean"):
+        assert k[key]["rel_diff"] == pytest.approx(0.1, abs=1e-12), key
+    # |1.1 m - m| / |m| = 0.1 at every sample
+    assert k["history_error"]["value"] == pytest.approx(0.1, abs=1e-12)
+    assert "kink damper: steady-state peak |M|" in format_table(res)
+    # another section is another case
+    c = write_run(mpi_tmp_path / "c", model="beam", scale=1.1, t_end=3.0, anchors=pinned)
+    _add_kink(c, 1.1, {**case, "section": {"EI": 2.0}, "solver": {"span_bending": "auto"}})
+    assert compare_runs(a, c)["same_case"] is False

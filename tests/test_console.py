@@ -75,3 +75,54 @@ def test_log_follows_the_current_stderr(monkeypatch):
 
     if MPI.COMM_WORLD.rank == 0:  # the handler lets rank 0's records through only
         assert "[cablefem] two" in second.getvalue()
+
+
+def test_the_console_shows_the_static_anchor_moments_and_the_sag(make_case, mpi_tmp_path):
+    """After the statics the run logs each anchor's tension and, at a clamped anchor, its
+    moment (the tool's main result), and the sag, as summary.json has them: 6 significant
+    digits on the console, so within 5e-6 of them relative."""
+    import logging
+    import re
+
+    from cablefem.app.run import run_case
+
+    records = []
+
+    class Keep(logging.Handler):
+        def emit(self, record):
+            records.append(record.getMessage())
+
+    logger = logging.getLogger("cablefem")
+    handler, old_level = Keep(), logger.level
+    logger.addHandler(handler)
+    logger.setLevel(logging.INFO)
+    try:
+        res = run_case(make_case(), mpi_tmp_path, dynamics=False, figures=False,
+                       progress=False)
+    finally:
+        logger.removeHandler(handler)
+        logger.setLevel(old_level)
+    text = "\n".join(records)
+    for name, entry in res.summary["anchors"].items():
+        m = re.search(rf"static: anchor {name}: tension (\S+) N, moment (\S+) N m ", text)
+        assert m, text
+        assert float(m.group(1)) == pytest.approx(entry["static_tension"], rel=5e-6)
+        assert float(m.group(2)) == pytest.approx(entry["static_moment"], rel=5e-6)
+        assert entry["static_moment"] > 0
+    m = re.search(r"static: sag (\S+) of the chord", text)
+    assert m, text
+    assert float(m.group(1)) == pytest.approx(res.summary["static"]["sag_ratio"], rel=5e-6)
+
+
+def test_static_state_lines_show_the_most_loaded_of_many_anchors():
+    """A network with 20 clamped anchors: the console shows the 12 largest moments
+    (console.MAX_LINES) and says how many more summary.json has."""
+    from cablefem.app.console import MAX_LINES, static_state_lines
+
+    entries = {f"a{i}": {"static_tension": 100.0 + i, "static_moment": float(i),
+                         "static_error_estimate": 1e-3} for i in range(20)}
+    lines = static_state_lines(entries, {}, None, "SI", "string")
+    shown = [ln.split(":")[1].split()[-1] for ln in lines if ln.startswith("static: anchor")]
+    assert MAX_LINES == 12 and shown == [f"a{i}" for i in range(19, 7, -1)]
+    assert lines[-1] == "static: 8 more anchors (those with smaller moments or tensions) " \
+        "in summary.json"

@@ -14,7 +14,7 @@ from mpi4py import MPI
 from cablefem.app.run import run_case
 from cablefem.cable import CableModel
 from cablefem.case import CaseError, parse_case
-from cablefem.seabed import GroundedCatenary, touchdown
+from cablefem.seabed import GroundedCatenary, anchor_penalty_force, touchdown
 from cablefem.statics import solve_static
 
 comm = MPI.COMM_WORLD
@@ -53,18 +53,58 @@ def test_mooring_line_statics_against_the_closed_forms():
     horizontal and fairlead tensions within 1e-4 (the stretch T/EA = 3e-6, the penetration
     w/k = 0.5 mm against the 50 m height, the mesh's O(h^2); measured -7e-5 and -2e-5);
     the touchdown, where the penetration crosses zero, within 0.25 of an element of the
-    closed form's grounded length (the contact's soft transition over a few elements:
-    measured 0.16 m at 1 m elements, 0.03 m at 0.5 m)."""
+    closed form's grounded length (the mesh does not resolve the contact's edge, whose
+    offset 1.048 sqrt(H/k) is 0.096 m: measured -0.16 m at 1 m elements, -0.03 m at
+    0.5 m)."""
     model = CableModel(comm, parse_case(mooring()))
     st = solve_static(model)
     gc = GroundedCatenary([0, 0, 0], [X_F, 0, H_F], LINE, W, [0, 0, 1], True)
     F = st.anchor_forces[1][:3]
     assert abs(F[0]) == pytest.approx(gc.H, rel=1e-4)
     assert np.linalg.norm(F) == pytest.approx(gc.fairlead_tension, rel=1e-4)
-    td = touchdown(model)
+    td = touchdown(model, st.anchor_forces)
     assert td["s"] == pytest.approx(gc.grounded_length, abs=0.25 * LINE / 150)
+    # the rigid equivalent (V/w) does not depend on where the mesh puts the contact's end:
+    # within 5 mm (its O(w/k) vertex depth 0.3 mm, the stretch T/EA l = 0.5 mm; measured
+    # +1.3 mm)
+    assert td["rigid"]["s"] == pytest.approx(gc.grounded_length, abs=5e-3)
     assert td["grounded_length"] == pytest.approx(td["s"], rel=1e-12)  # one contact run
     assert abs(td["position"][2]) < 1e-9 * LINE  # on the seabed plane
+
+
+def test_rigid_touchdown_and_the_penalty_offset():
+    """The penalty contact ends c sqrt(H/k) beyond the rigid seabed's touchdown (c = 1.048,
+    cablefem.seabed.penalty_offset_factor; 2.9 and 0.91 m at k = 1e3 and 1e4 N/m^2 here),
+    while the rigid equivalent, from the suspended length V/w, converges to the closed
+    form's grounded catenary as k grows: first order in w/k (its vertex sits 0.55 w/k below
+    the plane), measured -0.64 and -0.060 m, a ratio of 10.7 for 10 in k. The measured
+    offset is within 3 % of c sqrt(H/k) (measured 0.5 % and 0.7 % at 1 m elements; the
+    formula's small slopes, w/sqrt(kH) = 0.17 at k = 1e3, make O(slope^2) = 3 %). The anchor
+    on the seabed's plane holds up that length of line: its vertical force, -1517 N at
+    k = 1e3, is the first integral's -1504.5 N within 2 % (mesh: the layer sqrt(H/k) is
+    2.9 elements), and it does not go away with refinement (-1512 N at 0.5 m elements)."""
+    gc = GroundedCatenary([0, 0, 0], [X_F, 0, H_F], LINE, W, [0, 0, 1], True)
+    err, offsets = [], []
+    for k in (1e3, 1e4):
+        d = mooring(150)
+        d["seabed"]["stiffness"] = k
+        model = CableModel(comm, parse_case(d))
+        td = touchdown(model, solve_static(model).anchor_forces)
+        H = td["horizontal_tension"]  # the line's own: 2.8 % above gc.H at k = 1e3
+        assert td["penalty_offset"] == pytest.approx(1.04841 * math.sqrt(H / k), rel=1e-5)
+        offset = td["s"] - td["rigid"]["s"]
+        assert offset == pytest.approx(td["penalty_offset"], rel=0.03)
+        assert td["rigid"]["grounded_length"] == pytest.approx(td["rigid"]["s"], rel=1e-12)
+        err.append(td["rigid"]["s"] - gc.grounded_length)
+        offsets.append(offset)
+        if k == 1e3:
+            a = td["anchors_on_seabed"]["anchor"]
+            assert a["penalty_force"] == pytest.approx(-anchor_penalty_force(H, W, k, 0.0))
+            assert a["vertical_force"] == pytest.approx(a["penalty_force"], rel=0.02)
+            assert a["penalty_force"] == pytest.approx(-1.04841 * W * math.sqrt(H / k),
+                                                       rel=1e-5)
+    assert abs(err[1]) < abs(err[0]) / 8 and abs(err[1]) < 0.1  # order 1 in 1/k
+    assert offsets[0] > 3 * offsets[1] > 2.0  # the contact's end moves by sqrt(H/k)
 
 
 def test_dynamic_run_with_damping_and_friction(mpi_tmp_path):

@@ -71,9 +71,11 @@ def _parser() -> argparse.ArgumentParser:
                          epilog="Case file keys:\n\n" + keys)
     common(run, restartable=True)
     run.add_argument("--t-end", type=float, help="override dynamics.t_end (s)")
-    run.add_argument("--model", choices=["string", "beam"], default=None,
+    run.add_argument("--model", choices=["string", "beam", "auto"], default=None,
                      help="'string' (default): the string + asymptotics; 'beam': the "
-                          "reference rod (geometrically exact, graded mesh, [beam] table)")
+                          "reference rod (geometrically exact, graded mesh, [beam] table); "
+                          "'auto': the string, then the rod where the string's estimated "
+                          "moment error exceeds 2 %% (default: solver.model)")
     run.add_argument("--refine", type=float, default=None,
                      help="beam: scale the mesh density ([beam] layer_elements and "
                           "span_elements), > 0; default 1")
@@ -291,7 +293,8 @@ def _main(argv: list[str] | None = None) -> int:
                                  ("outer_correction", "")):
                 stored = type(default)(ck[key]) if key in ck else default
                 given = getattr(args, key)
-                if given is not None and given != stored:
+                if given is not None and given != stored and not (
+                        key == "model" and given == "auto"):  # auto ran one of them
                     return _input_error(f"--{key} {given} differs from the checkpoint's "
                                         f"({stored}): restart with the same model")
                 setattr(args, key, stored)
@@ -312,8 +315,11 @@ def _main(argv: list[str] | None = None) -> int:
         return _input_error(f"--t-end must be > 0 (s), got {args.t_end}")
     if getattr(args, "refine", None) is not None and not args.refine > 0:
         return _input_error(f"--refine must be > 0, got {args.refine}")
-    if getattr(args, "refine", None) is not None and (args.model or "string") != "beam":
-        return _input_error("--refine applies to --model beam only")
+    if args.command == "run" and args.model is None:
+        args.model = case.solver.model  # the case's route unless --model overrides it
+    if getattr(args, "refine", None) is not None and getattr(args, "model", None) not in (
+            "beam", "auto"):
+        return _input_error("--refine applies to --model beam (or auto) only")
     if getattr(args, "n", None) is not None and args.n < 1:
         return _input_error(f"--n must be >= 1, got {args.n}")
 
@@ -363,7 +369,7 @@ def _main(argv: list[str] | None = None) -> int:
                      model=args.model or "string", refine=args.refine or 1.0)
         else:
             result = run_case(case, args.output, modes=args.n, dynamics=False,
-                              figures=False, progress=not args.quiet)
+                              figures=False, progress=not args.quiet, model="string")
     except CaseError as err:
         sys.stderr.write(str(err) + "\n")
         return EXIT_INPUT

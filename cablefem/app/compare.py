@@ -6,7 +6,9 @@ static moment and tension (from ``summary.json``), steady-state peak and RMS of 
 magnitude ``|M|`` (from ``anchors.csv``, over the last third of the time range the two runs
 have in common, so that both use the same window), and the relative differences
 ``(b - a) / a``; the history error ``RMS(|M|_b - |M|_a) / RMS(|M|_a)``, the pointwise
-difference of the two histories over the same window (:func:`history_error`); also the first
+difference of the two histories over the same window (:func:`history_error`); the same for
+every interior kink of both runs (``kinks.csv``, :mod:`cablefem.app.compare_kinks`: a
+damper's kink is what a stay-cable user compares; no figure); also the first
 natural frequency and the wall times (ratio ``b / a``). Warns (log and ``warnings`` in
 ``compare.json``) when a run's first output row is not its static state
 (:func:`start_warnings`): such a run did not start clean. Writes ``compare.json``,
@@ -27,6 +29,7 @@ import numpy as np
 from mpi4py import MPI
 
 from cablefem import __version__
+from cablefem.app.compare_kinks import compare_kinks, read_kinks, same_case
 from cablefem.app.plots import MAX_PANELS
 from cablefem.app.run import steady_state_stats
 from cablefem.io.anchorcsv import read_moments
@@ -105,8 +108,10 @@ def _read_run(folder: Path) -> dict:
     status = summary.get("status", "completed")
     if status != "completed":
         log.warning("%s: the run's status is %r: comparing what it wrote", folder, status)
-    times = np.concatenate([d["time"] for d in data.values()])
+    kinks = read_kinks(folder)  # none without kinks.csv
+    times = np.concatenate([d["time"] for d in list(data.values()) + list(kinks.values())])
     return {"dir": folder, "summary": summary, "anchors": anchors, "data": data,
+            "kinks": kinks,
             "model": model, "status": status, "label": f"{model} ({folder.resolve().name})",
             "t_range": (float(times.min()), float(times.max()))}
 
@@ -250,16 +255,17 @@ def _compare(dir_a: Path, dir_b: Path, outdir: Path) -> dict:
     skipped = [n for n in names_a if n not in clamped
                and (ra["anchors"][n].get("kind") == "clamped"
                     or rb["anchors"][n].get("kind") == "clamped")]
-    if not clamped:
+    if not clamped and not set(ra["kinks"]) & set(rb["kinks"]):
         which = [str(r["dir"]) for r in (ra, rb)
                  if not any(_has_moments(r, n) for n in names_a)]
         none = (f" ({' and '.join(which)} {'has' if len(which) == 1 else 'have'} none)"
                 if which else "")
-        raise ValueError(f"no anchor is clamped with moments in both runs{none}: nothing to "
-                         "compare")
+        raise ValueError(f"no anchor is clamped with moments in both runs{none} and no "
+                         "kink is in both: nothing to compare")
     for n in skipped:
         log.warning("anchor %s: not clamped with moments in both runs, left out", n)
-    if ra["summary"].get("case") != rb["summary"].get("case"):
+    same = same_case(ra["summary"].get("case"), rb["summary"].get("case"))
+    if not same:  # but for the keys the model choice sets (compare_kinks.MODEL_KEYS)
         log.warning("%s and %s echo different case files: is it the same case?", dir_a, dir_b)
 
     t_lo = max(ra["t_range"][0], rb["t_range"][0])
@@ -310,10 +316,12 @@ def _compare(dir_a: Path, dir_b: Path, outdir: Path) -> dict:
         "runs": {k: {"dir": str(r["dir"]), "model": r["model"], "label": r["label"],
                      "status": r["status"], "time_range": list(r["t_range"])}
                  for k, r in (("a", ra), ("b", rb))},
-        "same_case": ra["summary"].get("case") == rb["summary"].get("case"),
+        "same_case": same,
         "common_time_range": [t_lo, t_hi] if steady else None,
         "steady_fraction": FRACTION,
         "anchors": anchors, "skipped_anchors": skipped,
+        "kinks": compare_kinks(ra, rb, t_lo, t_hi, steady, _window_stats, history_error,
+                               _pair),
         "first_frequency": {"omega": _pair(omega1(ra), omega1(rb))},
         "wall_time": wall, "start_tolerance": START_TOLERANCE, "warnings": warnings}
 
@@ -342,8 +350,12 @@ def _table_rows(res: dict) -> list[list[str]]:
     """Rows ``[quantity, a, b, difference]`` of the comparison (a header row first)."""
     la, lb = res["runs"]["a"]["label"], res["runs"]["b"]["label"]
     rows = [["quantity", f"a: {la}", f"b: {lb}", "(b-a)/a or b/a"]]
-    for name, entry in res["anchors"].items():
+    items = list(res["anchors"].items())
+    items += [(f"kink {n}", e) for n, e in (res.get("kinks") or {}).items()]
+    for name, entry in items:
         for key, text in _ROWS:
+            if key not in entry:  # a kink has no static tension here
+                continue
             p = entry[key]
             rows.append([f"{name}: {text}", _fmt(p["a"]), _fmt(p["b"]), _pct(p["rel_diff"])])
         h = entry.get("history_error") or {}
@@ -361,7 +373,8 @@ def _table_rows(res: dict) -> list[list[str]]:
 
 
 def _window_text(res: dict) -> str:
-    w = next((e["window"] for e in res["anchors"].values() if e["window"]), None)
+    w = next((e["window"] for e in list(res["anchors"].values())
+              + list((res.get("kinks") or {}).values()) if e["window"]), None)
     if w is None:
         return "steady state: not compared (no common time range)"
     return (f"steady state: t in [{w[0]:.6g}, {w[1]:.6g}], the last third of the common "

@@ -47,7 +47,6 @@ from cablefem.modal import free_dofs, solve_modes
 from cablefem.moments import (
     ERROR_THRESHOLD,
     MAX_ANCHOR_ANGLE,
-    anchor_moments,
     resonance,
 )
 from cablefem.network import NetworkModel
@@ -127,11 +126,14 @@ def run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, **
     from cablefem.app.resources import check_memory
     from cablefem.io.outdir import output_lock
 
-    check_memory(case, comm, kwargs.get("model", "string"))
+    kwargs.setdefault("model", getattr(case.solver, "model", "string"))  # solver.model
+    runner = _runner(kwargs["model"])
+    check_memory(case, comm, "string" if runner is not _run_case else
+                 kwargs["model"])  # "auto" runs the string first
     with output_lock(outdir, comm), _StopOnSignal() as stop:
         try:
             with quiet_compiler():  # no compiler lines on the console
-                return _run_case(case, outdir, comm, **kwargs)
+                return runner(case, outdir, comm, **kwargs)
         except (RunInterrupted, CaseError):
             raise
         except BaseException as err:  # noqa: BLE001 - a signal may surface as any error
@@ -142,6 +144,18 @@ def run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, **
                 f"(build, statics, modes or the final output): {outdir} holds no complete "
                 "result; run again ('--restart' continues from a checkpoint of the "
                 "dynamics only)", stop.signal) from err
+
+
+def _runner(model: str):
+    """What runs a case for ``model``: :func:`_run_case`, or for ``"auto"`` the string and
+    where needed the rod (:func:`cablefem.app.automodel.run_auto`)."""
+    if model != "auto":
+        return _run_case
+    from functools import partial
+
+    from cablefem.app.automodel import run_auto
+
+    return partial(run_auto, _run_case)
 
 
 class _Stopped(BaseException):
@@ -320,13 +334,14 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
     elif getattr(case, "seabed", None) is not None:  # where the line leaves the seabed
         from cablefem.seabed import touchdown
 
-        td = touchdown(model)
+        td = touchdown(model, static.anchor_forces)
         if td is None:
             warn(summary, "seabed", "the cable does not touch the seabed in the static state")
         else:
             summary["static"]["touchdown"] = td
-            log.info("touchdown at s = %.6g (%s), grounded length %.6g", td["s"],
-                     ", ".join(f"{x:.6g}" for x in td["position"]), td["grounded_length"])
+            from cablefem.app.console import log_touchdown
+
+            log_touchdown(td)
     # a folder found after a kill says what happened: running, last checkpoint (none yet)
     summary["checkpoint"] = None
     if not restart:
@@ -405,6 +420,7 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
         emitter.moment_columns.set_resonance(amp, static.anchor_forces,
                                              None if bends else w_r, shift)
         summary["error_resonance_factor"] = amp
+    static_entries = _log_static_state(model, static, emitter, form, kind, sag)
     if resume is not None:  # after the emitter, which takes its reference from the statics
         model.scatter_nodal(resume["u"], model.u)
         model.scatter_nodal(resume["v"], model.v)
@@ -509,21 +525,7 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
                      model.anchors.index(a)][:3]))}
         if a.clamp is not None:  # a side of a clamp a cable runs through
             entry["clamp"] = a.clamp
-        if a.kind == "clamped":
-            F_static = static.anchor_forces[model.anchors.index(a)]
-            st = anchor_moments(F_static[None, :3], a.direction, a.section.EI, a.section.EA,
-                                a.section.mass, np.zeros((1, 3)),
-                                emitter.load_at(0.0, a.section), model.anchor_span(a.name),
-                                None, form, 1 if getattr(model, "hinges", None) else 0)
-            if kind == "beam":  # the rod's own; the composite with the beam's force beside
-                entry["static_moment_composite"] = float(st["moment"][0])
-                st = rod_moment_columns(st, F_static[None, 3:6], a.direction)
-                entry["static_moment_vector"] = F_static[3:6]
-            entry["static_moment"] = float(st["moment"][0])
-            entry["static_moment_layer"] = float(st["moment_layer"][0])
-            entry["static_delta"] = float(st["delta"][0])
-            entry["layer_length"] = float(st["layer_length"][0])
-            entry["static_error_estimate"] = float(st["error_estimate"][0])
+        entry.update(static_entries[a.name])  # tension; moment at a clamped anchor
         if a.name in moments and len(times):
             mo = moments[a.name]
             entry["valid_fraction"] = float(np.mean(mo["valid"]))
@@ -670,6 +672,16 @@ def _warn_damper_offsets(summary: dict, model, kinks) -> None:
              f"node, l/2 inside the string's kink ({why}): their damping ratios, forces "
              f"and kink moments may be off by about {100 * est:.2g} % (the largest; "
              "damper_offset_estimate in summary.json; docs/dampers.md)")
+
+
+def _log_static_state(model, static, emitter, form: str, kind: str, sag) -> dict:
+    """The anchors' static entries (cablefem.app.console), logged with the kinks' static
+    moments and the sag before the dynamics."""
+    from cablefem.app.console import log_static_state, static_anchor_entries
+
+    entries = static_anchor_entries(model, static, emitter, form, kind)
+    log_static_state(entries, emitter.kinkout, sag, model.case.units, kind)
+    return entries
 
 
 def _whole_run(base: dict, stats: DynamicsStats, wall: float) -> dict:

@@ -1,6 +1,9 @@
 """``touchdown.csv`` and its summary: where a cable on the seabed leaves it, at every output
 time (a case with ``[seabed]``; docs/seabed.md). The touchdown moves with the floater and
-its excursion along the line is what the line's fatigue at the touchdown zone depends on."""
+its excursion along the line is what the line's fatigue at the touchdown zone depends on.
+The touchdown here is the penalty contact's end (cablefem.seabed.touchdown), which lies
+about 1.048 sqrt(H/k) beyond the rigid seabed's touchdown; the rigid equivalent is in the
+static summary only (docs/seabed.md)."""
 
 from __future__ import annotations
 

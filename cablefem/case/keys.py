@@ -327,6 +327,13 @@ CASE_KEYS: dict[str, KeyDoc | TableDoc] = {
             "others). 'auto': on when it would move a computed mode's frequency by more "
             "than 0.5 % (estimated from the string without it; off when no mode is "
             "computed). The rod ignores it."),
+        "model": KeyDoc(
+            "string", "string", "", "The route: 'string' (default) the string + "
+            "asymptotics | 'beam' the reference rod (single straight cables without "
+            "[seabed] or [fluid]) | 'auto' the string, then the rod on the same case where "
+            "the string's estimated moment error at a clamped anchor exceeds 2 % (the rod's "
+            "numbers reported, model_auto in summary.json; docs/rod.md). '--model' "
+            "overrides it."),
         "petsc_options": KeyDoc(
             "table of options", {}, "",
             "PETSc options without '-' (values string/number/boolean), e.g. ts_type, "

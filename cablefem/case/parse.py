@@ -496,7 +496,8 @@ def parse_case(data: dict, base_dir: str | os.PathLike = Path("."),
     solver_r = table("solver")
     solver = SolverSpec(solver_r.boolean("tension_only"), _parse_petsc_options(solver_r),
                         solver_r.string("outer_correction", ("none", "hinge")),
-                        solver_r.boolean_or("span_bending", "auto"))
+                        solver_r.boolean_or("span_bending", "auto"),
+                        solver_r.string("model", ("string", "beam", "auto")))
     if problems:
         raise CaseError(problems, source)
     parts = [title, section, gravity, geometry, mesh.elements, mesh.grading, damping,
@@ -592,7 +593,8 @@ def _parse_network_case(data: dict, base_dir: Path, source: str) -> Case:
     solver_r = table("solver")
     solver = SolverSpec(solver_r.boolean("tension_only"), _parse_petsc_options(solver_r),
                         solver_r.string("outer_correction", ("none", "hinge")),
-                        solver_r.boolean_or("span_bending", "auto"))
+                        solver_r.boolean_or("span_bending", "auto"),
+                        solver_r.string("model", ("string", "beam", "auto")))
     first = sections.get(cables[0].section) if cables else None
     fatigue = _parse_fatigue(top.table("fatigue"), first)
     fluid_r = top.table("fluid")
