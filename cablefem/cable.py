@@ -32,6 +32,7 @@ from cablefem.geometry import create_line_mesh, graded_stations, polyline_cable,
 from cablefem.jit import quiet_compiler
 from cablefem.seabed import GroundedCatenary, add_seabed_terms
 from cablefem.span_bending import is_on
+from cablefem.water import water_problems, wave_warnings
 
 __all__ = ["CableModel", "AnchorBC", "comm_first"]  # AnchorBC: from cablefem.anchor
 
@@ -120,6 +121,8 @@ class CableModel:
         self.tension_only = case.solver.tension_only
 
         self._t_build = time.perf_counter()
+        self.warnings += wave_warnings(getattr(case, "fluid", None), case.gravity,
+                                       getattr(case, "seabed", None))
         self.geometry, self.initial_shape = self._build_geometry()
         self.length = self.geometry.length
         self._phase(f"mesh of {len(self.geometry.stations) - 1} elements")
@@ -238,6 +241,10 @@ class CableModel:
         if bad:
             raise CaseError(bad, case.source)
         extra += self.damper_s
+        wet = water_problems(case.anchors, case.gravity, getattr(case, "fluid", None),
+                             getattr(case, "seabed", None), positions=(p, q))
+        if wet:  # a description built in Python (a case file's are refused when read)
+            raise CaseError(wet, case.source)
         if geo.kind == "polyline":
             g = polyline_cable(poly, case.mesh.elements, case.mesh.grading, names, tuple(extra))
         else:

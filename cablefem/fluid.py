@@ -38,6 +38,7 @@ from petsc4py import PETSc
 
 from cablefem import forms
 from cablefem.flow import POWER_FLOOR, wave_kinematics
+from cablefem.water import water_depth_of
 
 __all__ = ["DELTA_V", "add_fluid_terms", "submerged_weight", "water_depth", "FluidMotion",
            "steady_flow"]
@@ -81,12 +82,7 @@ def _profile_factor(profile, z):
 def water_depth(model) -> float | None:
     """The waves' water depth (m): ``fluid.depth``, else the surface above the seabed, else
     None (deep water)."""
-    fl, bed = model.case.fluid, getattr(model.case, "seabed", None)
-    if fl.depth is not None:
-        return float(fl.depth)
-    if bed is not None and fl.surface is not None and fl.surface > bed.z:
-        return float(fl.surface - bed.z)
-    return None
+    return water_depth_of(model.case.fluid, getattr(model.case, "seabed", None))
 
 
 class FluidMotion:

@@ -471,3 +471,16 @@ def test_the_mesh_leaves_the_damper_room_for_its_offset():
     assert np.all(near <= 1.1 * MESH_RATIO * ell * (1 + 1e-3))
     h = 149.74 / 2000  # about the mesh's size elsewhere (the stress-free length / 2000)
     assert np.all(np.abs(np.diff(st[k + 2:k + 6]) / h - 1) < 0.3)
+
+
+@pytest.mark.parametrize("direction, warns", [([1.0, 0, 0], True), ([0.1, 0, 1.0], False)])
+def test_a_damper_along_the_cable_warns(mpi_tmp_path, direction, warns):
+    """A damper whose direction is the taut cable's axis x damps only the axial motion (the
+    transverse modes' ratios were ~1e-15, silently): the run warns on its direction. One
+    tilted by atan(0.1) from z keeps 1 - (d.t)^2 = 0.99 of its coefficient: no warning."""
+    from cablefem.app.run import run_case
+
+    case = parse_case(taut(0.05, 1.0, 40, direction=direction))
+    res = run_case(case, mpi_tmp_path / "out", comm, figures=False, progress=False, modes=0)
+    keys = [w["key"] for w in res.summary.get("warnings", [])]
+    assert ("dampers[0].direction" in keys) == warns, keys

@@ -32,6 +32,7 @@ from cablefem.app.report import (
 from cablefem.app.resources import note_small_problem
 from cablefem.cable import CableModel
 from cablefem.case import Case, CaseError, check_table_ends
+from cablefem.dampers import axial_dampers
 from cablefem.dynamics import DynamicsError, DynamicsStats, Interrupted, integrate
 from cablefem.errors import RunError, RunInterrupted
 from cablefem.io.checkpoint import case_digest, read_checkpoint, write_checkpoint
@@ -294,6 +295,8 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
         "slack_elements": static.slack_elements, "max_tension": static.max_tension,
         "min_tension": static.min_tension, "sag_ratio": sag}
     summary["wall_time"]["statics"] = static.wall_time
+    for key, message in axial_dampers(model):
+        warn(summary, key, message)
     if kind == "beam" and static.slack_elements:
         # statics tried the relaxation from the guess and found nothing better
         warn(summary, "statics", f"the rod's static state has {static.slack_elements} "

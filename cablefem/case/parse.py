@@ -62,6 +62,7 @@ from cablefem.motion import (
     read_motion_csv,
 )
 from cablefem.properties import Section
+from cablefem.water import water_problems
 
 # ---------------------------------------------------------------------------------------------
 # Parsing, table by table.
@@ -486,6 +487,7 @@ def parse_case(data: dict, base_dir: str | os.PathLike = Path("."),
         problems += [p for p in flow_problems(fluid, gravity)
                      if p[0] != "fluid.waves" or "surface" not in p[1]]  # reported already
     seabed = _parse_seabed(top.table("seabed"))
+    problems += water_problems(anchors, gravity, fluid, seabed)
     damping = _parse_damping(top.table("damping"))
     dynamics = _parse_dynamics(top.table("dynamics"))
     modal = ModalSpec(table("modal").integer("modes"))
@@ -607,6 +609,7 @@ def _parse_network_case(data: dict, base_dir: Path, source: str) -> Case:
         problems += [p for p in flow_problems(fluid, gravity)
                      if p[0] != "fluid.waves" or "surface" not in p[1]]  # reported already
     seabed = _parse_seabed(top.table("seabed"))
+    problems += water_problems([], gravity, fluid, seabed)  # the anchors: in the model
     if problems:
         raise CaseError(problems, source)
     if _missing(title, gravity, mesh_path, first, damping, modal.modes, solver.tension_only):
