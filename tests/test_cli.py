@@ -107,6 +107,26 @@ def test_malformed_motion_csv(tmp_path):
     assert "Traceback" not in res.stderr
 
 
+def test_table_ends_follow_t_end_and_static_only(tmp_path, capsys):
+    """A motion table that ends at 0.06 s, dynamics.t_end = 0.1 s: refused for the case's
+    own end (exit 2, naming the table's file), but not for --t-end 0.05 nor for
+    --static-only, which were refused before ("before the end of the run t = 0.1 s")."""
+    from cablefem.app.cli import main
+
+    t = np.linspace(0.0, 0.06, 13)
+    rows = "".join(f"{ti!r},{1e-4 * (1 - np.cos(50 * ti)) ** 2!r},0,0\n" for ti in t)
+    (tmp_path / "m.csv").write_text("time,ux,uy,uz\n" + rows)
+    case = write_case(tmp_path, motion='type = "table"\nfile = "m.csv"')
+    assert main(["run", str(case), "-o", str(tmp_path / "a"), "-q", "--no-figures"]) == 2
+    assert "anchors[1].motion.file" in capsys.readouterr().err
+    assert main(["run", str(case), "-o", str(tmp_path / "b"), "-q", "--no-figures",
+                 "--t-end", "0.05"]) == 0
+    assert json.loads((tmp_path / "b" / "summary.json").read_text())["dynamics"][
+        "t_end"] == 0.05
+    assert main(["run", str(case), "-o", str(tmp_path / "c"), "-q", "--no-figures",
+                 "--static-only"]) == 0
+
+
 def test_run_writes_everything_and_post_reproduces(tmp_path):
     case = write_case(tmp_path)
     out = tmp_path / "out"
