@@ -127,6 +127,17 @@ def test_table_ends_follow_t_end_and_static_only(tmp_path, capsys):
                  "--static-only"]) == 0
 
 
+def test_restart_of_a_missing_folder_says_so(tmp_path, capsys):
+    """--restart of a folder that does not exist said "no checkpoint": now exit 2 with
+    "no such folder"; an existing folder without a checkpoint still says no checkpoint."""
+    from cablefem.app.cli import main
+
+    assert main(["run", "--restart", str(tmp_path / "nope"), "-q"]) == 2
+    assert "nope: no such folder" in capsys.readouterr().err
+    assert main(["run", "--restart", str(tmp_path), "-q"]) == 2
+    assert "no checkpoint" in capsys.readouterr().err
+
+
 def test_run_writes_everything_and_post_reproduces(tmp_path):
     case = write_case(tmp_path)
     out = tmp_path / "out"
