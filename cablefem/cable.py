@@ -32,7 +32,7 @@ from cablefem.geometry import create_line_mesh, graded_stations, polyline_cable,
 from cablefem.jit import quiet_compiler
 from cablefem.seabed import GroundedCatenary, add_seabed_terms
 from cablefem.span_bending import is_on
-from cablefem.water import water_problems, wave_warnings
+from cablefem.water import floating_problems, water_problems, wave_warnings
 
 __all__ = ["CableModel", "AnchorBC", "comm_first"]  # AnchorBC: from cablefem.anchor
 
@@ -251,11 +251,21 @@ class CableModel:
             stations = graded_stations(length, case.mesh.elements, case.mesh.grading,
                                        tuple(extra), self._damper_clearance(p, q, length, gdir))
             g = straight_cable(p, (q - p) / np.linalg.norm(q - p), stations, names)
+        chord = float(np.linalg.norm(q - p))
+        if len(g.stations) == 2 and length > chord * (1.0 + 1e-12):
+            raise CaseError([("mesh.elements", f"one element between the anchors is straight "
+                              f"along their chord ({chord:g} m), shorter than the stress-free "
+                              f"length l = {length:g} m: a slack element that carries nothing "
+                              "(the run would fail in the dynamics); give more elements")],
+                            case.source)
         # initial shape: the elastic catenary through the anchors (exact for the bare cable;
         # with a seabed it crosses, the catenary with its grounded part)
         fl = getattr(case, "fluid", None)
         self.submerged_weight = (submerged_weight(fl, sec.mass, case.gravity.g)
                                  if fl is not None else self.weight)
+        afloat = floating_problems(p, q, length, self.submerged_weight, sec.EA, gdir, fl)
+        if afloat:
+            raise CaseError(afloat, case.source)
         try:
             shape = catenary.catenary_between(p, q, length, self.weight, sec.EA, gdir)
             if getattr(case, "seabed", None) is not None:

@@ -19,8 +19,8 @@ import numpy as np
 
 from cablefem.flow import wave_number
 
-__all__ = ["BREAKING_STEEPNESS", "BURIED_FRACTION", "elevation", "water_problems",
-           "wave_warnings"]
+__all__ = ["BREAKING_STEEPNESS", "BURIED_FRACTION", "elevation", "floating_problems",
+           "water_problems", "wave_warnings"]
 
 #: an anchor may lie below the seabed by at most this fraction of the anchors' distance (an
 #: anchor on the seabed sinks in by the lying cable's penetration w/k, mm against 100s of m)
@@ -93,3 +93,29 @@ def wave_warnings(fluid, gravity, seabed) -> list[tuple[str, str]]:
                          f"{length:.4g} m) is above 1/7, where linear (Airy) theory does "
                          "not hold"))
     return out
+
+
+def floating_problems(p, q, length: float, w: float, EA: float, gdir, fluid
+                      ) -> list[tuple[str, str]]:
+    """``(key, message)`` of a single cable lighter than the water it displaces (submerged
+    weight ``w < 0``, N/m) whose catenary, turned upwards, rises above the free surface
+    between its anchors ``p``, ``q``: it would float there, where its buoyancy stops (a jump
+    in the load no equilibrium of the model follows; a fluid density of 1e6 kg/m^3 ran
+    statics into a stall, exit 1). A buoyant line held below the surface is fine."""
+    if fluid is None or fluid.surface is None or not w < 0:
+        return []
+    from cablefem.catenary import catenary_between
+
+    up = -np.asarray(gdir, float) / np.linalg.norm(gdir)
+    try:
+        shape = catenary_between(p, q, length, -w, EA, up)  # its "gravity" points up
+        top = float(np.max(shape.position(np.linspace(0.0, length, 401)) @ up))
+    except ValueError:
+        return []  # no catenary to judge by: statics decides
+    if top <= fluid.surface:
+        return []
+    return [("fluid.density", f"the cable floats: its buoyancy exceeds its weight by "
+                              f"{-w:.4g} N/m (fluid.density = {fluid.density:g}) and its "
+                              f"catenary would rise to z = {top:.4g} m, above the free "
+                              f"surface at fluid.surface = {fluid.surface:g} m, where "
+                              "the buoyancy stops: no equilibrium the model can follow")]

@@ -127,6 +127,21 @@ def test_table_ends_follow_t_end_and_static_only(tmp_path, capsys):
                  "--static-only"]) == 0
 
 
+def test_one_sagging_element_is_refused(tmp_path, capsys):
+    """mesh.elements = 1 with a sag (l = 1.0065 > chord 1): the one element is straight
+    along the chord, slack; the run reached the dynamics and failed (exit 1). Refused
+    before any solve (exit 2, mesh.elements); a taut single element (l < chord) runs."""
+    from cablefem.app.cli import main
+
+    case = write_case(tmp_path, geometry="sag_ratio = 0.05", q_pos="[1.0, 0, 0]")
+    case.write_text(case.read_text().replace("elements = 12", "elements = 1"))
+    assert main(["run", str(case), "-o", str(tmp_path / "a"), "-q", "--no-figures"]) == 2
+    assert "mesh.elements" in capsys.readouterr().err
+    case.write_text(case.read_text().replace("sag_ratio = 0.05", "length = 0.999"))
+    assert main(["run", str(case), "-o", str(tmp_path / "b"), "-q", "--no-figures",
+                 "--static-only"]) == 0
+
+
 def test_restart_of_a_missing_folder_says_so(tmp_path, capsys):
     """--restart of a folder that does not exist said "no checkpoint": now exit 2 with
     "no such folder"; an existing folder without a checkpoint still says no checkpoint."""

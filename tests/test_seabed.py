@@ -273,3 +273,22 @@ def test_a_breaking_wave_warns(height, warns):
     assert [k for k, _ in got] == (["fluid.waves[0].height"] if warns else [])
     if warns:
         assert "H/lambda = 0.15 " in got[0][1] and "lambda = 100 m" in got[0][1]
+
+
+@pytest.mark.parametrize("surface, floats", [(60.0, True), (1000.0, False)])
+def test_a_cable_that_floats_to_the_surface_is_refused(surface, floats):
+    """fluid.density = 1e5 kg/m^3 makes the line 7.2e3 N/m lighter than the water it
+    displaces (rho g pi D^2/4 = 7.7e3 N/m against m g = 490 N/m): its catenary turned
+    upwards (150 m between anchors 130 m apart) rises above a surface 10 m over the
+    fairlead, where the buoyancy stops, and statics stalled (exit 1): refused at
+    fluid.density when the model is built. Held 950 m below the surface it is accepted."""
+    d = mooring(elements=20)
+    d["fluid"] = {"density": 1e5, "diameter": 0.1, "surface": surface}
+    if floats:
+        with pytest.raises(CaseError) as err:
+            CableModel(comm, parse_case(d))
+        assert [k for k, _ in err.value.problems] == ["fluid.density"]
+        assert "floats" in str(err.value)
+    else:
+        assert CableModel(comm, parse_case(d)).submerged_weight == pytest.approx(
+            W - 1e5 * G * math.pi * 0.1**2 / 4, rel=1e-12)
