@@ -484,3 +484,40 @@ def test_a_damper_along_the_cable_warns(mpi_tmp_path, direction, warns):
     res = run_case(case, mpi_tmp_path / "out", comm, figures=False, progress=False, modes=0)
     keys = [w["key"] for w in res.summary.get("warnings", [])]
     assert ("dampers[0].direction" in keys) == warns, keys
+
+
+def test_the_warning_line_is_printed_once(mpi_tmp_path, capsys):
+    """The command line's closing "1 warning(s)" line was written by every rank (twice on
+    2 ranks): rank 0 writes it, as it logs the warnings themselves."""
+    case = mpi_tmp_path / "axial.toml"
+    if comm.rank == 0:
+        case.write_text("""
+[section]
+EA = 1e8
+EI = 1e-6
+mass = 1.0
+[gravity]
+g = 0.0
+[geometry]
+length = 9.999
+[mesh]
+elements = 20
+[[anchors]]
+name = "p"
+position = [0.0, 0.0, 0.0]
+type = "pinned"
+[[anchors]]
+name = "q"
+position = [10.0, 0.0, 0.0]
+type = "pinned"
+[[dampers]]
+anchor = "q"
+distance = 2.0
+coefficient = 10.0
+direction = [1.0, 0.0, 0.0]
+""")
+    comm.Barrier()
+    assert main(["run", str(case), "-o", str(mpi_tmp_path / "out"), "--static-only",
+                 "--no-figures"]) == 0
+    err = capsys.readouterr().err
+    assert err.count("warning(s), listed under 'warnings'") == (1 if comm.rank == 0 else 0)

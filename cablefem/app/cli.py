@@ -375,11 +375,13 @@ def _main(argv: list[str] | None = None) -> int:
         sys.stderr.write(f"cablefem: {err}\n")
         return 128 + (err.signal or 2)
     warned = result.summary.get("warnings") or []
-    if warned:
+    from mpi4py import MPI
+
+    if warned and MPI.COMM_WORLD.rank == 0:  # once, as the log's warnings (rank 0)
         sys.stderr.write(f"cablefem: {len(warned)} warning(s), listed under 'warnings' in "
                          f"{Path(args.output) / 'summary.json'}\n")
-        if args.strict:
-            return EXIT_WARNED
+    if warned and args.strict:
+        return EXIT_WARNED
     return EXIT_OK
 
 
