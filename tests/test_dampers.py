@@ -521,3 +521,22 @@ direction = [1.0, 0.0, 0.0]
                  "--no-figures"]) == 0
     err = capsys.readouterr().err
     assert err.count("warning(s), listed under 'warnings'") == (1 if comm.rank == 0 else 0)
+
+
+def test_summary_has_the_damped_modes_lambda(mpi_tmp_path):
+    """summary.json's modes carry |lambda| of the damped system (it was only logged):
+    with Rayleigh damping the complex modes are the undamped ones, so |lambda| = omega to
+    the eigen-solver's tolerance (1e-8 allowed, as above); undamped: absent."""
+    from cablefem.app.run import run_case
+
+    d = taut(0.02, 1.0, 30)
+    d.pop("dampers")
+    d["damping"] = {"alpha": 0.3, "beta": 2e-4}
+    res = run_case(parse_case(d), mpi_tmp_path / "a", comm, figures=False, progress=False,
+                   modes=4)
+    for entry in res.summary["modes"]:
+        assert entry["lambda_abs"] == pytest.approx(entry["omega"], rel=1e-8)
+    d.pop("damping")
+    res = run_case(parse_case(d), mpi_tmp_path / "b", comm, figures=False, progress=False,
+                   modes=4)
+    assert not any("lambda_abs" in entry for entry in res.summary["modes"])

@@ -354,9 +354,12 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
             for entry, x in zip(summary["modes"], shifts):
                 if np.isfinite(x):
                     entry["span_bending_shift"] = float(x)
-        for entry, z in zip(summary["modes"], modal.damping_ratios):
+        lam = modal.damped_omegas  # |lambda| of the damped system's modes (None: undamped)
+        for k, (entry, z) in enumerate(zip(summary["modes"], modal.damping_ratios)):
             if np.isfinite(z):  # from the damped system's complex modes (modal.py)
                 entry["damping_ratio"] = float(z)
+                if lam is not None and np.isfinite(lam[k]):
+                    entry["lambda_abs"] = float(lam[k])
             else:  # no complex mode like it: absent, and said why
                 entry["damping_ratio_missing"] = "no complex mode of the damped system " \
                     "matches this mode (overdamped?)"
