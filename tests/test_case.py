@@ -714,7 +714,7 @@ BAD = [
     ("dynamics.t_end", DELETE, "dynamics.t_end", "missing required key"),
     ("dynamics.rho_inf", 1.5, "dynamics.rho_inf", "must be >= 0 and <= 1"),
     ("dynamics.output_every", 0, "dynamics.output_every", "must be >= 1"),
-    ("modal.modes", 0, "modal.modes", "must be >= 1"),
+    ("modal.modes", -1, "modal.modes", "must be >= 0"),
     ("solver.tension_only", 1, "solver.tension_only", "expected a boolean"),
     ("solver.petsc_options", {"cable_ts_type": "alpha2"}, "solver.petsc_options.cable_ts_type",
      "without '-' or the 'cable_' prefix"),

@@ -299,7 +299,8 @@ CASE_KEYS: dict[str, KeyDoc | TableDoc] = {
         "units": KeyDoc("string", "Pa", "", "Name of the stress unit in the reports."),
     }),
     "modal": TableDoc("table", None, "", "Modal analysis about the static equilibrium.", {
-        "modes": KeyDoc("integer", 6, "-", "Number of modes, >= 1."),
+        "modes": KeyDoc("integer", 6, "-", "Number of modes, >= 0 (0: no modal analysis; "
+                        "without a [modal] table a run computes 6)."),
     }),
     "beam": TableDoc("table", None, "", "Mesh and section of the reference rod model "
                      "('cablefem run --model beam'); the string ignores it.", {

@@ -501,7 +501,7 @@ def parse_case(data: dict, base_dir: str | os.PathLike = Path("."),
     problems += water_problems(anchors, gravity, fluid, seabed)
     damping = _parse_damping(top.table("damping"))
     dynamics = _parse_dynamics(top.table("dynamics"))
-    modal = ModalSpec(table("modal").integer("modes"))
+    modal = ModalSpec(table("modal").integer("modes", ge=0))
     fatigue = _parse_fatigue(top.table("fatigue"), section)
     beam_r = table("beam")
     beam = BeamSpec(*(beam_r.integer(k, **BEAM_BOUNDS[k][0]) if k == "span_elements"
@@ -601,7 +601,7 @@ def _parse_network_case(data: dict, base_dir: Path, source: str) -> Case:
                                 r.vector("direction", unit_vector=True)))
     damping = _parse_damping(top.table("damping"))
     dynamics = _parse_dynamics(top.table("dynamics"))
-    modal = ModalSpec(table("modal").integer("modes"))
+    modal = ModalSpec(table("modal").integer("modes", ge=0))
     solver_r = table("solver")
     solver = SolverSpec(solver_r.boolean("tension_only"), _parse_petsc_options(solver_r),
                         solver_r.string("outer_correction", ("none", "hinge")),
