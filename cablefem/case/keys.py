@@ -229,6 +229,9 @@ CASE_KEYS: dict[str, KeyDoc | TableDoc] = {
                                 "area pi D per length (MoorDyn's convention), >= 0."),
         "ca_normal": KeyDoc("number", 1.0, "-", "Normal added-mass coefficient on "
                             "rho pi D^2/4, >= 0."),
+        "ca_tangential": KeyDoc("number", 0.0, "-", "Tangential added-mass coefficient on "
+                                "rho pi D^2/4 (MoorDyn's Cat), on the acceleration along "
+                                "the cable relative to the fluid's, >= 0."),
         "buoyancy": KeyDoc("boolean", True, "", "Buoyancy rho g pi D^2/4 against gravity "
                            "below the surface (false in air)."),
         "time": _TIME_DOC,

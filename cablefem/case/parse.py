@@ -343,7 +343,8 @@ def _parse_fluid(r: _Reader | None, section, base_dir: Path) -> Fluid | None:
                  r.number("ca_normal", ge=0), r.boolean("buoyancy"),
                  _parse_time(r.table("time"), base_dir) or TimeFunction.constant(),
                  _parse_profile(r.table("profile")), tuple(w for w in waves if w is not None),
-                 r.number("depth", gt=0), r.number("wave_ramp", ge=0), velocity)
+                 r.number("depth", gt=0), r.number("wave_ramp", ge=0), velocity,
+                 r.number("ca_tangential", ge=0))
 
 
 def _parse_profile(r: _Reader | None) -> Profile | None:
