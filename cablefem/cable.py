@@ -24,6 +24,7 @@ from ufl.algorithms import expand_derivatives
 
 from cablefem import catenary, forms
 from cablefem.anchor import AnchorBC
+from cablefem.chain import without_bending
 from cablefem.dampers import damper_stations, damper_work, layer_length
 from cablefem.description import CableDescription
 from cablefem.errors import CaseError
@@ -109,6 +110,8 @@ class CableModel:
 
     def __init__(self, comm: MPI.Comm, description: CableDescription, prefix: str = "cable_"):
         comm, case = comm_first(comm, description)
+        #: section.EI = 0: the string alone (cablefem.chain): clamps pinned, no moments
+        case, self.string_alone = without_bending(case)
         self.case = case  #: the description (named ``case`` as in version 0.2)
         self.comm = comm
         self.prefix = prefix

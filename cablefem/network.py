@@ -184,7 +184,9 @@ class NetworkModel(CableModel):
             net = read_network_mesh(spec.mesh)
         except MeshError as err:
             raise CaseError(err.problems, case.source) from None
-        problems = []
+        problems = [(f"sections.{name}.EI", "must be > 0 in a network (its kinks and clamps "
+                     "need bending stiffness; EI = 0, the string alone, is for single "
+                     "cables)") for name, sec in spec.sections.items() if not sec.EI > 0]
         by_group = {c.group: c for c in spec.cables}
         links = {d.group: i for i, d in enumerate(case.dampers)}
         for g in net.groups:

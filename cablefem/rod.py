@@ -247,6 +247,9 @@ class BeamModel(CableModel):
         elif case.geometry.kind == "polyline":
             problems.append(("geometry.polyline", "the beam model needs a straight stress-free "
                              "reference: give length, horizontal_tension or sag_ratio"))
+        if case.section is not None and not case.section.EI > 0:
+            problems.append(("section.EI", "the beam model (a rod) needs EI > 0; a cable "
+                             "without bending stiffness is the string alone"))
         if not refine > 0:
             problems.append(("refine", f"must be > 0, got {refine}"))
         if problems:

@@ -32,6 +32,7 @@ from cablefem.app.report import (
 from cablefem.app.resources import note_small_problem
 from cablefem.cable import CableModel
 from cablefem.case import Case, CaseError, check_table_ends
+from cablefem.chain import NOTE as CHAIN_NOTE
 from cablefem.dampers import axial_dampers
 from cablefem.dynamics import DynamicsError, DynamicsStats, Interrupted, integrate
 from cablefem.errors import RunError, RunInterrupted
@@ -264,6 +265,9 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
                      "degrees_of_freedom": model.bs * len(model.geometry.stations),
                      "dimensionless": groups, "wall_time": {"build": t_build},
                      "warnings": []}
+    if getattr(model, "string_alone", False):  # section.EI = 0 (cablefem.chain)
+        summary["bending"] = {"EI": 0.0, "moments": False, "note": CHAIN_NOTE}
+        log.info("%s", CHAIN_NOTE)
     for key, message in list(case.warnings) + list(getattr(model, "warnings", [])):
         warn(summary, key, message)
     if kind == "beam":
@@ -302,7 +306,8 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
         warn(summary, "statics", f"the rod's static state has {static.slack_elements} "
              f"compressed element(s) (least tension {static.min_tension:.4g}): a buckled "
              "equilibrium, not a reference for a cable; try another --refine")
-    summary["outer_correction"] = "none" if kind == "beam" else case.solver.outer_correction
+    summary["outer_correction"] = ("none" if kind == "beam"  # the model's (EI = 0: none)
+                                   else model.case.solver.outer_correction)
     if kind != "beam":
         summary["span_bending"] = is_on(case.solver.span_bending)
         if auto is not None:

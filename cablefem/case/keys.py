@@ -66,7 +66,8 @@ CASE_KEYS: dict[str, KeyDoc | TableDoc] = {
                     "sqrt(l/g)); names the units in logs, figures and reports."),
     "section": TableDoc("table", REQUIRED, "", "Cross-section of the cable.", {
         "EA": KeyDoc("number", REQUIRED, "N", "Axial stiffness, > 0."),
-        "EI": KeyDoc("number", REQUIRED, "N m^2", "Bending stiffness, > 0."),
+        "EI": KeyDoc("number", REQUIRED, "N m^2", "Bending stiffness, >= 0; 0 (a chain): "
+                     "the string alone, no moments (single cables; docs/theory.md)."),
         "GJ": KeyDoc("number", 0.0, "N m^2", "Torsional stiffness, >= 0 (reported only)."),
         "mass": KeyDoc("number", REQUIRED, "kg/m", "Mass per stress-free length, > 0."),
         "diameter": KeyDoc("number", None, "m", "Outer diameter for stresses, > 0."),

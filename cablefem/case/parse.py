@@ -76,7 +76,7 @@ def _missing(*parts: Any) -> bool:
 
 
 def _parse_section(r: _Reader) -> Section | None:
-    values = (r.number("EA", gt=0), r.number("EI", gt=0), r.number("GJ", ge=0),
+    values = (r.number("EA", gt=0), r.number("EI", ge=0), r.number("GJ", ge=0),
               r.number("mass", gt=0))
     diameter = r.number("diameter", gt=0)
     if _missing(*values) or (r.has("diameter") and diameter is None):
