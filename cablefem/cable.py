@@ -24,6 +24,7 @@ from ufl.algorithms import expand_derivatives
 
 from cablefem import catenary, forms
 from cablefem.anchor import AnchorBC
+from cablefem.chain import without_bending
 from cablefem.dampers import damper_stations, damper_work, layer_length
 from cablefem.description import CableDescription
 from cablefem.errors import CaseError
@@ -32,6 +33,7 @@ from cablefem.geometry import create_line_mesh, graded_stations, polyline_cable,
 from cablefem.jit import quiet_compiler
 from cablefem.seabed import GroundedCatenary, add_seabed_terms
 from cablefem.span_bending import is_on
+from cablefem.water import floating_problems, water_problems, wave_warnings
 
 __all__ = ["CableModel", "AnchorBC", "comm_first"]  # AnchorBC: from cablefem.anchor
 
@@ -108,6 +110,8 @@ class CableModel:
 
     def __init__(self, comm: MPI.Comm, description: CableDescription, prefix: str = "cable_"):
         comm, case = comm_first(comm, description)
+        #: section.EI = 0: the string alone (cablefem.chain): clamps pinned, no moments
+        case, self.string_alone = without_bending(case)
         self.case = case  #: the description (named ``case`` as in version 0.2)
         self.comm = comm
         self.prefix = prefix
@@ -120,6 +124,8 @@ class CableModel:
         self.tension_only = case.solver.tension_only
 
         self._t_build = time.perf_counter()
+        self.warnings += wave_warnings(getattr(case, "fluid", None), case.gravity,
+                                       getattr(case, "seabed", None))
         self.geometry, self.initial_shape = self._build_geometry()
         self.length = self.geometry.length
         self._phase(f"mesh of {len(self.geometry.stations) - 1} elements")
@@ -238,17 +244,31 @@ class CableModel:
         if bad:
             raise CaseError(bad, case.source)
         extra += self.damper_s
+        wet = water_problems(case.anchors, case.gravity, getattr(case, "fluid", None),
+                             getattr(case, "seabed", None), positions=(p, q))
+        if wet:  # a description built in Python (a case file's are refused when read)
+            raise CaseError(wet, case.source)
         if geo.kind == "polyline":
             g = polyline_cable(poly, case.mesh.elements, case.mesh.grading, names, tuple(extra))
         else:
             stations = graded_stations(length, case.mesh.elements, case.mesh.grading,
                                        tuple(extra), self._damper_clearance(p, q, length, gdir))
             g = straight_cable(p, (q - p) / np.linalg.norm(q - p), stations, names)
+        chord = float(np.linalg.norm(q - p))
+        if len(g.stations) == 2 and length > chord * (1.0 + 1e-12):
+            raise CaseError([("mesh.elements", f"one element between the anchors is straight "
+                              f"along their chord ({chord:g} m), shorter than the stress-free "
+                              f"length l = {length:g} m: a slack element that carries nothing "
+                              "(the run would fail in the dynamics); give more elements")],
+                            case.source)
         # initial shape: the elastic catenary through the anchors (exact for the bare cable;
         # with a seabed it crosses, the catenary with its grounded part)
         fl = getattr(case, "fluid", None)
         self.submerged_weight = (submerged_weight(fl, sec.mass, case.gravity.g)
                                  if fl is not None else self.weight)
+        afloat = floating_problems(p, q, length, self.submerged_weight, sec.EA, gdir, fl)
+        if afloat:
+            raise CaseError(afloat, case.source)
         try:
             shape = catenary.catenary_between(p, q, length, self.weight, sec.EA, gdir)
             if getattr(case, "seabed", None) is not None:

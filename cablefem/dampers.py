@@ -27,8 +27,8 @@ from ufl.algorithms import expand_derivatives
 
 from cablefem import forms
 
-__all__ = ["applied_offset", "damper_stations", "damper_work", "kink_offset",
-           "layer_length", "link_work"]
+__all__ = ["AXIAL_FRACTION", "applied_offset", "axial_dampers", "damper_stations",
+           "damper_work", "kink_offset", "layer_length", "link_work"]
 
 
 def damper_stations(description, length: float) -> list[float]:
@@ -45,6 +45,38 @@ def damper_stations(description, length: float) -> list[float]:
     if problems:
         raise ValueError(problems)
     return out
+
+
+#: a damper with a direction whose part normal to the cable, squared (the fraction of its
+#: coefficient that damps the transverse motion), is below this acts along the axis
+AXIAL_FRACTION = 1e-2
+
+
+def axial_dampers(model) -> list[tuple[str, str]]:
+    """``(key, message)`` of a single cable's dampers with a ``direction`` (nearly) along
+    the cable's static tangent at their node: ``1 - (d.t)^2`` below
+    :data:`AXIAL_FRACTION`; such a damper only damps the stiff axial motion (the damping
+    ratios of the transverse modes are ~1e-15). Collective; every rank gets the list."""
+    case = model.case
+    nodes = getattr(model, "damper_nodes", [])
+    if getattr(model, "is_network", False) or not nodes:
+        return []
+    r = model.gather_nodal(model.u_static)
+    out = []
+    if model.comm.rank == 0:
+        x = model.geometry.points + r
+        for i, (d, k) in enumerate(zip(case.dampers, nodes)):
+            if d.direction is None:
+                continue
+            t = x[min(k + 1, len(x) - 1)] - x[max(k - 1, 0)]
+            c = float(np.dot(np.asarray(d.direction, float), t / np.linalg.norm(t)))
+            normal = 1.0 - c * c
+            if normal < AXIAL_FRACTION:
+                out.append((f"dampers[{i}].direction", f"the damper acts along the cable's "
+                            f"axis: only {normal:.3g} of its coefficient (1 - (d.t)^2, t the "
+                            "static tangent at its node) damps the transverse motion; give "
+                            "a direction normal to the cable, or none (the normal plane)"))
+    return model.comm.bcast(out, root=0)
 
 
 def _projector(d, u_t, t0):

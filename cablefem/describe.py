@@ -301,7 +301,8 @@ def describe_cable(anchors: list[Anchor], section: Section, *, length: float | N
                                                                       {"gt": 0}),
                                    ("cd_normal", "", {"ge": 0}),
                                    ("cd_tangential", "", {"ge": 0}),
-                                   ("ca_normal", "", {"ge": 0})):
+                                   ("ca_normal", "", {"ge": 0}),
+                                   ("ca_tangential", "", {"ge": 0})):
             _check(problems, f"fluid.{name}", number_problem(getattr(fluid, name), unit,
                                                              **bounds))
         problems += flow_problems(fluid, parts.get("gravity"))

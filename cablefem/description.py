@@ -145,7 +145,8 @@ class Fluid:
     the free ``surface`` as an elevation against gravity (m; None: everywhere immersed,
     as in air); the ``current`` velocity (m/s, 3-vector, uniform) times ``time.value(t)``
     in dynamics (a gust or turbulence history); the hydrodynamic ``diameter`` (m) and the
-    Morison coefficients ``cd_normal``, ``cd_tangential``, ``ca_normal``; ``buoyancy``
+    Morison coefficients ``cd_normal``, ``cd_tangential``, ``ca_normal``,
+    ``ca_tangential``; ``buoyancy``
     (False in air). The fluid's motion (:mod:`cablefem.flow`): the ``profile`` factor of
     the current with elevation (None: uniform), Airy ``waves`` on water of ``depth`` (m below
     the surface; None: deep water) built up over ``wave_ramp`` (s; None: 3 periods of the
@@ -165,6 +166,8 @@ class Fluid:
     depth: float | None = None
     wave_ramp: float | None = None
     velocity: VelocitySeries | None = None
+    #: tangential added-mass coefficient (MoorDyn's Cat), on the relative acceleration
+    ca_tangential: float = 0.0
 
     def diameter_on(self, section) -> float:
         """The hydrodynamic diameter on a cable of ``section`` (m): ``diameter``, or (a

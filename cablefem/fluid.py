@@ -9,7 +9,7 @@ length, with the relative velocity ``v_r = u_f − ṙ`` split along the cable's
 tangent ``t`` into ``v_rn`` (normal) and ``v_rt = (v_r·t) t`` (tangential)::
 
     drag       f_d = ½ ρ C_dn D |v_rn| v_rn + ½ ρ C_dt π D |v_rt| v_rt
-    added mass f_a = −C_an ρ A (r̈ − (r̈·t) t),          A = π D²/4
+    added mass f_a = −C_an ρ A (r̈ − (r̈·t) t) − C_at ρ A ((r̈ − u̇_f)·t) t,  A = π D²/4
     inertia    f_i = (1 + C_an) ρ A (u̇_f − (u̇_f·t) t)
     buoyancy   f_b = −ρ A g
 
@@ -38,6 +38,7 @@ from petsc4py import PETSc
 
 from cablefem import forms
 from cablefem.flow import POWER_FLOOR, wave_kinematics
+from cablefem.water import water_depth_of
 
 __all__ = ["DELTA_V", "add_fluid_terms", "submerged_weight", "water_depth", "FluidMotion",
            "steady_flow"]
@@ -81,12 +82,7 @@ def _profile_factor(profile, z):
 def water_depth(model) -> float | None:
     """The waves' water depth (m): ``fluid.depth``, else the surface above the seabed, else
     None (deep water)."""
-    fl, bed = model.case.fluid, getattr(model.case, "seabed", None)
-    if fl.depth is not None:
-        return float(fl.depth)
-    if bed is not None and fl.surface is not None and fl.surface > bed.z:
-        return float(fl.surface - bed.z)
-    return None
+    return water_depth_of(model.case.fluid, getattr(model.case, "seabed", None))
 
 
 class FluidMotion:
@@ -180,7 +176,8 @@ def add_fluid_terms(model) -> None:
     k = SimpleNamespace(cdn_D=const(fl.cd_normal) * D,
                         cdt_piD=const(fl.cd_tangential * np.pi) * D,
                         ma=const(fl.ca_normal * fl.density) * A,
-                        mi=const((1.0 + fl.ca_normal) * fl.density) * A)
+                        mi=const((1.0 + fl.ca_normal) * fl.density) * A,
+                        mt=const(fl.ca_tangential * fl.density) * A)
     model.fluid_factor = fem.Constant(mesh, PETSc.ScalarType(fl.time.value(0.0)))
     model.fluid_motion = motion = FluidMotion(model)
     g = forms.stretch_vector(u, t0)
@@ -204,6 +201,7 @@ def add_fluid_terms(model) -> None:
     an = a - ufl.dot(a, t) * t
     af = motion.acceleration()
     afn = af - ufl.dot(af, t) * t
+    at = ufl.dot(a - af, t) * t  # along the cable, relative to the fluid
     dynamic = wet * (-ufl.inner(drag_change, du) + k.ma * ufl.inner(an, du)
-                     - k.mi * ufl.inner(afn, du)) * lam * ufl.dx
+                     - k.mi * ufl.inner(afn, du) + k.mt * ufl.inner(at, du)) * lam * ufl.dx
     model.forms.add("fluid_dynamic", dynamic, kind="dynamic")

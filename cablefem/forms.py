@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import ufl
 from ufl.algorithms import estimate_total_polynomial_degree, expand_derivatives
+from ufl.algorithms.check_arities import ArityMismatch, check_form_arity
 
 __all__ = ["CableForms", "reference_tangent", "ds_", "stretch_vector", "stretch", "axial_strain",
            "tension", "layer_law_tension", "layer_stretch_vector",
@@ -345,6 +346,7 @@ class CableForms:
         # derivatives applied now: a term given as a Gateaux derivative in the direction v
         # (beta dF/du [v]) must show v explicitly for the Jacobian's derivative in v
         form = expand_derivatives(form)
+        self._check_linear(name, form)
         if kind == "static":
             rates = [w.name for w in (self.v, self.a) if w in form.coefficients()]
             if rates:
@@ -352,6 +354,25 @@ class CableForms:
                                  "no velocity or acceleration; add it with kind='dynamic'")
         self.user[name] = (form, kind)
         self._changes += 1
+
+    def _check_linear(self, name: str, form) -> None:
+        """A residual term is linear in the test function (``inner(du, du)*dx`` is not; its
+        Jacobian failed in :meth:`compile` with "too many values to unpack") and, in
+        dynamics, in the acceleration (the integrator's mass matrix is its derivative in
+        ``a``, a constant)."""
+        try:
+            check_form_arity(form, form.arguments())
+        except (ArityMismatch, ValueError):  # UFL 2022's message itself fails to format
+            raise ValueError(f"term {name!r}: the form is not linear in the test function "
+                             "model.du (a product of du with itself, or du inside a "
+                             "nonlinear function): a residual term is f . du, f free of "
+                             "du") from None
+        if self.a in form.coefficients():
+            second = expand_derivatives(ufl.derivative(ufl.derivative(form, self.a), self.a))
+            if not second.empty():
+                raise ValueError(f"term {name!r}: the form is not linear in the acceleration "
+                                 "model.a (the time integrator's mass matrix is the "
+                                 "derivative in a, a constant): an added mass is m_a a . du")
 
     def _check_rule(self, name: str, form) -> None:
         """A model that integrates its cells with one point (the rod: ``dx`` with quadrature

@@ -89,6 +89,8 @@ def kink_points(model) -> list[Kink]:
     """The kinks of a single cable or of a network (:func:`network_kinks`)."""
     if getattr(model, "is_network", False):
         return network_kinks(model)
+    if getattr(model, "string_alone", False):  # EI = 0: no layer, no kink moment
+        return []
     case, geo = model.case, model.geometry
     st = geo.stations
     out, seen = [], set()

@@ -35,6 +35,7 @@ from cablefem.fluid import submerged_weight
 from cablefem.geometry import MeshError, NetworkMesh, connected_components, read_network_mesh
 from cablefem.jit import quiet_compiler
 from cablefem.span_bending import is_on
+from cablefem.water import water_problems
 
 __all__ = ["NetworkModel", "NetworkGeometry", "ClampSide", "split_clamps"]
 
@@ -183,7 +184,9 @@ class NetworkModel(CableModel):
             net = read_network_mesh(spec.mesh)
         except MeshError as err:
             raise CaseError(err.problems, case.source) from None
-        problems = []
+        problems = [(f"sections.{name}.EI", "must be > 0 in a network (its kinks and clamps "
+                     "need bending stiffness; EI = 0, the string alone, is for single "
+                     "cables)") for name, sec in spec.sections.items() if not sec.EI > 0]
         by_group = {c.group: c for c in spec.cables}
         links = {d.group: i for i, d in enumerate(case.dampers)}
         for g in net.groups:
@@ -235,6 +238,10 @@ class NetworkModel(CableModel):
             problems.append(("anchors", f"{len(free)} part(s) of the network are held by no "
                                         f"anchor (disconnected cables), e.g. the one with node "
                                         f"{k} at {net.points[k].tolist()}"))
+        held = [(a, net.points[k]) for a in case.anchors if a.name in net.vertex_groups
+                for k in net.vertex_groups[a.name]]
+        problems += water_problems([a for a, _ in held], case.gravity, None,
+                                   getattr(case, "seabed", None), [p for _, p in held])
         if problems:
             raise CaseError(problems, case.source)
         net, sides = split_clamps(net, case.anchors, cell_damper < 0, case.source)

@@ -22,7 +22,8 @@ class Section:
     EA : float
         Axial stiffness (N), > 0.
     EI : float
-        Bending stiffness (N m^2), > 0.
+        Bending stiffness (N m^2), >= 0; 0 (a chain): the string alone, no moments
+        (single cables only, :mod:`cablefem.chain`).
     GJ : float
         Torsional stiffness (N m^2), >= 0. It does not enter the string or the inner solution
         (torsion decouples from bending, paper section 2); it is reported as ``gamma``.
@@ -44,7 +45,7 @@ class Section:
     diameter: float | None = None
 
     def __post_init__(self) -> None:
-        limits = [("EA", self.EA, True, "N"), ("EI", self.EI, True, "N m^2"),
+        limits = [("EA", self.EA, True, "N"), ("EI", self.EI, False, "N m^2"),
                   ("GJ", self.GJ, False, "N m^2"), ("mass", self.mass, True, "kg/m")]
         if self.diameter is not None:
             limits.append(("diameter", self.diameter, True, "m"))
@@ -89,7 +90,9 @@ def dimensionless_groups(section: Section, length: float, g: float) -> dict[str,
         raise ValueError(f"length must be > 0 (m), got {length!r}")
     if not (math.isfinite(g) and g >= 0):
         raise ValueError(f"g must be >= 0 (m/s^2), got {g!r}")
-    groups: dict[str, float | None] = {"gamma": section.GJ / section.EI}
+    # EI = 0 (a chain): no torsion-to-bending ratio and eps = 0 (no layer)
+    groups: dict[str, float | None] = {
+        "gamma": section.GJ / section.EI if section.EI > 0 else None}
     if g == 0:
         groups.update(eps=None, eps_b=None, time_unit=None, force_unit=None, moment_unit=None)
         return groups

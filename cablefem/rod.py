@@ -225,6 +225,9 @@ def rod_problems(case) -> list[tuple[str, str]]:
     if case.geometry.kind == "polyline":
         return [("geometry.polyline", "the beam model needs a straight stress-free "
                  "reference: give length, horizontal_tension or sag_ratio")]
+    if case.section is not None and not case.section.EI > 0:
+        return [("section.EI", "the beam model (a rod) needs EI > 0; a cable without bending "
+                 "stiffness is the string alone")]
     return []
 
 

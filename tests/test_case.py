@@ -575,6 +575,19 @@ def test_table_ending_before_t_end_is_refused_unless_held(tmp_path, where, key):
     assert has_problem(problems_of(data, base_dir=tmp_path), f"{key}.hold", "boolean")
 
 
+def test_table_ends_are_checked_against_the_runs_end(tmp_path):
+    """A table ending at t = 2 s with dynamics.t_end = 3 s was refused for a run that ends
+    before it (--t-end 1.5) or has no dynamics (--static-only): the check is against the
+    run's end (``t_end``) and skipped without dynamics; a later end is still refused."""
+    data = _table_case(tmp_path, SMOOTH, 0.01, 3.0)
+    assert has_problem(problems_of(data, base_dir=tmp_path), "anchors[1].motion.file",
+                       "end of the run t = 3 s")
+    assert parse_case(data, base_dir=tmp_path, t_end=1.5).anchors[1].motion.hold is False
+    parse_case(data, base_dir=tmp_path, dynamics=False)
+    assert has_problem(problems_of(data, base_dir=tmp_path, t_end=2.5),
+                       "anchors[1].motion.file", "end of the run t = 2.5 s")
+
+
 def test_table_resolution_warnings(tmp_path):
     """A smooth table, rows every 0.01 s, at rest at t = 0: no warning with dt = 0.01. With
     dt = 0.02 its rows are closer than dt. A fast table (w = 30 rad/s: its acceleration
@@ -701,7 +714,7 @@ BAD = [
     ("dynamics.t_end", DELETE, "dynamics.t_end", "missing required key"),
     ("dynamics.rho_inf", 1.5, "dynamics.rho_inf", "must be >= 0 and <= 1"),
     ("dynamics.output_every", 0, "dynamics.output_every", "must be >= 1"),
-    ("modal.modes", 0, "modal.modes", "must be >= 1"),
+    ("modal.modes", -1, "modal.modes", "must be >= 0"),
     ("solver.tension_only", 1, "solver.tension_only", "expected a boolean"),
     ("solver.petsc_options", {"cable_ts_type": "alpha2"}, "solver.petsc_options.cable_ts_type",
      "without '-' or the 'cable_' prefix"),

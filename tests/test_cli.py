@@ -88,7 +88,8 @@ def test_bad_section_values(tmp_path, field, value):
     text = case.read_text().replace(f"\n{field} = ", f"\n{field} = {value}\n#", 1)
     case.write_text(text)
     res = cablefem("run", case, "--output", tmp_path / "out")
-    assert res.returncode == 2 and f"section.{field}" in res.stderr and "> 0" in res.stderr
+    bound = ">= 0" if field == "EI" else "> 0"  # EI = 0: the string alone (test_chain.py)
+    assert res.returncode == 2 and f"section.{field}" in res.stderr and bound in res.stderr
     assert "Traceback" not in res.stderr
 
 
@@ -105,6 +106,52 @@ def test_malformed_motion_csv(tmp_path):
     res = cablefem("run", case, "--output", tmp_path / "out")
     assert res.returncode == 2 and "m.csv" in res.stderr and "line 3" in res.stderr
     assert "Traceback" not in res.stderr
+
+
+def test_table_ends_follow_t_end_and_static_only(tmp_path, capsys):
+    """A motion table that ends at 0.06 s, dynamics.t_end = 0.1 s: refused for the case's
+    own end (exit 2, naming the table's file), but not for --t-end 0.05 nor for
+    --static-only, which were refused before ("before the end of the run t = 0.1 s")."""
+    from cablefem.app.cli import main
+
+    t = np.linspace(0.0, 0.06, 13)
+    rows = "".join(f"{ti!r},{1e-4 * (1 - np.cos(50 * ti)) ** 2!r},0,0\n" for ti in t)
+    (tmp_path / "m.csv").write_text("time,ux,uy,uz\n" + rows)
+    case = write_case(tmp_path, motion='type = "table"\nfile = "m.csv"')
+    assert main(["run", str(case), "-o", str(tmp_path / "a"), "-q", "--no-figures"]) == 2
+    assert "anchors[1].motion.file" in capsys.readouterr().err
+    assert main(["run", str(case), "-o", str(tmp_path / "b"), "-q", "--no-figures",
+                 "--t-end", "0.05"]) == 0
+    assert json.loads((tmp_path / "b" / "summary.json").read_text())["dynamics"][
+        "t_end"] == 0.05
+    assert main(["run", str(case), "-o", str(tmp_path / "c"), "-q", "--no-figures",
+                 "--static-only"]) == 0
+
+
+def test_one_sagging_element_is_refused(tmp_path, capsys):
+    """mesh.elements = 1 with a sag (l = 1.0065 > chord 1): the one element is straight
+    along the chord, slack; the run reached the dynamics and failed (exit 1). Refused
+    before any solve (exit 2, mesh.elements); a taut single element (l < chord) runs."""
+    from cablefem.app.cli import main
+
+    case = write_case(tmp_path, geometry="sag_ratio = 0.05", q_pos="[1.0, 0, 0]")
+    case.write_text(case.read_text().replace("elements = 12", "elements = 1"))
+    assert main(["run", str(case), "-o", str(tmp_path / "a"), "-q", "--no-figures"]) == 2
+    assert "mesh.elements" in capsys.readouterr().err
+    case.write_text(case.read_text().replace("sag_ratio = 0.05", "length = 0.999"))
+    assert main(["run", str(case), "-o", str(tmp_path / "b"), "-q", "--no-figures",
+                 "--static-only"]) == 0
+
+
+def test_restart_of_a_missing_folder_says_so(tmp_path, capsys):
+    """--restart of a folder that does not exist said "no checkpoint": now exit 2 with
+    "no such folder"; an existing folder without a checkpoint still says no checkpoint."""
+    from cablefem.app.cli import main
+
+    assert main(["run", "--restart", str(tmp_path / "nope"), "-q"]) == 2
+    assert "nope: no such folder" in capsys.readouterr().err
+    assert main(["run", "--restart", str(tmp_path), "-q"]) == 2
+    assert "no checkpoint" in capsys.readouterr().err
 
 
 def test_run_writes_everything_and_post_reproduces(tmp_path):

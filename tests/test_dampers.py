@@ -471,3 +471,72 @@ def test_the_mesh_leaves_the_damper_room_for_its_offset():
     assert np.all(near <= 1.1 * MESH_RATIO * ell * (1 + 1e-3))
     h = 149.74 / 2000  # about the mesh's size elsewhere (the stress-free length / 2000)
     assert np.all(np.abs(np.diff(st[k + 2:k + 6]) / h - 1) < 0.3)
+
+
+@pytest.mark.parametrize("direction, warns", [([1.0, 0, 0], True), ([0.1, 0, 1.0], False)])
+def test_a_damper_along_the_cable_warns(mpi_tmp_path, direction, warns):
+    """A damper whose direction is the taut cable's axis x damps only the axial motion (the
+    transverse modes' ratios were ~1e-15, silently): the run warns on its direction. One
+    tilted by atan(0.1) from z keeps 1 - (d.t)^2 = 0.99 of its coefficient: no warning."""
+    from cablefem.app.run import run_case
+
+    case = parse_case(taut(0.05, 1.0, 40, direction=direction))
+    res = run_case(case, mpi_tmp_path / "out", comm, figures=False, progress=False, modes=0)
+    keys = [w["key"] for w in res.summary.get("warnings", [])]
+    assert ("dampers[0].direction" in keys) == warns, keys
+
+
+def test_the_warning_line_is_printed_once(mpi_tmp_path, capsys):
+    """The command line's closing "1 warning(s)" line was written by every rank (twice on
+    2 ranks): rank 0 writes it, as it logs the warnings themselves."""
+    case = mpi_tmp_path / "axial.toml"
+    if comm.rank == 0:
+        case.write_text("""
+[section]
+EA = 1e8
+EI = 1e-6
+mass = 1.0
+[gravity]
+g = 0.0
+[geometry]
+length = 9.999
+[mesh]
+elements = 20
+[[anchors]]
+name = "p"
+position = [0.0, 0.0, 0.0]
+type = "pinned"
+[[anchors]]
+name = "q"
+position = [10.0, 0.0, 0.0]
+type = "pinned"
+[[dampers]]
+anchor = "q"
+distance = 2.0
+coefficient = 10.0
+direction = [1.0, 0.0, 0.0]
+""")
+    comm.Barrier()
+    assert main(["run", str(case), "-o", str(mpi_tmp_path / "out"), "--static-only",
+                 "--no-figures"]) == 0
+    err = capsys.readouterr().err
+    assert err.count("warning(s), listed under 'warnings'") == (1 if comm.rank == 0 else 0)
+
+
+def test_summary_has_the_damped_modes_lambda(mpi_tmp_path):
+    """summary.json's modes carry |lambda| of the damped system (it was only logged):
+    with Rayleigh damping the complex modes are the undamped ones, so |lambda| = omega to
+    the eigen-solver's tolerance (1e-8 allowed, as above); undamped: absent."""
+    from cablefem.app.run import run_case
+
+    d = taut(0.02, 1.0, 30)
+    d.pop("dampers")
+    d["damping"] = {"alpha": 0.3, "beta": 2e-4}
+    res = run_case(parse_case(d), mpi_tmp_path / "a", comm, figures=False, progress=False,
+                   modes=4)
+    for entry in res.summary["modes"]:
+        assert entry["lambda_abs"] == pytest.approx(entry["omega"], rel=1e-8)
+    d.pop("damping")
+    res = run_case(parse_case(d), mpi_tmp_path / "b", comm, figures=False, progress=False,
+                   modes=4)
+    assert not any("lambda_abs" in entry for entry in res.summary["modes"])

@@ -187,3 +187,23 @@ def test_paper_numbers_quoted_are_computed(paper_statics):
             bad += [f"{row}, {name}: quoted {q}, computed {v:.6g}"
                     for q, v in zip(quoted, values) if not _quoted(q, v)]
     assert not bad, "numbers in the documentation that a run does not give:\n" + "\n".join(bad)
+
+
+def test_every_csv_column_has_a_unit():
+    """docs/outputs.md's table of units names every column the run writes to anchors.csv,
+    kinks.csv and touchdown.csv (the headers carry names only), once, with a unit."""
+    from cablefem.app.touchdownout import TOUCHDOWN_COLUMNS
+    from cablefem.io.anchorcsv import ANCHOR_COLUMNS, MOMENT_COLUMNS
+    from cablefem.kinks import KINK_COLUMNS
+
+    text = (ROOT / "docs" / "outputs.md").read_text()
+    block = text.split("<!-- csv-units:start -->")[1].split("<!-- csv-units:end -->")[0]
+    documented: dict[str, list[str]] = {}
+    for line in block.strip().splitlines()[2:]:
+        file, names, unit, what = (c.strip() for c in line.strip("|").split("|"))
+        assert unit and what, line
+        documented.setdefault(file, []).extend(re.findall(r"`([^`]+)`", names))
+    written = {"anchors.csv": ANCHOR_COLUMNS + MOMENT_COLUMNS, "kinks.csv": KINK_COLUMNS,
+               "touchdown.csv": TOUCHDOWN_COLUMNS}
+    for file, columns in written.items():
+        assert sorted(documented.get(file, [])) == sorted(columns), file

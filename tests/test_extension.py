@@ -335,3 +335,46 @@ def test_misuse_is_refused():
         model.F_dynamic = model.F_dynamic + term
     with pytest.raises(AttributeError, match="forms.add"):
         model.j_dynamic = None
+
+
+@pytest.mark.parametrize("kind", ["static", "dynamic"])
+def test_a_term_not_linear_in_du_or_a_is_refused_at_add(kind):
+    """inner(du, du)*dx was accepted by add and failed in compile() ("too many values to
+    unpack"); a dynamic term quadratic in a was accepted silently: both are refused at add,
+    naming the term. A term linear in a (an added mass) is accepted."""
+    model = CableModel(parse_case(_taut(4)), MPI.COMM_WORLD)
+    du, a = model.du, model.a
+    with pytest.raises(ValueError, match="'square'.*not linear in the test function"):
+        model.forms.add("square", ufl.inner(du, du) * ufl.dx, kind=kind)
+    with pytest.raises(ValueError, match="'root'.*not linear in the test function"):
+        model.forms.add("root", ufl.sqrt(ufl.inner(du, du) + 1.0) * ufl.dx, kind=kind)
+    assert model.forms.user == {}
+    if kind == "dynamic":
+        with pytest.raises(ValueError, match="'drag_a'.*not linear in the acceleration"):
+            model.forms.add("drag_a", ufl.dot(a, a) * du[1] * ufl.dx, kind=kind)
+        model.forms.add("added_mass", _constant(model, 0.5) * ufl.inner(a, du) * ufl.dx,
+                        kind=kind)
+        model.compile()
+
+
+@pytest.mark.parametrize("from_static", [True, False])
+def test_a_spring_from_the_static_state_leaves_it_at_rest(from_static):
+    """docs/extending.md: a spring k (u - u_static) added as a dynamic term leaves the
+    static state an equilibrium of the dynamics (the taut string at rest stays there to
+    round-off, 0.2 s); the spring k u, on the displacement from the stress-free reference,
+    pulls the statically stretched string (u_x up to CHORD - L0 = 0.01) back and it moves
+    (measured 3.6e-6 m at k = 25 N/m^2: far above round-off)."""
+    model = CableModel(parse_case(_taut(8)), MPI.COMM_WORLD)
+    disp = model.u - model.u_static if from_static else model.u
+    model.forms.add("spring", _constant(model, 25.0) * ufl.inner(disp, model.du) * ufl.dx,
+                    kind="dynamic")
+    model.compile()
+    solve_static(model)
+    us = model.comm.bcast(model.gather_nodal(model.u), root=0)
+    for _ in integrate(model, 0.2, 0.01, 1.0):
+        pass
+    moved = np.max(np.abs(model.comm.bcast(model.gather_nodal(model.u), root=0) - us))
+    if from_static:
+        assert moved <= 1e-12 * (CHORD - L0)
+    else:
+        assert moved > 1e-7

@@ -180,3 +180,34 @@ def test_python_api():
     assert {"fluid_static", "fluid_dynamic"} <= set(model.forms.user)
     with pytest.raises(CaseError, match="fluid.density"):
         create_cable(comm, anchors, sec, length=L, fluid=Fluid(-1.0, D))
+
+
+def _axial(res, model) -> float:
+    """The frequency of the first mode whose shape is along the cable (x)."""
+    for w, shape in zip(res.omegas, res.shapes):
+        r = model.comm.bcast(model.gather_nodal(shape), root=0)
+        if np.sum(r[:, 0] ** 2) > 0.99 * np.sum(r**2):
+            return float(w)
+    raise AssertionError("no axial mode")
+
+
+def test_tangential_added_mass_scales_the_axial_frequencies():
+    """fluid.ca_tangential (MoorDyn's Cat; it had no key): the added mass C rho A along the
+    cable, per current length, scales the axial modes by sqrt(m/(m + C rho A lam)) (lam =
+    1 + T/EA = 1.1, the stretch: the mass per stress-free length m) and leaves the
+    transverse ones alone (C_an = 0 in both). Exact for the P1 masses (both scale alike):
+    the eigen-solver's tolerance, 1e-8 allowed."""
+    C, EA, n = 1.5, 1.0e5, 8
+    out = []
+    for ca_t in (0.0, C):
+        model = CableModel(comm, parse_case(taut(EA=EA, elements=30, fluid={
+            "ca_normal": 0.0, "ca_tangential": ca_t})))
+        solve_static(model)
+        res = solve_modes(model, n)
+        out.append((_axial(res, model), res.omegas))
+    lam = 1 + T0 / EA
+    assert out[1][0] / out[0][0] == pytest.approx(np.sqrt(M / (M + C * RHO * A * lam)),
+                                                  rel=1e-8)
+    transverse = [w for w in out[0][1] if abs(w - out[0][0]) > 1e-6 * w][:4]
+    for w in transverse:
+        assert np.min(np.abs(out[1][1] - w)) <= 1e-8 * w

@@ -134,3 +134,21 @@ def test_network_mode_plane():
     assert inplane["plane"] == "in-plane" and inplane["normal_share"] < 1e-12
     line = np.column_stack([np.arange(5.0), 0 * np.arange(5.0), 0 * np.arange(5.0)])
     assert classify_network_mode(line, np.ones((5, 3))) == {}
+
+
+def test_modal_modes_0_skips_the_modal_analysis(mpi_tmp_path):
+    """docs/case-file.md: without a [modal] table a run computes modal.modes = 6 modes;
+    modal.modes = 0 (which the README's "a run without modes" needs; it was refused,
+    "must be >= 1") computes none and leaves the "auto" span bending off."""
+    from conftest import level_case
+
+    from cablefem.app.run import run_case
+    from cablefem.case import parse_case
+
+    d = level_case(elements=20)
+    res = run_case(parse_case(d), mpi_tmp_path / "a", figures=False, progress=False)
+    assert len(res.summary["modes"]) == 6
+    d["modal"] = {"modes": 0}
+    res = run_case(parse_case(d), mpi_tmp_path / "b", figures=False, progress=False)
+    assert "modes" not in res.summary
+    assert res.summary["span_bending_auto"]["reason"] == "no mode computed"

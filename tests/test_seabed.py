@@ -246,3 +246,89 @@ def test_mooring_demo_in_an_irregular_sea(mpi_tmp_path):
     dyn = res.summary["dynamics"]
     assert res.summary["status"] == "completed"
     assert dyn["newton_iterations"] <= 4 * dyn["steps"]
+
+
+@pytest.mark.parametrize("z, buried", [(H_F, ["anchor"]), (100.0, ["anchor", "fairlead"]),
+                                       (-50.0, []), (1e-4 * 130.0, [])])
+def test_a_seabed_above_an_anchor_is_refused(z, buried):
+    """A seabed between the anchors (the anchor 50 m below it) or above both (100 where
+    -100 was meant) made statics 'converge' at tensions of 1e8-1e9 N (the buried part
+    pushed up by k times its penetration): refused, naming seabed.z and the anchors. The
+    anchors' distance is 130 m: an anchor 0.013 m below the seabed (1e-4 of it, inside
+    the 1e-3 tolerance for an anchor sunk in by the penetration) is accepted."""
+    d = mooring()
+    d["seabed"]["z"] = z
+    if not buried:
+        parse_case(d)
+        return
+    with pytest.raises(CaseError) as err:
+        parse_case(d)
+    assert [k for k, _ in err.value.problems] == ["seabed.z"] * len(buried)
+    for name in buried:
+        assert f"anchor {name!r}" in str(err.value)
+
+
+@pytest.mark.parametrize("waves", [False, True])
+def test_a_free_surface_below_the_seabed_is_refused(waves):
+    """A surface at -150 m over a seabed at 0 ran with no buoyancy and the waves in deep
+    water, silently (an explicit negative depth was refused): refused at fluid.surface."""
+    d = mooring()
+    d["fluid"] = {"density": 1025.0, "diameter": 0.1, "surface": -150.0}
+    if waves:
+        d["fluid"]["waves"] = [{"height": 1.0, "period": 8.0, "direction": [1.0, 0, 0]}]
+    with pytest.raises(CaseError) as err:
+        parse_case(d)
+    assert [k for k, _ in err.value.problems] == ["fluid.surface"]
+    d["fluid"]["surface"] = 60.0  # above both anchors: water 60 m deep
+    parse_case(d)
+
+
+def test_the_mooring_demo_with_its_seabed_misplaced_exits_2(mpi_tmp_path, capsys):
+    """The command line: the mooring demo with seabed.z = 100 (-100 meant) is bad input."""
+    from pathlib import Path
+
+    from cablefem.app.cli import main
+
+    demo = Path(__file__).resolve().parents[1] / "demos" / "mooring.toml"
+    case = mpi_tmp_path / "moor.toml"
+    if comm.rank == 0:
+        case.write_text(demo.read_text().replace("z = -100.0", "z = 100.0"))
+    comm.Barrier()
+    assert main(["run", str(case), "-o", str(mpi_tmp_path / "out"), "-q"]) == 2
+    err = capsys.readouterr().err
+    assert "seabed.z" in err and "fluid.surface" in err
+
+
+@pytest.mark.parametrize("height, warns", [(15.0, True), (14.0, False)])
+def test_a_breaking_wave_warns(height, warns):
+    """A wave 100 m long in deep water (T = sqrt(2 pi 100/g), lambda = g T^2/(2 pi)):
+    15 m high is steeper than 1/7 (0.15) and warns on its height; 14 m (0.14) does not.
+    The model's warnings, which the run lists in summary.json."""
+    d = mooring(elements=20)
+    d["fluid"] = {"density": 1025.0, "diameter": 0.1, "surface": 1000.0, "depth": 1e6,
+                  "waves": [{"height": height, "period": math.sqrt(2 * math.pi * 100 / G),
+                             "direction": [1.0, 0, 0]}]}
+    model = CableModel(comm, parse_case(d))
+    got = [(k, m) for k, m in model.warnings if "breaking" in m]
+    assert [k for k, _ in got] == (["fluid.waves[0].height"] if warns else [])
+    if warns:
+        assert "H/lambda = 0.15 " in got[0][1] and "lambda = 100 m" in got[0][1]
+
+
+@pytest.mark.parametrize("surface, floats", [(60.0, True), (1000.0, False)])
+def test_a_cable_that_floats_to_the_surface_is_refused(surface, floats):
+    """fluid.density = 1e5 kg/m^3 makes the line 7.2e3 N/m lighter than the water it
+    displaces (rho g pi D^2/4 = 7.7e3 N/m against m g = 490 N/m): its catenary turned
+    upwards (150 m between anchors 130 m apart) rises above a surface 10 m over the
+    fairlead, where the buoyancy stops, and statics stalled (exit 1): refused at
+    fluid.density when the model is built. Held 950 m below the surface it is accepted."""
+    d = mooring(elements=20)
+    d["fluid"] = {"density": 1e5, "diameter": 0.1, "surface": surface}
+    if floats:
+        with pytest.raises(CaseError) as err:
+            CableModel(comm, parse_case(d))
+        assert [k for k, _ in err.value.problems] == ["fluid.density"]
+        assert "floats" in str(err.value)
+    else:
+        assert CableModel(comm, parse_case(d)).submerged_weight == pytest.approx(
+            W - 1e5 * G * math.pi * 0.1**2 / 4, rel=1e-12)

@@ -269,6 +269,7 @@ def _main(argv: list[str] | None = None) -> int:
 
     from cablefem.case import CaseError, load_case
 
+    ck: dict = {}  # a restart's checkpoint
     if args.command == "run":
         if args.restart is not None:
             from cablefem.io.checkpoint import read_checkpoint
@@ -304,15 +305,21 @@ def _main(argv: list[str] | None = None) -> int:
         if args.case is None or args.output is None:
             return _input_error("give a case file and --output DIR, or --restart DIR")
     case_path = args.case
+    if getattr(args, "t_end", None) is not None and not args.t_end > 0:
+        return _input_error(f"--t-end must be > 0 (s), got {args.t_end}")
+    # the tables must reach the end of the run's dynamics, when it has any: --t-end, or
+    # the checkpoint's end on a restart, else dynamics.t_end
+    t_end = getattr(args, "t_end", None)
+    if t_end is None and getattr(args, "restart", None) is not None and "t_stop" in ck:
+        t_end = float(ck["t_stop"])
     try:
-        case = load_case(case_path)
+        case = load_case(case_path, t_end=t_end, dynamics=args.command == "run"
+                         and not args.static_only)
     except CaseError as err:
         sys.stderr.write(str(err) + "\n")
         return EXIT_INPUT
     if getattr(args, "outer_correction", None) is not None:
         case.solver.outer_correction = args.outer_correction
-    if getattr(args, "t_end", None) is not None and args.t_end <= 0:
-        return _input_error(f"--t-end must be > 0 (s), got {args.t_end}")
     if getattr(args, "refine", None) is not None and not args.refine > 0:
         return _input_error(f"--refine must be > 0, got {args.refine}")
     if args.command == "run" and args.model is None:
@@ -382,11 +389,13 @@ def _main(argv: list[str] | None = None) -> int:
         sys.stderr.write(f"cablefem: {err}\n")
         return 128 + (err.signal or 2)
     warned = result.summary.get("warnings") or []
-    if warned:
+    from mpi4py import MPI
+
+    if warned and MPI.COMM_WORLD.rank == 0:  # once, as the log's warnings (rank 0)
         sys.stderr.write(f"cablefem: {len(warned)} warning(s), listed under 'warnings' in "
                          f"{Path(args.output) / 'summary.json'}\n")
-        if args.strict:
-            return EXIT_WARNED
+    if warned and args.strict:
+        return EXIT_WARNED
     return EXIT_OK
 
 

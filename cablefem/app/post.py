@@ -55,6 +55,9 @@ def run_post(case: Case, forces_csv: Path, outdir: Path, form: str = "exact",
     if case.network is not None:
         raise ValueError(f"{case.source}: 'cablefem post' takes single-cable cases; for a "
                          "network, its anchor forces come from 'cablefem run'")
+    if case.section is not None and not case.section.EI > 0:
+        raise ValueError(f"{case.source}: section.EI = 0: a cable without bending stiffness "
+                         "has no anchor moment to compute (cablefem.chain)")
     hist = read_forces(forces_csv)
     if sign == "anchor":
         hist.forces = {k: -v for k, v in hist.forces.items()}

@@ -32,6 +32,8 @@ from cablefem.app.report import (
 from cablefem.app.resources import note_small_problem
 from cablefem.cable import CableModel
 from cablefem.case import Case, CaseError, check_table_ends
+from cablefem.chain import NOTE as CHAIN_NOTE
+from cablefem.dampers import axial_dampers
 from cablefem.dynamics import DynamicsError, DynamicsStats, Interrupted, integrate
 from cablefem.errors import RunError, RunInterrupted
 from cablefem.io.checkpoint import case_digest, read_checkpoint, write_checkpoint
@@ -277,6 +279,9 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
                      "degrees_of_freedom": model.bs * len(model.geometry.stations),
                      "dimensionless": groups, "wall_time": {"build": t_build},
                      "warnings": []}
+    if getattr(model, "string_alone", False):  # section.EI = 0 (cablefem.chain)
+        summary["bending"] = {"EI": 0.0, "moments": False, "note": CHAIN_NOTE}
+        log.info("%s", CHAIN_NOTE)
     for key, message in list(case.warnings) + list(getattr(model, "warnings", [])):
         warn(summary, key, message)
     if kind == "beam":
@@ -308,12 +313,15 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
         "slack_elements": static.slack_elements, "max_tension": static.max_tension,
         "min_tension": static.min_tension, "sag_ratio": sag}
     summary["wall_time"]["statics"] = static.wall_time
+    for key, message in axial_dampers(model):
+        warn(summary, key, message)
     if kind == "beam" and static.slack_elements:
         # statics tried the relaxation from the guess and found nothing better
         warn(summary, "statics", f"the rod's static state has {static.slack_elements} "
              f"compressed element(s) (least tension {static.min_tension:.4g}): a buckled "
              "equilibrium, not a reference for a cable; try another --refine")
-    summary["outer_correction"] = "none" if kind == "beam" else case.solver.outer_correction
+    summary["outer_correction"] = ("none" if kind == "beam"  # the model's (EI = 0: none)
+                                   else model.case.solver.outer_correction)
     if kind != "beam":
         summary["span_bending"] = is_on(case.solver.span_bending)
         if auto is not None:
@@ -366,9 +374,12 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
             for entry, x in zip(summary["modes"], shifts):
                 if np.isfinite(x):
                     entry["span_bending_shift"] = float(x)
-        for entry, z in zip(summary["modes"], modal.damping_ratios):
+        lam = modal.damped_omegas  # |lambda| of the damped system's modes (None: undamped)
+        for k, (entry, z) in enumerate(zip(summary["modes"], modal.damping_ratios)):
             if np.isfinite(z):  # from the damped system's complex modes (modal.py)
                 entry["damping_ratio"] = float(z)
+                if lam is not None and np.isfinite(lam[k]):
+                    entry["lambda_abs"] = float(lam[k])
             else:  # no complex mode like it: absent, and said why
                 entry["damping_ratio_missing"] = "no complex mode of the damped system " \
                     "matches this mode (overdamped?)"

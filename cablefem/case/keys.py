@@ -66,7 +66,8 @@ CASE_KEYS: dict[str, KeyDoc | TableDoc] = {
                     "sqrt(l/g)); names the units in logs, figures and reports."),
     "section": TableDoc("table", REQUIRED, "", "Cross-section of the cable.", {
         "EA": KeyDoc("number", REQUIRED, "N", "Axial stiffness, > 0."),
-        "EI": KeyDoc("number", REQUIRED, "N m^2", "Bending stiffness, > 0."),
+        "EI": KeyDoc("number", REQUIRED, "N m^2", "Bending stiffness, >= 0; 0 (a chain): "
+                     "the string alone, no moments (single cables; docs/theory.md)."),
         "GJ": KeyDoc("number", 0.0, "N m^2", "Torsional stiffness, >= 0 (reported only)."),
         "mass": KeyDoc("number", REQUIRED, "kg/m", "Mass per stress-free length, > 0."),
         "diameter": KeyDoc("number", None, "m", "Outer diameter for stresses, > 0."),
@@ -229,6 +230,9 @@ CASE_KEYS: dict[str, KeyDoc | TableDoc] = {
                                 "area pi D per length (MoorDyn's convention), >= 0."),
         "ca_normal": KeyDoc("number", 1.0, "-", "Normal added-mass coefficient on "
                             "rho pi D^2/4, >= 0."),
+        "ca_tangential": KeyDoc("number", 0.0, "-", "Tangential added-mass coefficient on "
+                                "rho pi D^2/4 (MoorDyn's Cat), on the acceleration along "
+                                "the cable relative to the fluid's, >= 0."),
         "buoyancy": KeyDoc("boolean", True, "", "Buoyancy rho g pi D^2/4 against gravity "
                            "below the surface (false in air)."),
         "time": _TIME_DOC,
@@ -299,7 +303,8 @@ CASE_KEYS: dict[str, KeyDoc | TableDoc] = {
         "units": KeyDoc("string", "Pa", "", "Name of the stress unit in the reports."),
     }),
     "modal": TableDoc("table", None, "", "Modal analysis about the static equilibrium.", {
-        "modes": KeyDoc("integer", 6, "-", "Number of modes, >= 1."),
+        "modes": KeyDoc("integer", 6, "-", "Number of modes, >= 0 (0: no modal analysis; "
+                        "without a [modal] table a run computes 6)."),
     }),
     "beam": TableDoc("table", None, "", "Mesh and section of the reference rod model "
                      "('cablefem run --model beam'); the string ignores it.", {

@@ -62,6 +62,7 @@ from cablefem.motion import (
     read_motion_csv,
 )
 from cablefem.properties import Section
+from cablefem.water import water_problems
 
 # ---------------------------------------------------------------------------------------------
 # Parsing, table by table.
@@ -75,7 +76,7 @@ def _missing(*parts: Any) -> bool:
 
 
 def _parse_section(r: _Reader) -> Section | None:
-    values = (r.number("EA", gt=0), r.number("EI", gt=0), r.number("GJ", ge=0),
+    values = (r.number("EA", gt=0), r.number("EI", ge=0), r.number("GJ", ge=0),
               r.number("mass", gt=0))
     diameter = r.number("diameter", gt=0)
     if _missing(*values) or (r.has("diameter") and diameter is None):
@@ -342,7 +343,8 @@ def _parse_fluid(r: _Reader | None, section, base_dir: Path) -> Fluid | None:
                  r.number("ca_normal", ge=0), r.boolean("buoyancy"),
                  _parse_time(r.table("time"), base_dir) or TimeFunction.constant(),
                  _parse_profile(r.table("profile")), tuple(w for w in waves if w is not None),
-                 r.number("depth", gt=0), r.number("wave_ramp", ge=0), velocity)
+                 r.number("depth", gt=0), r.number("wave_ramp", ge=0), velocity,
+                 r.number("ca_tangential", ge=0))
 
 
 def _parse_profile(r: _Reader | None) -> Profile | None:
@@ -406,18 +408,22 @@ def _check_positions_on_cable(items: list, readers: list[_Reader], length: float
             r.add("s", f"must be < l = {length:g} (m), the stress-free length")
 
 
-def _finish(case: Case) -> Case:
-    """Cross-checks of the tables against the run's time range (a problem, or warnings)."""
-    if case.dynamics is not None:
-        problems = check_table_ends(case, case.dynamics.t_end)
+def _finish(case: Case, t_end: float | None = None, dynamics: bool = True) -> Case:
+    """Cross-checks of the tables against the run's time range (a problem, or warnings):
+    up to ``t_end`` (the run's, e.g. ``--t-end``; default ``dynamics.t_end``), none when
+    the run has no dynamics (``dynamics=False``, e.g. ``--static-only``)."""
+    if case.dynamics is not None and dynamics:
+        end = case.dynamics.t_end if t_end is None else float(t_end)
+        problems = check_table_ends(case, end)
         if problems:
             raise CaseError(problems, case.source)
-        case.warnings.extend(_table_warnings(case, case.dynamics.dt, case.dynamics.t_end))
+        case.warnings.extend(_table_warnings(case, case.dynamics.dt, end))
     return case
 
 
 def parse_case(data: dict, base_dir: str | os.PathLike = Path("."),
-               source: str = "<dict>") -> Case:
+               source: str = "<dict>", *, t_end: float | None = None,
+               dynamics: bool = True) -> Case:
     """Validate a case given as a dict of the TOML file's shape (see :data:`CASE_KEYS`).
 
     Parameters
@@ -428,6 +434,12 @@ def parse_case(data: dict, base_dir: str | os.PathLike = Path("."),
         Folder against which relative CSV paths are resolved.
     source : str
         Name of the case in error messages and in ``Case.source``.
+    t_end : float, optional
+        The run's end (s) against which the tables' lengths are checked (``--t-end``);
+        default ``dynamics.t_end``.
+    dynamics : bool
+        False for a run without dynamics (``--static-only``, ``cablefem modes``): the
+        tables' lengths are not checked.
 
     Raises
     ------
@@ -438,7 +450,8 @@ def parse_case(data: dict, base_dir: str | os.PathLike = Path("."),
     if not isinstance(data, dict):
         raise CaseError([("", f"expected a table of keys, got {_show(data)}")], source)
     if "network" in data:
-        return _parse_network_case(data, Path(base_dir), source)
+        return _finish(_parse_network_case(data, Path(base_dir), source), t_end, dynamics)
+    run = (t_end, dynamics)  # the run's (the case's own [dynamics] is parsed below)
     base_dir, problems = Path(base_dir), []
     top = _Reader(data, "", CASE_KEYS, problems)
 
@@ -486,9 +499,10 @@ def parse_case(data: dict, base_dir: str | os.PathLike = Path("."),
         problems += [p for p in flow_problems(fluid, gravity)
                      if p[0] != "fluid.waves" or "surface" not in p[1]]  # reported already
     seabed = _parse_seabed(top.table("seabed"))
+    problems += water_problems(anchors, gravity, fluid, seabed)
     damping = _parse_damping(top.table("damping"))
     dynamics = _parse_dynamics(top.table("dynamics"))
-    modal = ModalSpec(table("modal").integer("modes"))
+    modal = ModalSpec(table("modal").integer("modes", ge=0))
     fatigue = _parse_fatigue(top.table("fatigue"), section)
     beam_r = table("beam")
     beam = BeamSpec(*(beam_r.integer(k, **BEAM_BOUNDS[k][0]) if k == "span_elements"
@@ -515,7 +529,7 @@ def parse_case(data: dict, base_dir: str | os.PathLike = Path("."),
                         damping=damping,
                         dynamics=dynamics, modal=modal, solver=solver, source=source,
                         fatigue=fatigue,
-                        beam=beam, units=units or "SI"))
+                        beam=beam, units=units or "SI"), *run)
 
 
 def _parse_network_case(data: dict, base_dir: Path, source: str) -> Case:
@@ -589,7 +603,7 @@ def _parse_network_case(data: dict, base_dir: Path, source: str) -> Case:
                                 r.vector("direction", unit_vector=True)))
     damping = _parse_damping(top.table("damping"))
     dynamics = _parse_dynamics(top.table("dynamics"))
-    modal = ModalSpec(table("modal").integer("modes"))
+    modal = ModalSpec(table("modal").integer("modes", ge=0))
     solver_r = table("solver")
     solver = SolverSpec(solver_r.boolean("tension_only"), _parse_petsc_options(solver_r),
                         solver_r.string("outer_correction", ("none", "hinge")),
@@ -609,11 +623,12 @@ def _parse_network_case(data: dict, base_dir: Path, source: str) -> Case:
         problems += [p for p in flow_problems(fluid, gravity)
                      if p[0] != "fluid.waves" or "surface" not in p[1]]  # reported already
     seabed = _parse_seabed(top.table("seabed"))
+    problems += water_problems([], gravity, fluid, seabed)  # the anchors: in the model
     if problems:
         raise CaseError(problems, source)
     if _missing(title, gravity, mesh_path, first, damping, modal.modes, solver.tension_only):
         raise RuntimeError("cablefem internal error: a case value failed without a message")
-    return _finish(Case(title=title, section=first, gravity=gravity, geometry=None,
+    return (Case(title=title, section=first, gravity=gravity, geometry=None,
                         mesh=MeshSpec(1, 1.0), anchors=anchors, loads=loads,
                         point_masses=masses, point_loads=point_loads, damping=damping,
                         dynamics=dynamics, modal=modal, solver=solver, source=source,
@@ -650,8 +665,10 @@ def _parse_fatigue(r: _Reader | None, section: Section | None) -> FatigueSpec | 
     return FatigueSpec(**vals)
 
 
-def load_case(path: str | os.PathLike) -> Case:
+def load_case(path: str | os.PathLike, *, t_end: float | None = None,
+              dynamics: bool = True) -> Case:
     """Read and validate a TOML case file; relative CSV paths are taken from its folder.
+    ``t_end``, ``dynamics``: the run's, as in :func:`parse_case`.
 
     Raises
     ------
@@ -668,4 +685,5 @@ def load_case(path: str | os.PathLike) -> Case:
         where = re.search(r"line (\d+), column (\d+)", str(exc))
         key = f"line {where.group(1)}, column {where.group(2)}" if where else "TOML syntax"
         raise CaseError([(key, f"not a valid TOML file: {exc}")], str(path)) from None
-    return parse_case(data, base_dir=path.parent, source=str(path))
+    return parse_case(data, base_dir=path.parent, source=str(path), t_end=t_end,
+                      dynamics=dynamics)

@@ -59,6 +59,9 @@ def read_checkpoint(outdir: Path, comm: MPI.Comm = MPI.COMM_WORLD) -> dict:
         with np.load(path) as z:
             data = {k: z[k] for k in z.files}
     data = comm.bcast(data, root=0)
+    if data is None and not comm.bcast(Path(outdir).is_dir() if comm.rank == 0 else None):
+        raise ValueError(f"{outdir}: no such folder (--restart takes the output folder of "
+                         "an earlier run)")
     if data is None:
         raise ValueError(f"{path}: no checkpoint to restart from (a run writes one every "
                          "dynamics.checkpoint_every steps)")
