@@ -16,10 +16,10 @@ case "${1:-}" in
     [ -f meshes/roof_large.msh ] || "$PY" meshes/make_roof.py --n 42 --k 10 --out meshes/roof_large.msh
     export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
     exec mpirun -n "${NP:-2}" .venv/bin/cablefem run demos/roof_large.toml --output "${OUT:-output}/roof_large" ;;
-  test)      # serial suite, then the same suite on 2 MPI ranks
+  test)      # serial suite, then on 2 MPI ranks the tests where parallelism can change something
     bash .ci/setup
     "$PY" -m pytest -q -p no:cacheprovider tests
-    exec bash .ci/mpitest -q --color=no -p no:cacheprovider -m "not serial and not slow" tests ;;
+    exec bash .ci/mpitest -q --color=no -p no:cacheprovider -m "not serial and not slow and not single_rank" tests ;;
   test-slow)
     bash .ci/setup
     rc=0; "$PY" -m pytest -q -p no:cacheprovider -m slow tests || rc=$?

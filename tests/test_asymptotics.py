@@ -12,6 +12,8 @@ from scipy.spatial.transform import Rotation
 
 from cablefem import asymptotics as asy
 
+pytestmark = pytest.mark.single_rank  # pure NumPy: nothing distributed
+
 DELTAS_DEG = [1.0, 5.0, 10.0, 30.0, 60.0]
 BETAS = [0.0, 1e-3, 1e-2]
 EI_A, T_A = 4e-4, 25.0  # case A orders of magnitude (docs/theory.md §9)

@@ -112,6 +112,8 @@ def _tip(model):
     return MPI.COMM_WORLD.bcast(None if w is None else w[-1], root=0)
 
 
+@pytest.mark.single_rank  # 31 s on 2 ranks; the rod's parallel statics:
+# test_cantilever_tip_load_matches_the_elastica
 def test_cantilever_pure_moment_bends_into_a_circle():
     """An end moment M (about -E2: it bends the tip towards -E1) makes a circle of radius
     EI/M; with
@@ -303,6 +305,8 @@ def _sagging_clamped(EI: float, sag: float = 0.1) -> dict:
                         {"name": "q", "position": [1.0, 0, 0], "direction": [-1.0, 0, 0]}]}
 
 
+@pytest.mark.single_rank  # a fine rod (38 s on 2 ranks); the rod's parallel statics:
+# test_cantilever_tip_load_matches_the_elastica, test_taut_pinned_beam_frequencies
 def test_a_fine_rod_finds_the_tensioned_equilibrium():
     """Refined 4 and 8 times, the rod of a 10 %-sag cable with horizontal clamps
     (eps = 0.03) used to fail (Newton diverged from the guess: exit 1) or, worse, to

@@ -38,6 +38,8 @@ from cablefem.motion import (
 )
 from cablefem.properties import Section, dimensionless_groups
 
+pytestmark = pytest.mark.single_rank  # parsing, no dolfinx: nothing distributed
+
 EPS = np.finfo(float).eps
 OMEGA1 = 16.407  # case A: first in-plane frequency (rad per time unit), docs/theory.md §9
 OMEGA2 = 9.9815  # case B

@@ -11,11 +11,14 @@ import math
 import tempfile
 from pathlib import Path
 
+import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from cablefem.app.cli import main
 from cablefem.case import Case, CaseError, load_case
+
+pytestmark = pytest.mark.single_rank  # parsing, no dolfinx: nothing distributed
 
 BASE = """title = "fuzz"
 [section]

@@ -21,6 +21,8 @@ from cablefem.catenary import (
     solve_catenary,
 )
 
+pytestmark = pytest.mark.single_rank  # pure NumPy: nothing distributed
+
 EPS = np.finfo(float).eps
 
 # (span, rise, length, w, EA): slack level, inclined, steep and descending, taut (length <

@@ -121,6 +121,8 @@ def test_undamped_modes_have_zero_ratio():
     assert np.all(res.damping_ratios == 0.0) and res.damped_omegas is None
 
 
+@pytest.mark.single_rank  # 7250 steps of 100 elements (6 s serial, 42 s on 2 ranks); the
+# damper's parallel dynamics: test_network_damper_in_dynamics_by_superposition
 def test_free_decay_follows_the_modal_damping_ratio():
     """Dynamics: a cable released from its first z mode (amplitude 1e-3 L, linear range)
     decays as exp(-zeta omega t) with the PEP's zeta: the amplitude ratio over the

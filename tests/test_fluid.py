@@ -86,6 +86,8 @@ def release(d: dict, amplitude: float, t_end: float, dt: float, rho_inf: float =
     return np.array(ts), np.array(zs), stats, w
 
 
+@pytest.mark.single_rank  # a long free decay (25 s on 2 ranks); the drag's parallel
+# assembly: test_newton_iterations_with_drag_no_more_than_with_rayleigh and the others
 def test_quadratic_drag_free_decay_follows_equivalent_linearisation():
     """Released from 2 cm in its first mode in still water, the amplitude decays as the
     equivalent linearisation of the quadratic drag says: 1/A = 1/A0 + k t with

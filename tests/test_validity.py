@@ -119,6 +119,8 @@ def test_case_A_near_parametric_resonance():
     assert 0.028 / 4 < out["hinge"] < 4 * 0.028
 
 
+@pytest.mark.single_rank  # two runs of 6000 steps (17 s serial, 118 s on 2 ranks); the
+# estimate is rank 0's from gathered forces, its parallel path tested by the other runs
 def test_a_resonance_warning_names_the_span_bending(mpi_tmp_path):
     """Case A with four times its EI (eps doubled; "auto" leaves the bending off: 0.3 % at
     most) sits at its parametric resonance: many steady rows have an estimate above the
