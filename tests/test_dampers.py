@@ -188,11 +188,11 @@ def test_bad_damper_is_rejected_with_its_key(damper, key):
     assert key in str(err.value), str(err.value)
 
 
-def test_bad_damper_exit_2(mpi_tmp_path, capsys):
-    """The command line: a damper beyond the cable is an input problem (exit 2), named."""
-    case = mpi_tmp_path / "bad.toml"
+def _pinned_cable_toml(path, damper: str, mesh: str = "") -> None:
+    """Write (rank 0) a weightless pinned 10 m cable's case file with ``damper`` (the
+    [[dampers]] table's lines) and an optional [mesh] table; every rank waits for it."""
     if comm.rank == 0:
-        case.write_text("""
+        path.write_text(f"""
 [section]
 EA = 1e8
 EI = 1e-6
@@ -201,6 +201,7 @@ mass = 1.0
 g = 0.0
 [geometry]
 length = 9.999
+{mesh}
 [[anchors]]
 name = "p"
 position = [0.0, 0.0, 0.0]
@@ -210,11 +211,15 @@ name = "q"
 position = [10.0, 0.0, 0.0]
 type = "pinned"
 [[dampers]]
-anchor = "q"
-distance = 12.0
-coefficient = 10.0
+{damper}
 """)
     comm.Barrier()
+
+
+def test_bad_damper_exit_2(mpi_tmp_path, capsys):
+    """The command line: a damper beyond the cable is an input problem (exit 2), named."""
+    case = mpi_tmp_path / "bad.toml"
+    _pinned_cable_toml(case, 'anchor = "q"\ndistance = 12.0\ncoefficient = 10.0')
     assert main(["run", str(case), "-o", str(mpi_tmp_path / "out"), "-q"]) == 2
     assert "dampers[0].distance" in capsys.readouterr().err
 
@@ -492,33 +497,8 @@ def test_the_warning_line_is_printed_once(mpi_tmp_path, capsys):
     """The command line's closing "1 warning(s)" line was written by every rank (twice on
     2 ranks): rank 0 writes it, as it logs the warnings themselves."""
     case = mpi_tmp_path / "axial.toml"
-    if comm.rank == 0:
-        case.write_text("""
-[section]
-EA = 1e8
-EI = 1e-6
-mass = 1.0
-[gravity]
-g = 0.0
-[geometry]
-length = 9.999
-[mesh]
-elements = 20
-[[anchors]]
-name = "p"
-position = [0.0, 0.0, 0.0]
-type = "pinned"
-[[anchors]]
-name = "q"
-position = [10.0, 0.0, 0.0]
-type = "pinned"
-[[dampers]]
-anchor = "q"
-distance = 2.0
-coefficient = 10.0
-direction = [1.0, 0.0, 0.0]
-""")
-    comm.Barrier()
+    _pinned_cable_toml(case, 'anchor = "q"\ndistance = 2.0\ncoefficient = 10.0\n'
+                       'direction = [1.0, 0.0, 0.0]', mesh="[mesh]\nelements = 20")
     assert main(["run", str(case), "-o", str(mpi_tmp_path / "out"), "--static-only",
                  "--no-figures"]) == 0
     err = capsys.readouterr().err
