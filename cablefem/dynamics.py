@@ -463,8 +463,8 @@ class DynamicProblem:
                     f"({_TS_REASONS.get(reason, reason)}); last Newton history: "
                     f"{history.text()}", t)
             self.level += 1
-            log.info("t = %.6g: Newton failed with dt = %.3g, sub-stepping with dt = %.3g",
-                     t, h, sub / 4)
+            log.info("t = %.6g: Newton failed with dt = %.3g; going on with dt = %.3g", t, h,
+                     sub / 4)
         self.calm = 0 if failed else self.calm + 1
         self.time = t = t_next
         ts.setTime(t)  # the TS clock on the grid exactly, as a resumed run sets it
