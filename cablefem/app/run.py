@@ -560,6 +560,10 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
             if len(times) > 1:
                 entry["steady_state_moment"] = steady_state_stats(times, mo["moment"])
         summary["anchors"][a.name] = entry
+    if case.dynamics is not None and dynamics and times.size > 2:  # steps left ringing
+        from cablefem.app.alternation import check_alternation
+
+        check_alternation(summary, times, forces, case.dynamics)
     if emitter.touchdown.active and emitter.touchdown.rows:  # the touchdown's history
         summary["touchdown"] = emitter.touchdown.summary()
         off = summary["touchdown"].get("cable", {}).get("times_off_the_seabed", 0)
