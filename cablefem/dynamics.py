@@ -10,12 +10,17 @@ The residual ``F(t, U, V, A)`` is the model's UFL form ``F_dynamic``; the Jacobi
 ``dF/du + shift_v dF/du̇ + shift_a dF/dü`` (PETSc passes the shifts). An anchor's prescribed
 motion ``g(t)`` enters as the rows ``U − g(t)`` at the stage time.
 
-A step whose Newton solve fails is retried as 4, 16, ... equal sub-steps up to the next
-point of the nominal time grid (at most ``max_cuts`` times; PETSc's ``alpha2`` with its
-default adaptor would retry with the same step), and the run goes on with those sub-steps for
-``cooldown`` nominal steps before it tries a larger one: the step size changes seldom and
-only at grid points (generalised-α is second order at constant step only), and outputs stay
-on the nominal grid. When it cannot continue,
+A step whose Newton solve fails is retried from its start (displacement, velocity and the
+integrator's acceleration: :func:`_retry_from_start`) as 4, 16, ... equal sub-steps up to the
+next point of the nominal time grid (at most ``max_cuts`` times; PETSc's ``alpha2`` with its
+default adaptor would retry with the same step). The first step after a change of step size
+is a backward Euler step (:class:`_BackwardEuler`), which leaves the acceleration the
+equations of motion give at its end: generalised-α's acceleration belongs to its step size,
+and carried into a smaller step it set off a spike in the anchor forces (a mooring line's
+fairlead force 6 % low at the cut). The run then goes on with the sub-steps: returning to
+the larger step from a state the smaller one made set the fairlead force zigzagging by
+±10 % from step to step (``cooldown``, off by default, allows it after that many calm
+nominal steps). Outputs stay on the nominal grid. When it cannot continue,
 :class:`DynamicsError` says at which time, with the last Newton history, and leaves the last
 converged state in ``model.u`` and ``model.v``; everything written up to then stays valid.
 
@@ -170,6 +175,74 @@ def _make_ts(model, dt: float, rho_inf: float, history: SNESHistory,
     return ts, (F_vec, J_mat)
 
 
+def _retry_from_start(ts: PETSc.TS, t: float, number: int) -> None:
+    """Prepare ``ts`` (``alpha2``, after a step from ``t`` that failed) to retry that step
+    from its start: its displacement, velocity *and acceleration* there. ``TSRollBack``
+    marks the step rolled back, so that the next ``TSStep`` keeps ``alpha2``'s start state
+    (``X0``, ``V0``, ``A0``) instead of copying the failed attempt's acceleration into
+    ``A0``; it also moves the clock back a step, which is set again here.
+
+    The alternatives both changed the answer at every cut: a plain retry starts from the
+    failed iterate's acceleration, and a restart (``TSRestartStep``) re-estimates ``A0``
+    from two backward Euler half steps, which PETSc 3.18 divides by the half step instead
+    of the whole one, twice the acceleration (docs/rod.md, "Noticed, not changed"): the
+    sub-steps' first residual grew fourfold with each cut, and the mooring line of
+    demos/mooring.toml showed spikes in its fairlead force at every cut (issue 29 item 7)."""
+    ts.rollBack()
+    ts.setTime(t)
+    ts.setStepNumber(number)
+
+
+class _BackwardEuler:
+    """Within the block (when ``active``) ``alpha2``'s parameters are those of backward
+    Euler, ``α_m = α_f = γ = 1``, ``β = 1/2`` (PETSc's own for its start-up steps): the
+    equation of motion holds at the step's end, and neither the step nor its end state
+    depends on the acceleration it starts from; its end acceleration is the one the
+    equations of motion give there, generalised-α's consistent start. First order, and
+    strongly damping: used for the one step after a change of step size. petsc4py has no
+    call for ``TSAlpha2SetParams``: it is called through ctypes from the PETSc library
+    petsc4py is linked to."""
+
+    _lib = None
+
+    def __init__(self, ts: PETSc.TS, active: bool) -> None:
+        self.ts, self.active, self.saved = ts, active, None
+
+    @classmethod
+    def _functions(cls):
+        if cls._lib is None:
+            import ctypes
+
+            lib = ctypes.CDLL(PETSc.__file__)  # its dependencies hold libpetsc's symbols
+            real = ctypes.c_double
+            lib.TSAlpha2SetParams.argtypes = [ctypes.c_void_p] + [real] * 4
+            lib.TSAlpha2GetParams.argtypes = [ctypes.c_void_p] + [ctypes.POINTER(real)] * 4
+            cls._lib = (lib, real)
+        return cls._lib
+
+    def _set(self, params) -> None:
+        lib, _ = self._functions()
+        if lib.TSAlpha2SetParams(self.ts.handle, *params) != 0:
+            raise RuntimeError("TSAlpha2SetParams failed")
+
+    def __enter__(self):
+        if self.active:
+            lib, real = self._functions()
+            vals = [real() for _ in range(4)]
+            import ctypes
+
+            if lib.TSAlpha2GetParams(self.ts.handle, *map(ctypes.byref, vals)) != 0:
+                raise RuntimeError("TSAlpha2GetParams failed")
+            self.saved = [v.value for v in vals]
+            self._set((1.0, 1.0, 1.0, 0.5))
+        return self
+
+    def __exit__(self, *exc):
+        if self.saved is not None:
+            self._set(self.saved)
+        return False
+
+
 #: the TS's end time when none is given: PETSc's TSStep refuses to run without one
 _NO_END = 1e300
 
@@ -243,7 +316,8 @@ class DynamicProblem:
     def __init__(self, model, dt: float, *, rho_inf: float = 0.9,
                  petsc_options_prefix: str | None = None, petsc_options: dict | None = None,
                  initial: str = "quasi-static", start: Checkpoint | None = None,
-                 max_cuts: int = 6, cooldown: int = 8, stats: DynamicsStats | None = None):
+                 max_cuts: int = 6, cooldown: int | None = None,
+                 stats: DynamicsStats | None = None):
         if initial not in ("quasi-static", "rest"):
             raise ValueError(f"initial must be 'quasi-static' or 'rest', got {initial!r}")
         self._wall0 = time.perf_counter()
@@ -258,6 +332,9 @@ class DynamicProblem:
         self.reactions = AnchorReactions(model)
         self.hinges = getattr(model, "hinges", None)
         self.time, self.step_number, self.level, self.calm = 0.0, 0, 0, 0
+        #: the level of the last step taken (a step at another level starts with backward
+        #: Euler); None: the integrator estimates its acceleration itself at its next step
+        self._done_level: int | None = None
         #: the state at the start is an output of the first run() (not after a restore)
         self._initial_output = start is None
         if self.hinges:  # the layers' law, from the static state (also on a restart)
@@ -292,6 +369,7 @@ class DynamicProblem:
             m.v.x.array[:] = ck.v
         self.time, self.step_number = float(ck.time), int(ck.step)
         self.level, self.calm = int(ck.level), int(ck.calm)
+        self._done_level = None
         self._initial_output = False  # the checkpoint's time was an output already
         m.set_time(self.time)
         U = m.u.vector.copy()
@@ -348,27 +426,33 @@ class DynamicProblem:
                 t_next = t_end  # round-off: no extra step of ~1e-11 s (its velocity jump
                 # at a moving anchor gave forces of 1e6 N in the last row)
         history.clear()
-        if self.level and self.calm >= self.cooldown:  # a larger step again, seldom: each
-            self.level, self.calm = self.level - 1, 0  # change costs generalised-alpha
-        failed = False
+        if self.level and self.cooldown is not None and self.calm >= self.cooldown:
+            self.level, self.calm = self.level - 1, 0  # a larger step again (see the module)
+        failed = rolled = False
         while t < t_next - eps_t:
             sub = (t_next - t_start) / 4**self.level
-            ts.setTimeStep((t_next - t) / max(1, round((t_next - t) / sub)))
+            h = (t_next - t) / max(1, round((t_next - t) / sub))
+            ts.setTimeStep(h)
+            number = ts.getStepNumber()
+            changed = self._done_level is not None and self._done_level != self.level
             try:
-                ts.step()
+                with _BackwardEuler(ts, changed):
+                    ts.step()
             except PETSc.Error:  # raised when the step is rejected (ts_max_reject = 0)
                 if ts.getConvergedReason() >= 0:  # any other error: not a failed step
                     raise
             reason = ts.getConvergedReason()
             if reason >= 0:
                 t = ts.getTime()
+                rolled = False  # a step done: PETSc cleared its rolled-back state
+                self._done_level = self.level
                 continue
             stats.rejected_steps += 1
             failed = True
             ts.setConvergedReason(PETSc.TS.ConvergedReason.CONVERGED_ITERATING)
-            # a retried step would start from the failed attempt's acceleration (alpha2
-            # copies A1 into A0): restart, i.e. re-estimate A0 from the restored state
-            ts.restartStep()
+            if not rolled:  # the retry starts from the step's start, acceleration included
+                _retry_from_start(ts, t, number)
+                rolled = True
             if self.level == self.max_cuts:
                 self.time = t
                 self._state_to_model()  # the last converged state (step rolled back)
@@ -379,8 +463,8 @@ class DynamicProblem:
                     f"({_TS_REASONS.get(reason, reason)}); last Newton history: "
                     f"{history.text()}", t)
             self.level += 1
-            log.info("t = %.6g: Newton failed with dt = %.3g, sub-stepping with dt = %.3g",
-                     t, 4 * sub, sub)
+            log.info("t = %.6g: Newton failed with dt = %.3g; going on with dt = %.3g", t, h,
+                     sub / 4)
         self.calm = 0 if failed else self.calm + 1
         self.time = t = t_next
         ts.setTime(t)  # the TS clock on the grid exactly, as a resumed run sets it
@@ -453,7 +537,8 @@ class DynamicProblem:
 
 
 def integrate(model, t_end: float, dt: float, rho_inf: float = 0.9, output_every: int = 1,
-              stats: DynamicsStats | None = None, max_cuts: int = 6, cooldown: int = 8,
+              stats: DynamicsStats | None = None, max_cuts: int = 6,
+              cooldown: int | None = None,
               start: Checkpoint | None = None, checkpoint_every: int = 0,
               on_checkpoint=None, should_stop=None, initial: str = "quasi-static"
               ) -> Iterator[tuple[float, np.ndarray]]:

@@ -291,6 +291,9 @@ class StaticProblem:
         x = model.u.vector.copy()
         model.load_factor.value = 1.0
         total_its, steps = 0, 0
+        #: the strategies tried on the way, said once in the final line (their Newton
+        #: histories at debug level): Newton failing from the guess is part of the method
+        self.route: list[str] = []
         stages = getattr(model, "static_stages", None)  # a rod: soft-shear pre-solves
         if stages is not None:
             last = x.copy()
@@ -303,15 +306,15 @@ class StaticProblem:
                              its)
                 else:
                     last.copy(x)
-                    log.info("statics: pre-solve with %s failed (%s)", label, history.text())
+                    self._note(f"pre-solve with {label} failed", history)
         ok, its = _try(snes, x, history)
         total_its += its
         if not ok and model.tension_only:
             # every element slack on the guess (e.g. a coarse mesh of a stiff cable: the
             # chords of the sampled catenary are shorter than the elements): compression
             # allowed first
-            log.info("statics: tension-only Newton failed from the catenary (%s); solving "
-                     "with compression allowed first", history.text())
+            self._note("tension-only Newton failed from the catenary; compression allowed "
+                       "first", history)
             if self.bilateral_snes is None:
                 self.bilateral_snes, self._bilateral_work = self._make_snes(bilateral=True)
             model.scatter_nodal(guess, model.u)
@@ -365,10 +368,23 @@ class StaticProblem:
             log.warning("statics: %d slack element(s) carry no tension", slack)
         res = StaticResult(forces, total_its, steps, slack, tmax, tmin,
                            time.perf_counter() - t_start)
-        log.info("statics: converged in %d Newton iterations (%d continuation steps), "
-                 "tension %.6g..%.6g %s, %.2f s", total_its, steps, tmin, tmax,
+        route = f"; {', then '.join(self.route)}" if self.route else ""
+        log.info("statics: converged in %d Newton iterations (%d continuation steps%s), "
+                 "tension %.6g..%.6g %s, %.2f s", total_its, steps, route, tmin, tmax,
                  unit(model.case.units, "force"), res.wall_time)
         return res
+
+    def _note(self, what: str, history: SNESHistory | None = None) -> None:
+        """A step of the route to the equilibrium: kept for the final line, logged at
+        debug level with its Newton history (``logging.getLogger("cablefem").setLevel(
+        logging.DEBUG)`` shows it)."""
+        if not hasattr(self, "route"):
+            self.route = []
+        self.route.append(what)
+        if history is not None:
+            log.debug("statics: %s; Newton history: %s", what, history.text())
+        else:
+            log.debug("statics: %s", what)
 
     def _fallback(self, guess: np.ndarray, max_steps: int,
                   failure: str | None = None) -> tuple[PETSc.Vec, int, int]:
@@ -383,16 +399,17 @@ class StaticProblem:
         if not has_extra:
             # nothing to ramp: relaxation from the guess (e.g. a fine rod whose
             # clamped layers the guess misses by more than Newton can cross)
-            failure = failure or f"Newton failed from the elastic catenary ({history.text()})"
-            why = f"{failure} and there is no extra load to ramp"
-            log.info("statics: %s; relaxation from the guess", why)
+            self._note(failure or "Newton failed from the elastic catenary", history)
+            why = (f"{failure or 'Newton failed from the elastic catenary'} and there is no "
+                   "extra load to ramp")
+            self._note("relaxation from the guess")
             model.scatter_nodal(guess, model.u)
             x = model.u.vector.copy()
             its, steps = self._relax(x, "static equilibrium not found: " + why)
         else:
-            log.info("statics: %s; load continuation",
-                     failure or f"Newton failed from the catenary ({history.text()})")
+            self._note(failure or "Newton failed from the catenary", history)
             x, its, steps = self._continue(guess, max_steps)
+            self._note(f"load continuation, {steps} steps")
         return x, its, steps
 
     def _continue(self, guess: np.ndarray, max_steps: int) -> tuple[PETSc.Vec, int, int]:
@@ -412,7 +429,8 @@ class StaticProblem:
                     stalled = (f"load continuation stalled at load factor {lam:.4g} "
                                f"(increment {dlam:.2e}); last Newton history: "
                                f"{history.text()}")
-                    log.info("statics: %s; relaxation from the guess", stalled)
+                    self._note(f"load continuation stalled at load factor {lam:.4g}", history)
+                    self._note("relaxation from the guess")
                     model.load_factor.value = 1.0
                     model.scatter_nodal(guess, model.u)
                     model.u.vector.copy(x)
@@ -427,7 +445,7 @@ class StaticProblem:
                 if ok:
                     lam = trial
                     dlam *= 1.5
-                    log.info("statics: load factor %.4g converged in %d iterations", lam, its)
+                    log.debug("statics: load factor %.4g converged in %d iterations", lam, its)
                 else:
                     last.copy(x)  # back to the last converged state
                     dlam *= 0.5
@@ -495,7 +513,7 @@ class StaticProblem:
                     if ok:
                         y.copy(x)
                         y.destroy()
-                        log.info("statics: equilibrium after %d relaxation steps", step)
+                        self._note(f"equilibrium after {step} relaxation steps")
                         return total, step
                     y.destroy()
             raise StaticError(f"{why}; the relaxation did not reach the equilibrium either "

@@ -40,6 +40,34 @@ def _same_on_all_ranks(x) -> bool:
 
 
 # ---------------------------------------------------------------------------- statics
+def test_statics_says_its_route_once(caplog):
+    """Newton failing from the catenary is part of the method, not news: with at most 1
+    Newton iteration (the cable below needs 2), statics takes the relaxation and logs one
+    line at INFO, the converged one, naming the route, with no Newton history (before: a
+    line per failed attempt with its whole history; three before a converged relaxation
+    on a mooring line, 334 iterations); the histories stay at DEBUG."""
+    import logging
+
+    model = _model()
+    top = logging.getLogger("cablefem")  # it does not propagate after setup_logging
+    if not top.propagate:
+        top.addHandler(caplog.handler)
+    try:
+        with caplog.at_level(logging.DEBUG, logger="cablefem"), \
+                StaticProblem(model, petsc_options={"snes_max_it": 1}) as problem:
+            res = problem.solve()
+    finally:
+        top.removeHandler(caplog.handler)
+    assert res.continuation_steps > 0
+    mine = [r for r in caplog.records if r.name == "cablefem.statics"]
+    info = [r.getMessage() for r in mine if r.levelno >= logging.INFO]
+    assert len(info) == 1 and info[0].startswith("statics: converged"), info
+    assert "Newton failed from the elastic catenary, then relaxation from the guess, then " \
+           "equilibrium after" in info[0], info
+    assert "|F|=" not in info[0]
+    assert any("|F|=" in r.getMessage() for r in mine if r.levelno == logging.DEBUG)
+
+
 def test_static_problem_owns_its_snes_under_its_prefix():
     """Newton from the catenary needs 2 iterations on this cable (the sampled catenary is
     not the discrete equilibrium) and there is no extra load to ramp: with at most 1

@@ -155,3 +155,120 @@ def test_first_row_on_case_a_is_static_plus_damping_of_the_quasi_static_motion(k
             Mj = np.linalg.norm(jump[i, 3:])
             assert Mj > 1e-4 * np.linalg.norm(static[i, 3:])
             np.testing.assert_allclose(f0[i, 3:], expected[i, 3:], rtol=0, atol=1e-3 * Mj)
+
+
+def _spy_on_the_start(monkeypatch) -> dict:
+    """Record what the run passes to ``integrate`` and the velocity at its first output
+    (t = 0), gathered on rank 0 (None elsewhere)."""
+    import cablefem.app.run as run_module
+
+    seen: dict = {}
+    real = run_module.integrate
+
+    def spy(model, *args, **kw):
+        seen["initial"] = kw.get("initial")
+        for i, (t, forces) in enumerate(real(model, *args, **kw)):
+            if i == 0:
+                seen["t"], seen["v"] = t, model.gather_nodal(model.v)
+            yield t, forces
+
+    monkeypatch.setattr(run_module, "integrate", spy)
+    return seen
+
+
+def _taut_string(initial: str | None) -> dict:
+    """A taut weightless string (T = EA e = 100 N, 10 elements) between pinned anchors, q
+    moving across the chord, z = A sin(omega t) from t = 0 (velocity A omega at once)."""
+    d = {"title": "taut string", "section": {"EA": 1e4, "EI": 1e-6, "mass": 1.0},
+         "gravity": {"g": 0.0}, "geometry": {"length": 1.0}, "mesh": {"elements": 10},
+         "anchors": [{"name": "p", "position": [0, 0, 0], "type": "pinned"},
+                     {"name": "q", "position": [1.01, 0, 0], "type": "pinned",
+                      "motion": {"type": "harmonic", "amplitude": [0, 0, 1e-3],
+                                 "omega": 10.0, "ramp": 0.0}}],
+         "dynamics": {"t_end": 0.004, "dt": 0.002}}
+    if initial is not None:
+        d["dynamics"]["initial"] = initial
+    return d
+
+
+@pytest.mark.parametrize("initial", [None, "quasi-static", "rest"])
+def test_the_start_is_chosen_in_the_case_file(initial, mpi_tmp_path, monkeypatch):
+    """dynamics.initial reaches the time integration (default "quasi-static") and is
+    echoed in summary.json. On a taut string whose end q starts moving across the chord
+    with v0 = A omega: the quasi-static start gives every node the velocity v0 s/l (the
+    string follows its end as a straight line: the transverse static tangent is the
+    discrete Laplacian T/h, whose solution with v(0) = 0, v(l) = v0 is linear, exact for
+    P1), the rest start 0 everywhere but at q; to 1e-9 v0 (the linear solve)."""
+    from cablefem.app.run import run_case
+
+    seen = _spy_on_the_start(monkeypatch)
+    res = run_case(parse_case(_taut_string(initial)), mpi_tmp_path / "out", figures=False,
+                   progress=False)
+    want = initial or "quasi-static"
+    assert seen["initial"] == want and seen["t"] == 0.0
+    assert res.summary["dynamics"]["initial"] == want
+    assert res.summary["case"]["dynamics"]["initial"] == want
+    if MPI.COMM_WORLD.rank == 0:
+        v0 = 1e-3 * 10.0
+        s = res.model.geometry.stations
+        expected = np.zeros((s.size, 3))
+        expected[:, 2] = v0 * s / s[-1] if want == "quasi-static" else 0.0
+        expected[-1, 2] = v0
+        np.testing.assert_allclose(seen["v"], expected, rtol=0, atol=1e-9 * v0)
+
+
+def test_a_bad_start_is_refused_naming_the_key():
+    from cablefem.case import CaseError
+
+    with pytest.raises(CaseError, match=r"dynamics\.initial"):
+        parse_case(_taut_string("at rest"))
+
+
+@pytest.mark.parametrize("initial", ["quasi-static", "rest"])
+def test_the_rod_and_a_network_take_the_start(initial, mpi_tmp_path, monkeypatch):
+    """The rod (--model beam) and a network take dynamics.initial as the string does: at
+    rest, every node but the moving anchor's has zero velocity (translations and the rod's
+    rotations); quasi-static, the network of two cables in line whose two ends move
+    together moves as a rigid body (K 1 = 0: every node at v0, exact), and the rod's free
+    nodes move (a clamped rod follows its end with bending: no closed form here, only that
+    it is not the rest start)."""
+    from dataclasses import replace
+
+    from test_network import case_dict, write_mesh
+
+    from cablefem.app.run import run_case
+    from cablefem.case.schema import DynamicsSpec
+
+    v0 = 1e-3 * 10.0
+    # the rod: the taut rod of the test above, its end q moving across
+    seen = _spy_on_the_start(monkeypatch)
+    case = replace(_taut_rod(1e4, 1e-2, 1.0, 1.0, 0.01, 1e-3, 1e-3, 10.0),
+                   dynamics=DynamicsSpec(0.002, 0.002, 0.9, 1, initial=initial))
+    run_case(case, mpi_tmp_path / "rod", figures=False, progress=False, model="beam")
+    assert seen["initial"] == initial
+    if MPI.COMM_WORLD.rank == 0:
+        v = np.asarray(seen["v"])
+        free = np.abs(v[1:-1]).max()
+        assert (free == 0.0) if initial == "rest" else (free > 0.1 * v0), free
+        assert v[-1, 2] == pytest.approx(v0, rel=1e-12)
+    # a network: two cables in line (6 + 4 elements), both ends moving together along y
+    x = np.linspace(0, 10.0, 11)
+    pts = np.column_stack([x, np.zeros_like(x), np.zeros_like(x)])
+    cells = np.column_stack([np.arange(10), np.arange(1, 11)])
+    mesh = write_mesh(str(mpi_tmp_path / "line.msh"), pts, cells, ["a"] * 6 + ["b"] * 4,
+                      {"ends": [0, 10]})
+    d = case_dict(mesh, [{"group": "a", "section": "s", "pretension": 1e4},
+                         {"group": "b", "section": "s", "pretension": 1e4}], ["ends"],
+                  dynamics={"t_end": 0.002, "dt": 0.002, "initial": initial})
+    d["anchors"][0]["motion"] = {"type": "harmonic", "amplitude": [0, 1e-3, 0],
+                                 "omega": 10.0, "ramp": 0.0}
+    seen = _spy_on_the_start(monkeypatch)
+    run_case(parse_case(d), mpi_tmp_path / "net", figures=False, progress=False)
+    assert seen["initial"] == initial
+    if MPI.COMM_WORLD.rank == 0:
+        v = np.asarray(seen["v"])
+        ends = np.isin(np.arange(len(v)), [0, 10])
+        np.testing.assert_allclose(v[ends, 1], v0, rtol=1e-12)
+        want = v0 if initial == "quasi-static" else 0.0
+        np.testing.assert_allclose(v[~ends], [[0, want, 0]] * int((~ends).sum()), rtol=0,
+                                   atol=1e-9 * v0)

@@ -470,7 +470,8 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
             for t, forces in integrate(model, t_stop, dyn.dt, dyn.rho_inf, stride, stats,
                                        start=start, checkpoint_every=dyn.checkpoint_every,
                                        on_checkpoint=checkpoint,
-                                       should_stop=lambda: stop["signal"] is not None):
+                                       should_stop=lambda: stop["signal"] is not None,
+                                       initial=dyn.initial):
                 step, last = stats.steps, t >= t_stop - 1e-9 * dyn.dt
                 if step % dyn.output_every == 0 or last:
                     emitter.add(t, forces)
@@ -482,7 +483,8 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
             # the whole run's counters (a resumed run adds those before its checkpoint)
             total = _whole_run(base, stats, stats.wall_time)
             summary["dynamics"] = {
-                "t_end": t_stop, "dt": dyn.dt, "rho_inf": dyn.rho_inf, "steps": stats.steps,
+                "t_end": t_stop, "dt": dyn.dt, "rho_inf": dyn.rho_inf, "initial": dyn.initial,
+                "steps": stats.steps,
                 "rejected_steps": total["rejected_steps"],
                 "newton_iterations": total["newton_iterations"],
                 "linear_iterations": total["linear_iterations"],
@@ -571,6 +573,10 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
             if len(times) > 1:
                 entry["steady_state_moment"] = steady_state_stats(times, mo["moment"])
         summary["anchors"][a.name] = entry
+    if case.dynamics is not None and dynamics and times.size > 2:  # steps left ringing
+        from cablefem.app.alternation import check_alternation
+
+        check_alternation(summary, times, forces, case.dynamics)
     if emitter.touchdown.active and emitter.touchdown.rows:  # the touchdown's history
         summary["touchdown"] = emitter.touchdown.summary()
         off = summary["touchdown"].get("cable", {}).get("times_off_the_seabed", 0)

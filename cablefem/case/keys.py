@@ -277,6 +277,10 @@ CASE_KEYS: dict[str, KeyDoc | TableDoc] = {
         "checkpoint_every": KeyDoc("integer", 500, "-",
                                    "Checkpoint for 'cablefem run --restart' every n-th step, "
                                    ">= 0 (0: none)."),
+        "initial": KeyDoc("string", "quasi-static", "", "Velocity at t = 0: 'quasi-static' "
+                          "(the cable follows its anchors' velocity at t = 0 as a static "
+                          "solution would) | 'rest' (the cable at rest, only the anchors "
+                          "moving; what most FE codes start from)."),
     }),
     "fatigue": TableDoc("table", None, "", "Fatigue at the clamped anchors (EN 1993-1-9 style "
                         "S-N curve); present: 'cablefem run' also writes the fatigue report.", {

@@ -248,7 +248,8 @@ def _parse_dynamics(r: _Reader | None) -> DynamicsSpec | None:
         r.add("dt", f"must be <= t_end = {t_end!r} (s), got {dt!r}")
         return None
     parts = (t_end, dt, r.number("rho_inf", ge=0, le=1), r.integer("output_every"),
-             r.integer("fields_every"), r.integer("checkpoint_every", ge=0))
+             r.integer("fields_every"), r.integer("checkpoint_every", ge=0),
+             r.string("initial", choices=("quasi-static", "rest")))
     return None if _missing(*parts) else DynamicsSpec(*parts)
 
 

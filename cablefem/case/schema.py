@@ -37,6 +37,8 @@ class DynamicsSpec:
     output_every: int
     fields_every: int = 20
     checkpoint_every: int = 500
+    #: the velocity at t = 0: "quasi-static" or "rest" (cablefem.initial.initial_velocity)
+    initial: str = "quasi-static"
 
 
 @dataclass
