@@ -716,9 +716,3 @@ def _checkpoint_time(outdir: Path, comm: MPI.Comm) -> float | None:
         return read_checkpoint(outdir, comm)["checkpoint"].time
     except ValueError:
         return None
-
-
-
-
-
-
