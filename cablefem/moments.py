@@ -52,16 +52,22 @@ def resonance(omega: float | None, omegas, damping_ratio) -> tuple[float, float 
     harmonic excitation at ``omega`` (rad/s) (docs/theory.md §5):
     ``1 / sqrt(d**2 + zeta**2)`` with ``d = |omega / (k omega_n) - 1|`` the smallest relative
     detuning from a primary (k = 1) or parametric (k = 2) resonance of the modes
-    ``omegas`` and ``zeta`` the damping ratio there (``damping_ratio(omega_n)``); at least
-    1 (far from resonance the response follows the load quasi-statically). Returns the
-    factor and the circular frequency of the mode that gives it (None at factor 1)."""
+    ``omegas`` and ``zeta`` the damping ratio there: ``damping_ratio(omega_n)``, or, when
+    ``damping_ratio`` is a sequence, each mode's own (the damped system's modal ratios,
+    dampers included); at least 1 (far from resonance the response follows the load
+    quasi-statically). Returns the factor and the circular frequency of the mode that
+    gives it (None at factor 1)."""
     if not omega or omegas is None or len(omegas) == 0:
         return 1.0, None
+    if callable(damping_ratio):
+        ratios = [damping_ratio(w) for w in np.asarray(omegas, float)]
+    else:
+        ratios = np.asarray(damping_ratio, float)
     best, mode = 1.0, None
-    for w in np.asarray(omegas, float):
+    for w, z in zip(np.asarray(omegas, float), ratios):
         if not w > 0:
             continue
-        z = max(float(damping_ratio(w)), 0.0)
+        z = max(float(z), 0.0)
         for k in (1, 2):
             d = abs(omega / (k * w) - 1.0)
             f = 1.0 / max(np.hypot(d, z), 1e-12)

@@ -471,3 +471,30 @@ def test_the_mesh_leaves_the_damper_room_for_its_offset():
     assert np.all(near <= 1.1 * MESH_RATIO * ell * (1 + 1e-3))
     h = 149.74 / 2000  # about the mesh's size elsewhere (the stress-free length / 2000)
     assert np.all(np.abs(np.diff(st[k + 2:k + 6]) / h - 1) < 0.3)
+
+
+def test_resonance_factor_takes_the_dampers_ratio(mpi_tmp_path):
+    """The error estimate's resonance factor 1/sqrt(d^2 + zeta^2) takes each mode's damping
+    ratio from the damped system's modes, the damper's included: the taut cable with
+    Krenk's optimum damper at a/L = 0.02 (zeta_1 = a/(2L) = 1 %) and no [damping] table,
+    driven at its first frequency, has a factor of about 1/zeta_1 = 100, computed exactly
+    from the modes' own ratios (round-off: 1e-9). Before, the ratio came from the
+    [damping] table alone (0): the factor was 1/d, d the mode's detuning (P1 frequency
+    error, 2.6e-4 here: a factor of 3890)."""
+    from cablefem.app.run import run_case
+
+    w1 = np.pi * np.sqrt(T / (M / LAM)) / L
+    d = taut(0.02, 1.0, 40)
+    d["dampers"][0].pop("direction")  # normal to the cable: both planes damped
+    d["anchors"][1]["motion"] = {"type": "harmonic", "amplitude": [0.0, 0.0, 0.01],
+                                 "omega": w1}
+    d["modal"] = {"modes": 4}
+    res = run_case(parse_case(d), mpi_tmp_path / "out", comm, figures=False,
+                   progress=False, dynamics=False)
+    modes = res.summary["modes"]
+    zetas = np.array([m["damping_ratio"] for m in modes])
+    assert np.all(zetas > 0.005)  # Krenk: 1 % in mode 1, 0.8 % in mode 2 (eta = 2)
+    want = max(1 / np.hypot(abs(w1 / (k * m["omega"]) - 1), m["damping_ratio"])
+               for m in modes for k in (1, 2))
+    assert res.summary["error_resonance_factor"] == pytest.approx(want, rel=1e-9)
+    assert res.summary["error_resonance_factor"] < 1 / 0.005

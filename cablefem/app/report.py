@@ -80,6 +80,20 @@ def _damping_ratio(case: Case):
     return d.ratio_at
 
 
+def modal_damping_ratios(case: Case, modal) -> np.ndarray:
+    """Each mode's damping ratio for the resonance factor: the damped system's own
+    (``modal.damping_ratios``, from its complex modes: the ``[damping]`` table, dampers and
+    a fluid's linearised drag together), the ``[damping]`` table's ratio at the mode's
+    frequency where a mode has no complex partner (NaN) or none was computed."""
+    table = _damping_ratio(case)
+    own = getattr(modal, "damping_ratios", None)
+    out = np.array([table(w) for w in np.asarray(modal.omegas, float)], float)
+    if own is not None:
+        own = np.asarray(own, float)
+        out = np.where(np.isfinite(own), own, out)
+    return out
+
+
 def _g(x) -> str:
     return "n/a" if x is None else f"{x:.4g}"
 

@@ -20,11 +20,11 @@ from cablefem import __version__
 from cablefem.app.log import Progress, quiet_compiler
 from cablefem.app.output import RunOutput, rod_moment_columns
 from cablefem.app.report import (
-    _damping_ratio,
     _g,
     _max_excitation,
     _section_name,
     anchor_validity,
+    modal_damping_ratios,
     static_sag_ratio,
     steady_state_stats,
     warn,
@@ -396,7 +396,7 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
     except OutputError as err:
         raise RunError(f"{err}; run the case again") from err
     if n_modes and omega and kind != "beam":  # the error estimate near a resonance
-        amp, w_r = resonance(omega, modal.omegas, _damping_ratio(case))
+        amp, w_r = resonance(omega, modal.omegas, modal_damping_ratios(case, modal))
         bends = is_on(case.solver.span_bending)  # the outer problem has the span's bending
         shift = None  # the resonant mode's own span-bending error, measured on it
         if not bends and w_r is not None and shifts is not None:
