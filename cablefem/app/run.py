@@ -26,10 +26,12 @@ from cablefem.app.report import (
     anchor_validity,
     modal_damping_ratios,
     static_sag_ratio,
+    statistics_start,
     steady_state_stats,
     warn,
 )
 from cablefem.app.resources import note_small_problem
+from cablefem.app.statistics import warn_drifts
 from cablefem.cable import CableModel
 from cablefem.case import Case, CaseError, check_table_ends
 from cablefem.dynamics import DynamicsError, DynamicsStats, Interrupted, integrate
@@ -501,6 +503,7 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
     moments = {name: {k: np.array(v) for k, v in cols.items()}
                for name, cols in emitter.columns.items()}
     summary["anchors"] = {}
+    start = statistics_start(summary, case, times)
     for a in model.anchors:
         entry = {"kind": a.kind, "position": a.position,
                  "section": _section_name(case, a.section),
@@ -554,9 +557,11 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
             why = emitter.reasons.get(a.name, [])  # this process's rows (not a resumed run's)
             why = ["(not recorded)"] * (len(times) - len(why)) + why
             entry["validity"] = anchor_validity(summary, a.name, times,
-                                                {**mo, "invalid_reason": why}, ERROR_THRESHOLD)
+                                                {**mo, "invalid_reason": why}, ERROR_THRESHOLD,
+                                                start=start)
             if len(times) > 1:
-                entry["steady_state_moment"] = steady_state_stats(times, mo["moment"])
+                entry["steady_state_moment"] = steady_state_stats(times, mo["moment"],
+                                                                  start=start)
         summary["anchors"][a.name] = entry
     if emitter.touchdown.active and emitter.touchdown.rows:  # the touchdown's history
         summary["touchdown"] = emitter.touchdown.summary()
@@ -568,7 +573,7 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
                  "(sqrt(stiffness/mass) dt > 1); more seabed.damping or a smaller "
                  "dynamics.dt, or a smoother anchor motion (its ramp)")
     if emitter.kinkout.kinks:
-        summary["kinks"] = emitter.kinkout.summary()
+        summary["kinks"] = emitter.kinkout.summary(start)
         for name, entry in summary["kinks"].items():
             frac = entry.get("valid_fraction", 1.0)
             if frac < 1.0 or not entry["static_valid"]:
@@ -583,6 +588,7 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
         warn(summary, "kinks", f"{len(gaps)} node(s) where a cable kinks have no kink "
              f"moment (e.g. node {k}, {where!r}: {why}): give each cable through such a "
              "node its own group, of one section (docs/kinks.md)")
+    warn_drifts(summary, warn)
     if summary["status"] == "running":
         summary["status"] = "completed"
     if figures and len(times) > 1 and moments:

@@ -273,6 +273,11 @@ CASE_KEYS: dict[str, KeyDoc | TableDoc] = {
         "checkpoint_every": KeyDoc("integer", 500, "-",
                                    "Checkpoint for 'cablefem run --restart' every n-th step, "
                                    ">= 0 (0: none)."),
+        "statistics_start": KeyDoc("number", None, "s", "Start of the output window of the "
+                                   "steady-state statistics (peak, RMS) and of the moments' "
+                                   "validity summary, >= 0 and < t_end; default: the last "
+                                   "third of the run. A response still building up or "
+                                   "decaying in the window warns."),
     }),
     "fatigue": TableDoc("table", None, "", "Fatigue at the clamped anchors (EN 1993-1-9 style "
                         "S-N curve); present: 'cablefem run' also writes the fatigue report.", {

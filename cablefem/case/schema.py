@@ -37,6 +37,8 @@ class DynamicsSpec:
     output_every: int
     fields_every: int = 20
     checkpoint_every: int = 500
+    #: start of the statistics window, s (None: the last third of the run)
+    statistics_start: float | None = None
 
 
 @dataclass
