@@ -34,6 +34,7 @@ from cablefem.app.resources import note_small_problem
 from cablefem.app.statistics import warn_drifts
 from cablefem.cable import CableModel
 from cablefem.case import Case, CaseError, check_table_ends
+from cablefem.discretisation import model_frequency_error
 from cablefem.dynamics import DynamicsError, DynamicsStats, Interrupted, integrate
 from cablefem.errors import RunError, RunInterrupted
 from cablefem.io.checkpoint import case_digest, read_checkpoint, write_checkpoint
@@ -404,8 +405,11 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
         if not bends and w_r is not None and shifts is not None:
             shift = float(shifts[int(np.argmin(np.abs(modal.omegas - w_r)))])
             summary["error_resonance_shift"] = shift
+        disc = None if w_r is None else model_frequency_error(model, static, w_r)
+        if disc is not None:  # the mesh's and the time step's, amplified alike
+            summary["error_resonance_discretisation"] = disc
         emitter.moment_columns.set_resonance(amp, static.anchor_forces,
-                                             None if bends else w_r, shift)
+                                             None if bends else w_r, shift, disc)
         summary["error_resonance_factor"] = amp
     if resume is not None:  # after the emitter, which takes its reference from the statics
         model.scatter_nodal(resume["u"], model.u)
