@@ -87,11 +87,13 @@ def frequency_error(omega: float, tension: float, mass: float, h: float | None,
     return max(abs(e_h), abs(e_h + e_t))
 
 
-def model_frequency_error(model, static, omega: float) -> float | None:
+def model_frequency_error(model, static, omega: float, time_step: bool = True
+                          ) -> float | None:
     """:func:`frequency_error` of a single string's mode at ``omega``: its mesh's effective
     element, the least static tension (the largest wavenumber along the cable), the mass
     per length with a fluid's added mass (``fluid.ca_normal rho pi D^2/4``), and the case's
-    time step; None for a network (several sections and meshes) or a rod."""
+    time step (``time_step=False``: the mesh's alone, a mode's); None for a network
+    (several sections and meshes) or a rod."""
     case = model.case
     if getattr(model, "is_network", False) or getattr(case, "section", None) is None:
         return None
@@ -105,5 +107,5 @@ def model_frequency_error(model, static, omega: float) -> float | None:
         mass = mass + fluid.ca_normal * fluid.density * np.pi * D * D / 4
     dyn = case.dynamics
     return frequency_error(omega, static.min_tension, mass, effective_element(stations),
-                           None if dyn is None else dyn.dt,
+                           None if dyn is None or not time_step else dyn.dt,
                            0.9 if dyn is None else dyn.rho_inf)

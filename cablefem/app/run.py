@@ -18,6 +18,7 @@ from mpi4py import MPI
 
 from cablefem import __version__
 from cablefem.app.log import Progress, quiet_compiler
+from cablefem.app.modecheck import mode_validity
 from cablefem.app.output import RunOutput, rod_moment_columns
 from cablefem.app.report import (
     _g,
@@ -360,6 +361,9 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
             else:  # no complex mode like it: absent, and said why
                 entry["damping_ratio_missing"] = "no complex mode of the damped system " \
                     "matches this mode (overdamped?)"
+        if kind != "beam":  # each mode's estimated error and range (the rod resolves)
+            mode_validity(summary, model, static, modal, warn, ERROR_THRESHOLD,
+                          1 if model.hinges else 0)
         summary["wall_time"]["modal"] = modal.wall_time
         # the static state again: the modal solve does not change model.u, but be explicit
         model.u.x.array[:] = model.u_static.x.array
