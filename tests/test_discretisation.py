@@ -101,14 +101,17 @@ def test_alpha_ratio_is_petscs_alpha2(rho, Omega):
 
 def test_the_estimate_amplifies_the_mesh_error_at_resonance():
     """Near a resonance the mesh's frequency error enters the estimate as the outer one
-    does: e_disc A |M - M_s| / max(M, M_s) added to the row. A stay-like anchor row
+    does: e_h A |M - M_s| / max(M, M_s) added to the row. A stay-like anchor row
     (T = 3.44e6 N, m = 60 kg/m) at omega = 5.1 rad/s on 40 elements of 3.75 m: theta =
-    0.080, e_h = theta^2/24 = 2.7e-4 (time step 0.01 s: e_t = -2.2e-4, their sum smaller),
-    at A = 200 and a dynamic part of 20 % of the moment: +1.1 %. Before, the estimate had
-    no such term: 0.03 % where the measured error against the rod was 0.3-0.6 %."""
-    e = frequency_error(5.1, 3.44e6, 60.0, 3.75, 0.01, 0.9)
+    0.080, e_h = theta^2/24 = 2.7e-4 (1 % : the theta^4 term); at A = 200 and a dynamic
+    part of 20 % of the moment: +1.1 %. Before, the estimate had no such term. The time
+    step's error (dt = 0.01 s: Omega = 0.051, e_t = -2.2e-4 at rho_inf = 0.9, -Omega^2/12
+    = -2.17e-4 at rho_inf = 1 and a little more below) is reported apart."""
+    e = frequency_error(5.1, 3.44e6, 60.0, 3.75)
     theta = 5.1 * np.sqrt(60.0 / 3.44e6) * 3.75
     assert e == pytest.approx(theta**2 / 24, rel=0.01)
+    e_t = frequency_error(5.1, 3.44e6, 60.0, 3.75, 0.01, 0.9)
+    assert -1.1 * 0.051**2 / 12 < e_t < -0.051**2 / 12
     args = (np.array([0.02]), np.array([3.44e6]), 5e5, 1.5e9, 150.0, None, 1, 200.0,
             np.array([1.25]), 1.0, 60.0, 5.1, 0.0)
     base = error_estimate(*args)[0]

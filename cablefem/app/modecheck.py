@@ -57,7 +57,7 @@ def mode_validity(summary: dict, model, static, modal, warn, threshold: float,
     bad = []
     for i, (entry, w) in enumerate(zip(summary["modes"], modal.omegas)):
         kl = max((w * np.sqrt(m * EI) / T for T, EI, m, _ in clamps), default=0.0)
-        mesh = model_frequency_error(model, static, float(w), time_step=False) or 0.0
+        mesh = abs(model_frequency_error(model, static, float(w)) or 0.0)
         est = e_outer + e1 * kl * kl / 2 + abs(entry.get("span_bending_shift", 0.0)) + mesh
         entry["error_estimate"] = float(est)
         if clamps:

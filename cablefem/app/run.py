@@ -410,8 +410,11 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
             shift = float(shifts[int(np.argmin(np.abs(modal.omegas - w_r)))])
             summary["error_resonance_shift"] = shift
         disc = None if w_r is None else model_frequency_error(model, static, w_r)
-        if disc is not None:  # the mesh's and the time step's, amplified alike
-            summary["error_resonance_discretisation"] = disc
+        if disc is not None:  # the mesh's, amplified alike; the time step's beside it
+            summary["error_resonance_mesh"] = disc = abs(disc)
+            step = model_frequency_error(model, static, w_r, time_step=True)
+            if step is not None:
+                summary["error_resonance_time_step"] = step
         emitter.moment_columns.set_resonance(amp, static.anchor_forces,
                                              None if bends else w_r, shift, disc)
         summary["error_resonance_factor"] = amp
