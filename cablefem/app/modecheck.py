@@ -54,12 +54,13 @@ def mode_validity(summary: dict, model, static, modal, warn, threshold: float,
     clamps = _clamps(model, static)
     e1 = sum(c[3] for c in clamps)
     e_outer = e1 if outer_order == 0 else e1 * e1
-    bad = []
+    bad, meshes = [], {}
     for i, (entry, w) in enumerate(zip(summary["modes"], modal.omegas)):
         kl = max((w * np.sqrt(m * EI) / T for T, EI, m, _ in clamps), default=0.0)
         mesh = abs(model_frequency_error(model, static, float(w)) or 0.0)
         est = e_outer + e1 * kl * kl / 2 + abs(entry.get("span_bending_shift", 0.0)) + mesh
         entry["error_estimate"] = float(est)
+        meshes[i + 1] = mesh
         if clamps:
             entry["layer_ratio"] = float(kl)
             entry["valid"] = bool(kl <= MAX_LAYER_RATIO)
@@ -68,12 +69,16 @@ def mode_validity(summary: dict, model, static, modal, warn, threshold: float,
     if bad:
         worst = max(bad, key=lambda n: summary["modes"][n - 1]["error_estimate"])
         e = summary["modes"][worst - 1]
+        why = (f"of that, the mesh's own {meshes[worst]:.1%} (linear elements: more "
+               "mesh.elements reduce it as their length squared)"
+               if meshes[worst] > e["error_estimate"] / 2 else
+               "their wavelength is not long against the clamps' boundary layer (ell = "
+               "sqrt(EI/T)), which the string leaves out (the rod, 'cablefem run --model "
+               "beam', computes them)")
         warn(summary, "modal", f"{len(bad)} of {len(summary['modes'])} modes (number "
              f"{', '.join(map(str, bad))}) are outside the method's range or have an "
              f"estimated frequency error above {threshold:.0%} (mode {worst}: "
              f"{e['error_estimate']:.1%}, k ell = {e.get('layer_ratio', 0.0):.3g}; in range: "
-             f"k ell <= {MAX_LAYER_RATIO:g}): their wavelength is not long against the clamps' "
-             "boundary layer (ell = sqrt(EI/T)), which the string leaves out; see "
-             "error_estimate and valid in summary.json's modes (the rod, 'cablefem run "
-             "--model beam', computes them)")
+             f"k ell <= {MAX_LAYER_RATIO:g}): {why}; see error_estimate and valid in "
+             "summary.json's modes")
     return bad

@@ -409,9 +409,17 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
         if not bends and w_r is not None and shifts is not None:
             shift = float(shifts[int(np.argmin(np.abs(modal.omegas - w_r)))])
             summary["error_resonance_shift"] = shift
+        # the mesh's frequency error, amplified alike at a primary resonance (at a
+        # parametric one the response locks its phase to the excitation: theory.md §5.2);
+        # the time step's beside it
+        parametric = w_r is not None and abs(omega / (2 * w_r) - 1) < abs(omega / w_r - 1)
         disc = None if w_r is None else model_frequency_error(model, static, w_r)
-        if disc is not None:  # the mesh's, amplified alike; the time step's beside it
+        if w_r is not None:
+            summary["error_resonance_kind"] = "parametric" if parametric else "primary"
+        if disc is not None:
             summary["error_resonance_mesh"] = disc = abs(disc)
+            if parametric:
+                disc = None
             step = model_frequency_error(model, static, w_r, time_step=True)
             if step is not None:
                 summary["error_resonance_time_step"] = step
