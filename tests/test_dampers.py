@@ -504,3 +504,4 @@ def test_resonance_factor_takes_the_dampers_ratio(mpi_tmp_path):
     # L/40, the estimate 0.6 % above; 1 %.
     assert res.summary["error_resonance_mesh"] == pytest.approx(modes[0]["omega"] / w1 - 1,
                                                                 rel=0.01)
+    assert res.summary["error_resonance_kind"] == "primary"  # amplified into the estimate
