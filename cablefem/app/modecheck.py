@@ -9,8 +9,8 @@ for a wave of wavenumber ``k`` (a taut beam: ``T k^2 + EI k^4 = m omega^2`` with
 evanescent root), not over the static ``ell`` that the virtual hinge places the string's end
 at: each end is off by ``ell (k ell)^2/2`` to first order, a frequency error of
 ``e1 (k ell)^2/2`` with ``e1 = sum over the clamped ends of h/l`` (h the hinge offset,
-l the cable's length). A mode's estimated relative frequency error adds, as the anchor
-moment's estimate does (§5.1), the outer problem's next order (``e1``, its square with the
+l the cable's length; in a network twice the largest, a cable having two ends). A mode's
+estimated relative frequency error adds, as the anchor moment's estimate does (§5.1), the outer problem's next order (``e1``, its square with the
 virtual hinge), ``e1 (k ell)^2/2``, the span's bending measured on the mode when
 it is off (``span_bending_shift``) and the mesh's P1 error (:mod:`cablefem.discretisation`).
 """
@@ -52,7 +52,8 @@ def mode_validity(summary: dict, model, static, modal, warn, threshold: float,
     (relative frequency error); warn (key ``modal``) naming the modes outside the range or
     with an estimate above ``threshold``. Returns those modes' numbers (1-based)."""
     clamps = _clamps(model, static)
-    e1 = sum(c[3] for c in clamps)
+    # a cable has at most two clamped ends: a network's many clamps do not add up
+    e1 = min(len(clamps), 2) * max((c[3] for c in clamps), default=0.0)
     e_outer = e1 if outer_order == 0 else e1 * e1
     bad, meshes = [], {}
     for i, (entry, w) in enumerate(zip(summary["modes"], modal.omegas)):
