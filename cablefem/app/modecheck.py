@@ -10,9 +10,10 @@ evanescent root), not over the static ``ell`` that the virtual hinge places the 
 at: each end is off by ``ell (k ell)^2/2`` to first order, a frequency error of
 ``e1 (k ell)^2/2`` with ``e1 = sum over the clamped ends of h/l`` (h the hinge offset,
 l the cable's length; in a network twice the largest, a cable having two ends). A mode's
-estimated relative frequency error adds, as the anchor moment's estimate does (§5.1), the outer problem's next order (``e1``, its square with the
-virtual hinge), ``e1 (k ell)^2/2``, the span's bending measured on the mode when
-it is off (``span_bending_shift``) and the mesh's P1 error (:mod:`cablefem.discretisation`).
+estimated relative frequency error adds, as the anchor moment's estimate does (§5.1),
+the outer problem's next order (``e1``, its square with the virtual hinge),
+``e1 (k ell)^2/2``, the span's bending measured on the mode when it is off
+(``span_bending_shift``) and the mesh's P1 error (:mod:`cablefem.discretisation`).
 """
 
 from __future__ import annotations
