@@ -43,6 +43,10 @@ log = logging.getLogger(__name__)
 #: smallest modal assurance criterion (mass-weighted correlation) with which an undamped
 #: mode takes a complex mode's damping ratio
 MIN_MAC = 0.1
+#: largest share of a mode's squared amplitude on the other side of the plane of the chord
+#: and gravity for the label 'in-plane' or 'out-of-plane'; between, the mode is 'mixed'
+#: (without a current or wind that plane is a symmetry plane: shares 0 or 1 to round-off)
+MIXED_SHARE = 0.1
 #: relative distance of |lambda| from a mode's frequency within which a mode that no complex
 #: mode resembles takes the nearest one left
 NEAR_OMEGA = 0.05
@@ -66,8 +70,11 @@ def classify_mode(stations: np.ndarray, shape: np.ndarray, chord: np.ndarray,
     """Classify a nodal mode shape (n_nodes, 3) of a single cable, in station order.
 
     ``plane``: 'in-plane' or 'out-of-plane', the side of the plane of the chord and gravity
-    holding most of the shape's squared amplitude (absent without gravity or with a chord
-    along gravity). ``symmetry``: the correlation of the shape with its mirror image about
+    holding all but :data:`MIXED_SHARE` of the shape's squared amplitude, 'mixed' when
+    neither does (a cable blown out of that plane by a current or wind, or two modes of
+    nearly equal frequency that the eigensolver returns as combinations; the share says
+    how much); absent without gravity or with a chord along gravity. ``symmetry``: the
+    correlation of the shape with its mirror image about
     the plane normal to the chord at mid-span, when the stations are mirror-symmetric:
     'symmetric' above 0.5, 'antisymmetric' below -0.5, else 'mixed'. A level cable's modes
     are exactly one or the other; an inclined cable's are so to O(sag x inclination), and
@@ -83,7 +90,8 @@ def classify_mode(stations: np.ndarray, shape: np.ndarray, chord: np.ndarray,
             n /= np.linalg.norm(n)
             share = float(np.sum((shape @ n) ** 2) / norm2)
             out["out_of_plane_share"] = share
-            out["plane"] = "out-of-plane" if share > 0.5 else "in-plane"
+            out["plane"] = ("out-of-plane" if share >= 1 - MIXED_SHARE else "in-plane"
+                            if share <= MIXED_SHARE else "mixed")
     if mirror:
         L = stations[-1]
         mirrored = np.column_stack([np.interp(L - stations, stations, shape[:, k])
@@ -112,6 +120,8 @@ def classify_network_mode(points: np.ndarray, shape: np.ndarray) -> dict:
 
 def _label_text(lab: dict) -> str:
     parts = [lab[k] for k in ("plane", "symmetry") if k in lab]
+    if lab.get("plane") == "mixed":
+        parts[0] = f"mixed (out-of-plane share {lab['out_of_plane_share']:.2f})"
     return (" " + " ".join(parts)) if parts else ""
 
 

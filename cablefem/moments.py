@@ -52,16 +52,22 @@ def resonance(omega: float | None, omegas, damping_ratio) -> tuple[float, float 
     harmonic excitation at ``omega`` (rad/s) (docs/theory.md §5):
     ``1 / sqrt(d**2 + zeta**2)`` with ``d = |omega / (k omega_n) - 1|`` the smallest relative
     detuning from a primary (k = 1) or parametric (k = 2) resonance of the modes
-    ``omegas`` and ``zeta`` the damping ratio there (``damping_ratio(omega_n)``); at least
-    1 (far from resonance the response follows the load quasi-statically). Returns the
-    factor and the circular frequency of the mode that gives it (None at factor 1)."""
+    ``omegas`` and ``zeta`` the damping ratio there: ``damping_ratio(omega_n)``, or, when
+    ``damping_ratio`` is a sequence, each mode's own (the damped system's modal ratios,
+    dampers included); at least 1 (far from resonance the response follows the load
+    quasi-statically). Returns the factor and the circular frequency of the mode that
+    gives it (None at factor 1)."""
     if not omega or omegas is None or len(omegas) == 0:
         return 1.0, None
+    if callable(damping_ratio):
+        ratios = [damping_ratio(w) for w in np.asarray(omegas, float)]
+    else:
+        ratios = np.asarray(damping_ratio, float)
     best, mode = 1.0, None
-    for w in np.asarray(omegas, float):
+    for w, z in zip(np.asarray(omegas, float), ratios):
         if not w > 0:
             continue
-        z = max(float(damping_ratio(w)), 0.0)
+        z = max(float(z), 0.0)
         for k in (1, 2):
             d = abs(omega / (k * w) - 1.0)
             f = 1.0 / max(np.hypot(d, z), 1e-12)
@@ -75,7 +81,8 @@ def error_estimate(delta: np.ndarray, tension: np.ndarray, EI: float, EA: float,
                    outer_order: int = 0, amplification: float = 1.0,
                    moment: np.ndarray | None = None, static_moment: float | None = None,
                    mass: float | None = None, resonant_omega: float | None = None,
-                   resonant_shift: float | None = None) -> np.ndarray:
+                   resonant_shift: float | None = None,
+                   discretisation: float | None = None) -> np.ndarray:
     """Estimated relative error of the anchor moment (docs/theory.md §5), per row.
 
     ``e_outer = HINGED_ENDS h / (lambda l)`` (``lambda = 1 + T/EA``: the stretched
@@ -99,7 +106,9 @@ def error_estimate(delta: np.ndarray, tension: np.ndarray, EI: float, EA: float,
     ``EI m omega_n^2 / (2 T^2)`` (a taut beam's first correction), is amplified likewise and
     added to the dynamic part; ``resonant_shift``, when given, is that error measured on
     the mode itself (:func:`cablefem.span_bending.frequency_shifts`, any shape: a sagging
-    cable's in-plane modes bend far more than a taut beam's) and replaces the formula. The
+    cable's in-plane modes bend far more than a taut beam's) and replaces the formula.
+    ``discretisation``: the resonant mode's frequency error from the string's own mesh and
+    time step (:func:`cablefem.discretisation.frequency_error`), amplified likewise. The
     estimate is at most 1: an error of the size of the moment itself (a history whose
     phase is not determined).
     """
@@ -118,6 +127,8 @@ def error_estimate(delta: np.ndarray, tension: np.ndarray, EI: float, EA: float,
             elif resonant_omega and mass:
                 T = np.asarray(tension, float)
                 e = e + EI * mass * resonant_omega**2 / (2.0 * T * T) * dyn
+            if discretisation:
+                e = e + discretisation * dyn
         if period_ratio is not None:
             e = e + np.nan_to_num(np.asarray(period_ratio, float) ** 2, nan=0.0)
     return np.minimum(e, 1.0)
@@ -140,7 +151,8 @@ def anchor_moments(forces: np.ndarray, direction: np.ndarray, EI: float, EA: flo
                    outer_order: int = 0, amplification: float = 1.0,
                    static_moment: float | None = None,
                    resonant_omega: float | None = None,
-                   resonant_shift: float | None = None) -> dict[str, np.ndarray]:
+                   resonant_shift: float | None = None,
+                   discretisation: float | None = None) -> dict[str, np.ndarray]:
     """Anchor moment columns for one clamped anchor over ``n`` times.
 
     Rows with ``delta`` above :data:`MAX_ANCHOR_ANGLE` are invalid; ``invalid_reason``
@@ -159,7 +171,8 @@ def anchor_moments(forces: np.ndarray, direction: np.ndarray, EI: float, EA: flo
         ``static_moment`` (N m) its resonance factor and the static moment it applies to;
         ``resonant_omega`` the resonant mode's circular frequency (its span-bending
         frequency error is amplified too; None when the outer problem bends) and
-        ``resonant_shift`` that error measured on the mode (None: the taut beam's).
+        ``resonant_shift`` that error measured on the mode (None: the taut beam's);
+        ``discretisation`` its frequency error from the mesh and the time step.
     """
     N = np.atleast_2d(np.asarray(forces, float))
     qs = (mass, omega) if omega else None
@@ -195,7 +208,8 @@ def anchor_moments(forces: np.ndarray, direction: np.ndarray, EI: float, EA: flo
             "error_estimate": error_estimate(lay.delta, lay.tension, EI, EA, length,
                                              lay.period_ratio, outer_order, amplification,
                                              np.linalg.norm(M, axis=1), static_moment,
-                                             mass, resonant_omega, resonant_shift),
+                                             mass, resonant_omega, resonant_shift,
+                                             discretisation),
             "invalid_reason": reason, "tension": lay.tension, "normal": lay.normal,
             "slack": lay.slack}
 
@@ -310,7 +324,7 @@ class AnchorMoments:
         #: resonance factor of the error estimate and static moment per anchor
         #: (:meth:`set_resonance`)
         self.amplification, self.static_moments = 1.0, {}
-        self.resonant_omega = self.resonant_shift = None
+        self.resonant_omega = self.resonant_shift = self.discretisation = None
         self._by_name = {a.name: a for a in self.anchors}
 
     @classmethod
@@ -333,19 +347,23 @@ class AnchorMoments:
 
     def set_resonance(self, amplification: float, static_forces,
                       resonant_omega: float | None = None,
-                      resonant_shift: float | None = None) -> None:
+                      resonant_shift: float | None = None,
+                      discretisation: float | None = None) -> None:
         """Let the error estimate of the dynamic part of the moments grow by
         ``amplification`` (:func:`resonance`) about the static moments of the anchor
         forces ``static_forces`` (n_anchors, 3+) in the model's anchor order;
         ``resonant_omega``: the resonant mode's circular frequency, whose span-bending
         frequency error is amplified too (None when the outer problem has span bending);
-        ``resonant_shift``: that error measured on the mode (None: the taut beam's)."""
+        ``resonant_shift``: that error measured on the mode (None: the taut beam's);
+        ``discretisation``: the mode's frequency error from the mesh and the time step."""
         self.amplification, self.resonant_omega, self.resonant_shift = 1.0, None, None
+        self.discretisation = None
         F = np.asarray(static_forces, float)
         self.static_moments = {a.name: float(self.anchor(a.name, [0.0], F[a.index, None, :3])[
             "moment"][0]) for a in self.anchors}
         self.amplification = float(amplification)
         self.resonant_omega, self.resonant_shift = resonant_omega, resonant_shift
+        self.discretisation = discretisation
 
     @property
     def names(self) -> list[str]:
@@ -380,7 +398,7 @@ class AnchorMoments:
                               self.length if a.length is None else a.length, self.omega,
                               self.form, self.outer_order, self.amplification,
                               self.static_moments.get(name), self.resonant_omega,
-                              self.resonant_shift)
+                              self.resonant_shift, self.discretisation)
 
     def compute(self, times: np.ndarray, forces) -> dict[str, dict[str, np.ndarray]]:
         """Columns of every clamped anchor: ``{name: {column: (n,) array}}``. ``forces``:

@@ -560,3 +560,37 @@ def test_damper_kink_converges_at_second_order_in_the_time_step():
              for i in range(2)]
     assert 3.2 < diffs[0] / diffs[1] < 4.8, diffs
     assert diffs[0] < 0.03, diffs
+
+
+def test_resonance_factor_takes_the_dampers_ratio(mpi_tmp_path):
+    """The error estimate's resonance factor 1/sqrt(d^2 + zeta^2) takes each mode's damping
+    ratio from the damped system's modes, the damper's included: the taut cable with
+    Krenk's optimum damper at a/L = 0.02 (zeta_1 = a/(2L) = 1 %) and no [damping] table,
+    driven at its first frequency, has a factor of about 1/zeta_1 = 100, computed exactly
+    from the modes' own ratios (round-off: 1e-9). Before, the ratio came from the
+    [damping] table alone (0): the factor was 1/d, d the mode's detuning (P1 frequency
+    error, 2.6e-4 here: a factor of 3890)."""
+    from cablefem.app.run import run_case
+
+    w1 = np.pi * np.sqrt(T / (M / LAM)) / L
+    d = taut(0.02, 1.0, 40)
+    d["dampers"][0].pop("direction")  # normal to the cable: both planes damped
+    d["anchors"][1]["motion"] = {"type": "harmonic", "amplitude": [0.0, 0.0, 0.01],
+                                 "omega": w1}
+    d["modal"] = {"modes": 4}
+    res = run_case(parse_case(d), mpi_tmp_path / "out", comm, figures=False,
+                   progress=False, dynamics=False)
+    modes = res.summary["modes"]
+    zetas = np.array([m["damping_ratio"] for m in modes])
+    assert np.all(zetas > 0.005)  # Krenk: 1 % in mode 1, 0.8 % in mode 2 (eta = 2)
+    want = max(1 / np.hypot(abs(w1 / (k * m["omega"]) - 1), m["damping_ratio"])
+               for m in modes for k in (1, 2))
+    assert res.summary["error_resonance_factor"] == pytest.approx(want, rel=1e-9)
+    assert res.summary["error_resonance_factor"] < 1 / 0.005
+    # the resonant mode's mesh error (cablefem.discretisation) against the mode's own, its
+    # FE frequency over the exact pi/L sqrt(T lambda/m): 2.571e-4. The mesh puts a node
+    # at the damper (0.2 m instead of 0.25 m): sqrt(sum h^3/sum h) is 0.3 % longer than
+    # L/40, the estimate 0.6 % above; 1 %.
+    assert res.summary["error_resonance_mesh"] == pytest.approx(modes[0]["omega"] / w1 - 1,
+                                                                rel=0.01)
+    assert res.summary["error_resonance_kind"] == "primary"  # amplified into the estimate

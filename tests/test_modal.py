@@ -152,3 +152,24 @@ def test_modal_modes_0_skips_the_modal_analysis(mpi_tmp_path):
     res = run_case(parse_case(d), mpi_tmp_path / "b", figures=False, progress=False)
     assert "modes" not in res.summary
     assert res.summary["span_bending_auto"]["reason"] == "no mode computed"
+
+
+@pytest.mark.parametrize("share, plane", [(0.0, "in-plane"), (0.05, "in-plane"),
+                                          (0.53, "mixed"), (0.3, "mixed"),
+                                          (0.95, "out-of-plane"), (1.0, "out-of-plane")])
+def test_a_mode_in_both_planes_is_labelled_mixed(share, plane):
+    """A shape with the share ``share`` of its squared amplitude out of the plane of the
+    chord (x) and gravity (-z): the second sine of a level cable in z and in y, weighted
+    sqrt(1 - share) and sqrt(share). The share is recovered to round-off (the two parts
+    are orthogonal); a mode with more than 10 % on either side (MIXED_SHARE) is 'mixed'.
+    Before, 0.53 was labelled 'out-of-plane' (share > 0.5), and the in-plane mode of a
+    cable in wind it stood for was missing from the table."""
+    from cablefem.modal import classify_mode
+
+    s = np.linspace(0.0, 1.0, 41)
+    wave = np.sin(2 * np.pi * s)
+    shape = np.column_stack([0 * s, np.sqrt(share) * wave, np.sqrt(1 - share) * wave])
+    lab = classify_mode(s, shape, np.array([1.0, 0, 0]), np.array([0, 0, -1.0]), True)
+    assert lab["out_of_plane_share"] == pytest.approx(share, abs=1e-12)
+    assert lab["plane"] == plane
+    assert lab["symmetry"] == "antisymmetric"

@@ -86,10 +86,10 @@ class KinkOutput:
         if self.csv is not None:
             self.csv.close()
 
-    def summary(self) -> dict:
+    def summary(self, start: float | None = None) -> dict:
         """Per kink: its station (a network's: its node and section), the static moment,
         tension, angle and layer length, the fraction of valid rows and the steady-state
-        peak and RMS of the moment."""
+        peak and RMS of the moment (from ``start``, s; default: the last third)."""
         out = {}
         times = np.array(self.times)
         for i, k in enumerate(self.kinks):
@@ -109,6 +109,7 @@ class KinkOutput:
             if times.size:
                 entry["valid_fraction"] = float(np.mean(rows["valid"] == 1))
             if times.size > 1:
-                entry["steady_state_moment"] = steady_state_stats(times, rows["moment"])
+                entry["steady_state_moment"] = steady_state_stats(times, rows["moment"],
+                                                                 start=start)
             out[k.name] = entry
         return out

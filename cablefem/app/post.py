@@ -18,7 +18,8 @@ from mpi4py import MPI
 from cablefem import __version__
 from cablefem.app.plots import anchor_figures
 from cablefem.app.report import anchor_validity
-from cablefem.app.run import _max_excitation, steady_state_stats
+from cablefem.app.run import _max_excitation, steady_state_stats, warn
+from cablefem.app.statistics import warn_drifts
 from cablefem.case import Case
 from cablefem.description import stress_free_length
 from cablefem.io.anchorcsv import ANCHOR_COLUMNS, MOMENT_COLUMNS, AnchorCSV, read_forces
@@ -114,6 +115,10 @@ def run_post(case: Case, forces_csv: Path, outdir: Path, form: str = "exact",
             "validity": anchor_validity(warnings, a.name, times, res, ERROR_THRESHOLD)}
         for r, c in zip(reasons, counts):
             log.warning("anchor %s: %d of %d rows invalid: %s", a.name, c, times.size, r)
+    drifts = {"anchors": summary_anchors}  # a response not steady in the window warns
+    warn_drifts(drifts, warn)
+    if drifts.get("warnings"):
+        warnings.setdefault("warnings", []).extend(drifts["warnings"])
     cols = ANCHOR_COLUMNS + MOMENT_COLUMNS
     names = list(hist.forces)
     N = np.stack([hist.forces[n] for n in names], axis=1)  # (time, anchor, 3): row order

@@ -7,7 +7,11 @@ import logging
 
 import numpy as np
 
+from cablefem.app.statistics import FRACTION, steady_state_stats, window_start
 from cablefem.case import Case
+
+__all__ = ["warn", "steady_state_stats", "static_sag_ratio", "anchor_validity",
+           "modal_damping_ratios", "statistics_start"]
 
 log = logging.getLogger(__name__)
 
@@ -17,21 +21,6 @@ def warn(summary: dict, key: str | None, message: str) -> None:
     ``{"key": ..., "message": ...}`` (``key``: the case key or run step it concerns)."""
     summary.setdefault("warnings", []).append({"key": key, "message": message})
     log.warning("%s%s", f"{key}: " if key else "", message)
-
-
-def steady_state_stats(times: np.ndarray, values: np.ndarray, fraction: float = 1 / 3) -> dict:
-    """Peak and RMS of ``values`` over the last ``fraction`` of the run (NaNs skipped)."""
-    if times.size < 2:
-        return {"peak": float(np.nanmax(values)) if values.size else None,
-                "rms": None, "window": None}
-    t0 = times[-1] - fraction * (times[-1] - times[0])
-    sel = times >= t0
-    v = values[sel]
-    v = v[np.isfinite(v)]
-    if v.size == 0:
-        return {"peak": None, "rms": None, "window": [float(t0), float(times[-1])]}
-    return {"peak": float(np.max(np.abs(v))), "rms": float(np.sqrt(np.mean(v * v))),
-            "mean": float(np.mean(v)), "window": [float(t0), float(times[-1])]}
 
 
 def static_sag_ratio(r: np.ndarray, p: np.ndarray, q: np.ndarray, gdir: np.ndarray) -> float:
@@ -80,15 +69,46 @@ def _damping_ratio(case: Case):
     return d.ratio_at
 
 
+def modal_damping_ratios(case: Case, modal) -> np.ndarray:
+    """Each mode's damping ratio for the resonance factor: the damped system's own
+    (``modal.damping_ratios``, from its complex modes: the ``[damping]`` table, dampers and
+    a fluid's linearised drag together), the ``[damping]`` table's ratio at the mode's
+    frequency where a mode has no complex partner (NaN) or none was computed."""
+    table = _damping_ratio(case)
+    own = getattr(modal, "damping_ratios", None)
+    out = np.array([table(w) for w in np.asarray(modal.omegas, float)], float)
+    if own is not None:
+        own = np.asarray(own, float)
+        out = np.where(np.isfinite(own), own, out)
+    return out
+
+
+def statistics_start(summary: dict, case: Case, times: np.ndarray) -> float | None:
+    """The case's ``dynamics.statistics_start`` when the run reached it; None (the last
+    third) otherwise, with a warning when it was given (a run cut short by ``--t-end``)."""
+    start = getattr(case.dynamics, "statistics_start", None)
+    times = np.asarray(times, float)
+    if start is None or times.size < 2:
+        return None
+    if start >= times[-1]:
+        warn(summary, "dynamics.statistics_start", f"{start:g} is not before the run's end "
+             f"({times[-1]:g}): the statistics are over the last third of the run instead")
+        return None
+    summary["statistics_start"] = float(start)
+    return float(start)
+
+
 def _g(x) -> str:
     return "n/a" if x is None else f"{x:.4g}"
 
 
 def anchor_validity(summary: dict, name: str, times: np.ndarray, mo: dict,
-                    threshold: float, fraction: float = 1 / 3) -> dict:
+                    threshold: float, fraction: float = FRACTION,
+                    start: float | None = None) -> dict:
     """The validity of clamped anchor ``name``'s moment rows ``mo`` (columns ``valid``,
     ``error_estimate``, optionally ``invalid_reason``) over the output window (the last
-    ``fraction`` of the run, as :func:`steady_state_stats`; every row for fewer than two
+    ``fraction`` of the run or from ``start``, as :func:`steady_state_stats`; every row for
+    fewer than two
     times): the fraction of invalid rows and of rows whose error estimate is above
     ``threshold``, the maximum and median estimate. Warns (:func:`warn`) naming the anchor,
     the fraction and the reason when any row of the window is invalid or above the
@@ -96,7 +116,7 @@ def anchor_validity(summary: dict, name: str, times: np.ndarray, mo: dict,
     times = np.asarray(times, float)
     sel = np.ones(times.size, bool)
     if times.size > 1:
-        sel = times >= times[-1] - fraction * (times[-1] - times[0])
+        sel = times >= window_start(times, start, fraction)
     valid = np.asarray(mo["valid"], float)[sel] > 0
     n = int(valid.size)
     err = np.asarray(mo.get("error_estimate", np.full(times.size, np.nan)), float)[sel]

@@ -18,22 +18,26 @@ from mpi4py import MPI
 
 from cablefem import __version__
 from cablefem.app.log import Progress, quiet_compiler
+from cablefem.app.modecheck import mode_validity
 from cablefem.app.output import RunOutput, rod_moment_columns
 from cablefem.app.report import (
-    _damping_ratio,
     _g,
     _max_excitation,
     _section_name,
     anchor_validity,
+    modal_damping_ratios,
     static_sag_ratio,
+    statistics_start,
     steady_state_stats,
     warn,
 )
 from cablefem.app.resources import note_small_problem
+from cablefem.app.statistics import warn_drifts
 from cablefem.cable import CableModel
 from cablefem.case import Case, CaseError, check_table_ends
 from cablefem.chain import NOTE as CHAIN_NOTE
 from cablefem.dampers import axial_dampers
+from cablefem.discretisation import model_frequency_error
 from cablefem.dynamics import DynamicsError, DynamicsStats, Interrupted, integrate
 from cablefem.errors import RunError, RunInterrupted
 from cablefem.io.checkpoint import case_digest, read_checkpoint, write_checkpoint
@@ -383,6 +387,9 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
             else:  # no complex mode like it: absent, and said why
                 entry["damping_ratio_missing"] = "no complex mode of the damped system " \
                     "matches this mode (overdamped?)"
+        if kind != "beam":  # each mode's estimated error and range (the rod resolves)
+            mode_validity(summary, model, static, modal, warn, ERROR_THRESHOLD,
+                          1 if model.hinges else 0)
         summary["wall_time"]["modal"] = modal.wall_time
         # the static state again: the modal solve does not change model.u, but be explicit
         model.u.x.array[:] = model.u_static.x.array
@@ -422,14 +429,28 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
     except OutputError as err:
         raise RunError(f"{err}; run the case again") from err
     if n_modes and omega and kind != "beam":  # the error estimate near a resonance
-        amp, w_r = resonance(omega, modal.omegas, _damping_ratio(case))
+        amp, w_r = resonance(omega, modal.omegas, modal_damping_ratios(case, modal))
         bends = is_on(case.solver.span_bending)  # the outer problem has the span's bending
         shift = None  # the resonant mode's own span-bending error, measured on it
         if not bends and w_r is not None and shifts is not None:
             shift = float(shifts[int(np.argmin(np.abs(modal.omegas - w_r)))])
             summary["error_resonance_shift"] = shift
+        # the mesh's frequency error, amplified alike at a primary resonance (at a
+        # parametric one the response locks its phase to the excitation: theory.md §5.2);
+        # the time step's beside it
+        parametric = w_r is not None and abs(omega / (2 * w_r) - 1) < abs(omega / w_r - 1)
+        disc = None if w_r is None else model_frequency_error(model, static, w_r)
+        if w_r is not None:
+            summary["error_resonance_kind"] = "parametric" if parametric else "primary"
+        if disc is not None:
+            summary["error_resonance_mesh"] = disc = abs(disc)
+            if parametric:
+                disc = None
+            step = model_frequency_error(model, static, w_r, time_step=True)
+            if step is not None:
+                summary["error_resonance_time_step"] = step
         emitter.moment_columns.set_resonance(amp, static.anchor_forces,
-                                             None if bends else w_r, shift)
+                                             None if bends else w_r, shift, disc)
         summary["error_resonance_factor"] = amp
     static_entries = _log_static_state(model, static, emitter, form, kind, sag)
     if resume is not None:  # after the emitter, which takes its reference from the statics
@@ -530,6 +551,7 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
     moments = {name: {k: np.array(v) for k, v in cols.items()}
                for name, cols in emitter.columns.items()}
     summary["anchors"] = {}
+    start = statistics_start(summary, case, times)
     for a in model.anchors:
         entry = {"kind": a.kind, "position": a.position,
                  "section": _section_name(case, a.section),
@@ -569,9 +591,11 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
             why = emitter.reasons.get(a.name, [])  # this process's rows (not a resumed run's)
             why = ["(not recorded)"] * (len(times) - len(why)) + why
             entry["validity"] = anchor_validity(summary, a.name, times,
-                                                {**mo, "invalid_reason": why}, ERROR_THRESHOLD)
+                                                {**mo, "invalid_reason": why}, ERROR_THRESHOLD,
+                                                start=start)
             if len(times) > 1:
-                entry["steady_state_moment"] = steady_state_stats(times, mo["moment"])
+                entry["steady_state_moment"] = steady_state_stats(times, mo["moment"],
+                                                                  start=start)
         summary["anchors"][a.name] = entry
     if case.dynamics is not None and dynamics and times.size > 2:  # steps left ringing
         from cablefem.app.alternation import check_alternation
@@ -587,7 +611,7 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
                  "(sqrt(stiffness/mass) dt > 1); more seabed.damping or a smaller "
                  "dynamics.dt, or a smoother anchor motion (its ramp)")
     if emitter.kinkout.kinks:
-        summary["kinks"] = emitter.kinkout.summary()
+        summary["kinks"] = emitter.kinkout.summary(start)
         for name, entry in summary["kinks"].items():
             frac = entry.get("valid_fraction", 1.0)
             if frac < 1.0 or not entry["static_valid"]:
@@ -602,6 +626,7 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
         warn(summary, "kinks", f"{len(gaps)} node(s) where a cable kinks have no kink "
              f"moment (e.g. node {k}, {where!r}: {why}): give each cable through such a "
              "node its own group, of one section (docs/kinks.md)")
+    warn_drifts(summary, warn)
     if summary["status"] == "running":
         summary["status"] = "completed"
     if figures and len(times) > 1 and moments:

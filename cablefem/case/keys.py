@@ -281,6 +281,11 @@ CASE_KEYS: dict[str, KeyDoc | TableDoc] = {
                           "(the cable follows its anchors' velocity at t = 0 as a static "
                           "solution would) | 'rest' (the cable at rest, only the anchors "
                           "moving; what most FE codes start from)."),
+        "statistics_start": KeyDoc("number", None, "s", "Start of the output window of the "
+                                   "steady-state statistics (peak, RMS) and of the moments' "
+                                   "validity summary, >= 0 and < t_end; default: the last "
+                                   "third of the run. A response still building up or "
+                                   "decaying in the window warns."),
     }),
     "fatigue": TableDoc("table", None, "", "Fatigue at the clamped anchors (EN 1993-1-9 style "
                         "S-N curve); present: 'cablefem run' also writes the fatigue report.", {

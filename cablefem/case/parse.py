@@ -250,7 +250,13 @@ def _parse_dynamics(r: _Reader | None) -> DynamicsSpec | None:
     parts = (t_end, dt, r.number("rho_inf", ge=0, le=1), r.integer("output_every"),
              r.integer("fields_every"), r.integer("checkpoint_every", ge=0),
              r.string("initial", choices=("quasi-static", "rest")))
-    return None if _missing(*parts) else DynamicsSpec(*parts)
+    start, bad_start = r.number("statistics_start", ge=0), False
+    if start is not None and t_end is not None and start >= t_end:
+        r.add("statistics_start", f"must be < t_end = {t_end!r} (s), got {start!r}")
+        bad_start = True
+    if r.has("statistics_start") and start is None:
+        bad_start = True
+    return None if _missing(*parts) or bad_start else DynamicsSpec(*parts, start)
 
 
 def _parse_petsc_options(r: _Reader) -> dict:

@@ -39,6 +39,8 @@ class DynamicsSpec:
     checkpoint_every: int = 500
     #: the velocity at t = 0: "quasi-static" or "rest" (cablefem.initial.initial_velocity)
     initial: str = "quasi-static"
+    #: start of the statistics window, s (None: the last third of the run)
+    statistics_start: float | None = None
 
 
 @dataclass
