@@ -35,15 +35,16 @@ def write_run(folder: Path, *, model: str | None, scale: float, t_end: float,
               after: float = 1.0, anchors=(("p", "clamped"), ("q", "pinned")),
               omega: float | None = 10.0, wall: dict | None = None,
               static_moment: float | None = None, mean: float = M0, phase: float = 0.0,
-              per_period: int = PER_PERIOD, first_tension: float = 100.0) -> Path:
+              per_period: int = PER_PERIOD, first_tension: float = 100.0,
+              case: dict | None = None) -> Path:
     """A run folder as cablefem writes it: summary.json and anchors.csv. Clamped anchors
     have ``moment = scale (M0 + A sin(W t))`` for ``t <= 3`` and ``after`` times that
     beyond (what a window over the run's own range, not the common one, would see);
     pinned anchors have empty moment columns. ``model=None``: an old run without the key.
     ``mean`` and ``phase``: ``moment = scale (mean + A sin(W t + phase))``; ``per_period``
     samples per period; the static moment defaults to the first row's (a run that starts
-    clean), the static tension is 100 and the first row's ``first_tension``.
-    Rank 0 writes; collective."""
+    clean), the static tension is 100 and the first row's ``first_tension``; ``case``: the
+    echoed case file. Rank 0 writes; collective."""
     if MPI.COMM_WORLD.rank == 0:
         folder.mkdir(parents=True)
         times = np.arange(round(t_end * per_period) + 1) / per_period
@@ -70,7 +71,7 @@ def write_run(folder: Path, *, model: str | None, scale: float, t_end: float,
                                                   "window": [0.0, 0.0]}})
             entries[name] = e
         summary = {"cablefem": "0.1.0", "status": "completed",
-                   "case": {"title": "compare test"}, "anchors": entries,
+                   "case": case or {"title": "compare test"}, "anchors": entries,
                    "wall_time": wall or {"total": 2.0, "dynamics": 1.5}}
         if model is not None:
             summary["model"] = model
@@ -128,6 +129,27 @@ def test_compare_known_differences(runs):
     assert res["figures"] == ["compare_p.png"]
     assert (b / "compare_p.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert not (b / "compare_q.png").exists()
+
+
+def test_the_window_follows_a_common_statistics_start(mpi_tmp_path):
+    """Both runs' case files set dynamics.statistics_start = 1: the window is [1, 3] of the
+    common range [0, 3] (two whole periods), not its last third [2, 3], as the runs' own
+    statistics are; runs that set different starts fall back to the last third."""
+    def case(start):
+        return {"title": "compare test", "dynamics": {"t_end": 3.0, "statistics_start": start}}
+
+    a = write_run(mpi_tmp_path / "a", model=None, scale=1.0, t_end=3.0, case=case(1.0))
+    b = write_run(mpi_tmp_path / "b", model="beam", scale=1.1, t_end=3.0, case=case(1.0))
+    res = compare_runs(a, b)
+    p = res["anchors"]["p"]
+    assert res["statistics_start"] == 1.0 and p["window"] == [1.0, 3.0]
+    # RMS over two whole periods, 1201 samples with both ends (sin = 0 twice): as in
+    # test_compare_known_differences, a relative error below 1e-4
+    assert p["steady_rms"]["a"] == pytest.approx(math.sqrt(M0 ** 2 + A ** 2 / 2), rel=1e-4)
+    assert p["steady_rms"]["rel_diff"] == pytest.approx(0.1, abs=1e-12)
+    c = write_run(mpi_tmp_path / "c", model="beam", scale=1.1, t_end=3.0, case=case(1.5))
+    res = compare_runs(a, c)
+    assert res["statistics_start"] is None and res["anchors"]["p"]["window"] == [2.0, 3.0]
 
 
 def test_compare_static_runs_and_output_folder(mpi_tmp_path):

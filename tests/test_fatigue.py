@@ -507,6 +507,18 @@ def test_default_window_leaves_out_the_start_up(mpi_tmp_path):
                        comm=comm)
     assert reps["q"]["damage"] == pytest.approx(whole, rel=RTOL)
     assert reps["q"]["window_rule"]["rule"] == "all"
+    # 'steady' follows the run's own statistics window, dynamics.statistics_start, when
+    # the case sets it (it took the last third, t >= 20, whatever the run's window was):
+    # from t = 15 five periods of the start-up's 100 cos count, D = 5/2.5e5 + tail
+    reps = run_fatigue(parse_case(level_case(
+        motion={"type": "harmonic", "amplitude": [2e-4, 0, 0], "omega": w},
+        dynamics={"t_end": 30.0, "dt": 0.025, "statistics_start": 15.0},
+        fatigue={"detail_category": DS_C, "area": 1.0, "modulus": 1.0, "window": "steady"})),
+        mpi_tmp_path / "run", mpi_tmp_path / "steady", comm=comm)
+    assert reps["q"]["window"] == [15.0, 30.0]
+    assert reps["q"]["window_rule"] == {"rule": "steady", "start": 15.0,
+                                        "reason": "dynamics.statistics_start"}
+    assert reps["q"]["damage"] == pytest.approx(5 / 2.5e5 + tail, rel=RTOL)
     write(mpi_tmp_path / "short", 400)  # t <= 9.975: within the start-up
     with pytest.raises(ValueError, match="after_startup"):
         run_fatigue(case(), mpi_tmp_path / "short", comm=comm)

@@ -140,8 +140,9 @@ def _parser() -> argparse.ArgumentParser:
     fat.add_argument("--case", type=Path, required=True, help="case file (TOML) with [fatigue]")
     fat.add_argument("--output", "-o", type=Path, help="output folder (default: rundir)")
     fat.add_argument("--window", choices=["after_startup", "all", "steady"],
-                     help="after the motions' start-up, the whole run or its last third "
-                          "(default: fatigue.window)")
+                     help="after the motions' start-up, the whole run or its statistics "
+                          "window (from dynamics.statistics_start, else the last third; "
+                          "default: fatigue.window)")
     fat.add_argument("--invalid", choices=["raise", "drop"], default="raise",
                      help="samples without a valid moment (slack anchor): stop (default) or "
                           "leave them out (the valid samples are then joined into one "
@@ -151,8 +152,10 @@ def _parser() -> argparse.ArgumentParser:
     cmp_ = sub.add_parser("compare", help="compare two runs of a case (e.g. string and beam)",
                           description="Compare two finished run folders, typically 'cablefem "
                           "run CASE -o A' and 'cablefem run CASE --model beam -o B': static "
-                          "moment and tension, steady-state peak and RMS of |M| (last third "
-                          "of the common time range) at every clamped anchor, first natural "
+                          "moment and tension, steady-state peak and RMS of |M| (the last "
+                          "third of the common time range, or from both runs' "
+                          "dynamics.statistics_start) at every clamped anchor and kink, first "
+                          "natural "
                           "frequency, wall times; relative differences (b-a)/a. Prints a "
                           "table; writes compare.json, compare.md and compare_<anchor>.png.")
     cmp_.add_argument("dir_a", type=Path, help="folder of run a (the reference of the "

@@ -19,6 +19,7 @@ result (and the same ValueError on bad input).
 
 from __future__ import annotations
 
+import functools
 import json
 import logging
 import math
@@ -36,7 +37,7 @@ from cablefem.io.anchorcsv import read_moments
 from cablefem.io.series import jsonable, write_json
 
 __all__ = ["compare_runs", "format_table", "history_error", "start_warnings", "FRACTION",
-           "START_TOLERANCE"]
+           "START_TOLERANCE", "statistics_start"]
 
 log = logging.getLogger(__name__)
 
@@ -144,14 +145,28 @@ def _has_moments(run: dict, name: str) -> bool:
             and bool(np.any(np.isfinite(d["moment"]))))
 
 
-def _window_stats(times: np.ndarray, values: np.ndarray, t_lo: float, t_hi: float) -> dict:
+def statistics_start(ra: dict, rb: dict) -> float | None:
+    """The runs' common ``dynamics.statistics_start`` (from their echoed case files), None
+    when either has none or they differ (then the last third of the common range)."""
+    starts = []
+    for r in (ra, rb):
+        dyn = (r["summary"].get("case") or {}).get("dynamics") or {}
+        starts.append(dyn.get("statistics_start") if isinstance(dyn, dict) else None)
+    a, b = starts
+    return float(a) if a is not None and b is not None and float(a) == float(b) else None
+
+
+def _window_stats(times: np.ndarray, values: np.ndarray, t_lo: float, t_hi: float,
+                  start: float | None = None) -> dict:
     """run.steady_state_stats over the common range ``[t_lo, t_hi]``: the samples outside
     are dropped and NaN samples at both ends of the range put in, so that the window
-    ``t >= t_hi - FRACTION (t_hi - t_lo)`` is the same for both runs (NaNs are skipped)."""
+    (from ``start``, the runs' common ``dynamics.statistics_start``, when it lies in the
+    range; else ``t >= t_hi - FRACTION (t_hi - t_lo)``) is the same for both runs (NaNs are
+    skipped)."""
     sel = (times >= t_lo) & (times <= t_hi)
     t = np.concatenate([[t_lo], times[sel], [t_hi]])
     v = np.concatenate([[np.nan], values[sel], [np.nan]])
-    return steady_state_stats(t, v, FRACTION)
+    return steady_state_stats(t, v, FRACTION, start=start)
 
 
 def _trapezoid(t: np.ndarray, y: np.ndarray) -> float:
@@ -270,6 +285,10 @@ def _compare(dir_a: Path, dir_b: Path, outdir: Path) -> dict:
 
     t_lo = max(ra["t_range"][0], rb["t_range"][0])
     t_hi = min(ra["t_range"][1], rb["t_range"][1])
+    start = statistics_start(ra, rb)
+    if start is not None and not t_lo <= start < t_hi:
+        start = None  # outside the common range: the last third
+    stats = functools.partial(_window_stats, start=start)
     steady = t_hi > t_lo
     if not steady:
         log.warning("the runs have no common time range longer than an instant (a: %s, b: "
@@ -282,7 +301,7 @@ def _compare(dir_a: Path, dir_b: Path, outdir: Path) -> dict:
         window = None
         entry["history_error"] = {"value": math.nan, "samples": 0, "interpolated": False}
         if steady:
-            st = [_window_stats(r["data"][n]["time"], r["data"][n]["moment"], t_lo, t_hi)
+            st = [stats(r["data"][n]["time"], r["data"][n]["moment"], t_lo, t_hi)
                   for r in (ra, rb)]
             window = st[0]["window"]
             for key in ("peak", "rms", "mean"):
@@ -318,9 +337,10 @@ def _compare(dir_a: Path, dir_b: Path, outdir: Path) -> dict:
                  for k, r in (("a", ra), ("b", rb))},
         "same_case": same,
         "common_time_range": [t_lo, t_hi] if steady else None,
-        "steady_fraction": FRACTION,
+        "steady_fraction": None if start is not None else FRACTION,
+        "statistics_start": start,
         "anchors": anchors, "skipped_anchors": skipped,
-        "kinks": compare_kinks(ra, rb, t_lo, t_hi, steady, _window_stats, history_error,
+        "kinks": compare_kinks(ra, rb, t_lo, t_hi, steady, stats, history_error,
                                _pair),
         "first_frequency": {"omega": _pair(omega1(ra), omega1(rb))},
         "wall_time": wall, "start_tolerance": START_TOLERANCE, "warnings": warnings}
@@ -377,7 +397,9 @@ def _window_text(res: dict) -> str:
               + list((res.get("kinks") or {}).values()) if e["window"]), None)
     if w is None:
         return "steady state: not compared (no common time range)"
-    return (f"steady state: t in [{w[0]:.6g}, {w[1]:.6g}], the last third of the common "
+    which = ("from both runs' dynamics.statistics_start" if res.get("statistics_start")
+             is not None else "the last third")
+    return (f"steady state: t in [{w[0]:.6g}, {w[1]:.6g}], {which} of the common "
             f"time range [{res['common_time_range'][0]:.6g}, {res['common_time_range'][1]:.6g}]")
 
 
@@ -472,8 +494,8 @@ def _figures(outdir: Path, ra: dict, rb: dict, anchors: dict, t_lo: float,
                 lo, hi = float(vals.min()), float(vals.max())
                 pad = 0.05 * (hi - lo) if hi > lo else 0.05 * abs(hi) or 1.0
                 zoom.set_ylim(lo - pad, hi + pad)
-            zoom.set_title(f"steady state: last third of the common time range "
-                           f"[{t_lo:.4g}, {t_hi:.4g}]", fontsize=9)
+            zoom.set_title(f"steady state: t in [{window[0]:.4g}, {window[1]:.4g}] of the "
+                           f"common time range [{t_lo:.4g}, {t_hi:.4g}]", fontsize=9)
         for ax in axes[:, 0]:
             ax.set_ylabel("|M|")
             ax.grid(True, lw=0.3)

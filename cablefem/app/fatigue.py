@@ -98,10 +98,15 @@ def _anchor_sections(case: Case, rundir: Path, names: list[str],
 
 def fatigue_window(case: Case, rule: str) -> tuple[str | tuple[float, float] | None, dict]:
     """The window argument of :func:`cablefem.fatigue.fatigue_report` for a window rule
-    ('after_startup', 'all', 'steady'), and its description for fatigue.json."""
+    ('after_startup', 'all', 'steady': from ``dynamics.statistics_start`` when the case
+    sets it, else the last third of the run), and its description for fatigue.json."""
     if rule == "all":
         return None, {"rule": "all", "reason": "the whole run"}
     if rule == "steady":
+        start = getattr(case.dynamics, "statistics_start", None)
+        if start is not None:  # the run's own statistics window
+            return (float(start), math.inf), {"rule": "steady", "start": float(start),
+                                              "reason": "dynamics.statistics_start"}
         return "steady", {"rule": "steady", "reason": "the last third of the run"}
     if rule != "after_startup":
         raise ValueError(f"window must be 'after_startup', 'all' or 'steady', got {rule!r}")

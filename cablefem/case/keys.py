@@ -306,7 +306,8 @@ CASE_KEYS: dict[str, KeyDoc | TableDoc] = {
         "window": KeyDoc("string", "after_startup", "", "'after_startup' from the end of the "
                          "longest anchor-motion ramp (a motion with ramp = 0 that jumps at "
                          f"t = 0: {DEFAULT_RAMP_PERIODS:g} of its periods) to the end | 'all' "
-                         "the whole run | 'steady' its last third."),
+                         "the whole run | 'steady' the run's statistics window (from "
+                         "dynamics.statistics_start, else the last third)."),
         "fibres": KeyDoc("integer", 36, "-", "Directions round the section scanned (with "
                          "their opposites) before the search for the worst one, >= 4."),
         "units": KeyDoc("string", "Pa", "", "Name of the stress unit in the reports."),
