@@ -31,7 +31,7 @@ from cablefem.io.anchorcsv import ANCHOR_COLUMNS, MOMENT_COLUMNS, OPTIONAL_MOMEN
 
 __all__ = ["ANCHOR_COLUMNS", "MOMENT_COLUMNS", "OPTIONAL_MOMENT_COLUMNS", "MAX_ANCHOR_ANGLE",
            "ERROR_THRESHOLD", "anchor_moments", "error_estimate",
-           "resonance", "resonance_factor"]
+           "resonance", "resonance_factor", "resonant_frequency_error"]
 
 #: Estimated relative error of the anchor moment above which a run warns (docs/theory.md
 #: §5): 2 %, the accuracy at which the leading order stops being better than the inputs
@@ -76,6 +76,25 @@ def resonance(omega: float | None, omegas, damping_ratio) -> tuple[float, float 
     return best, mode
 
 
+def resonant_frequency_error(tension, EI: float, mass: float | None,
+                             resonant_omega: float | None, resonant_shift: float | None,
+                             discretisation: float | None):
+    """The resonant mode's relative frequency error, string minus rod, with its sign
+    (docs/theory.md §5.2): the mesh's ``discretisation`` (P1 with the consistent mass: the
+    string's mode is too high, positive) minus the span's bending shift, which raises the
+    rod's frequency and which the string lacks (``resonant_shift`` measured on the mode,
+    positive; else the taut beam's ``EI m omega_n^2 / (2 T^2)`` at ``resonant_omega`` and
+    the row's ``tension``; none when both are None: the outer problem bends). 0 when
+    neither is known; per row where the formula is used."""
+    net = float(discretisation) if discretisation else 0.0
+    if resonant_shift is not None and np.isfinite(resonant_shift):
+        return net - resonant_shift
+    if resonant_omega and mass:
+        T = np.asarray(tension, float)
+        return net - EI * mass * resonant_omega**2 / (2.0 * T * T)
+    return net
+
+
 def error_estimate(delta: np.ndarray, tension: np.ndarray, EI: float, EA: float,
                    length: float | None, period_ratio: np.ndarray | None = None,
                    outer_order: int = 0, amplification: float = 1.0,
@@ -107,10 +126,11 @@ def error_estimate(delta: np.ndarray, tension: np.ndarray, EI: float, EA: float,
     added to the dynamic part; ``resonant_shift``, when given, is that error measured on
     the mode itself (:func:`cablefem.span_bending.frequency_shifts`, any shape: a sagging
     cable's in-plane modes bend far more than a taut beam's) and replaces the formula.
-    ``discretisation``: the resonant mode's frequency error from the string's own mesh and
-    time step (:func:`cablefem.discretisation.frequency_error`), amplified likewise. The
-    estimate is at most 1: an error of the size of the moment itself (a history whose
-    phase is not determined).
+    ``discretisation``: the resonant mode's signed frequency error from the string's own
+    mesh (:func:`cablefem.discretisation.frequency_error`). The two are one frequency
+    error of the mode, with signs (:func:`resonant_frequency_error`): its size is amplified,
+    not the sum of their sizes. The estimate is at most 1: an error of the size of the
+    moment itself (a history whose phase is not determined).
     """
     h, _ = asymptotics.virtual_hinge(delta, tension, EI, EA)
     with np.errstate(invalid="ignore"):
@@ -122,13 +142,8 @@ def error_estimate(delta: np.ndarray, tension: np.ndarray, EI: float, EA: float,
             Ms = abs(static_moment)
             dyn = amplification * np.abs(M - static_moment) / np.maximum(M, Ms)
             e = e * (Ms / np.maximum(M, Ms) + dyn)
-            if resonant_shift is not None and np.isfinite(resonant_shift):
-                e = e + abs(resonant_shift) * dyn
-            elif resonant_omega and mass:
-                T = np.asarray(tension, float)
-                e = e + EI * mass * resonant_omega**2 / (2.0 * T * T) * dyn
-            if discretisation:
-                e = e + discretisation * dyn
+            e = e + np.abs(resonant_frequency_error(tension, EI, mass, resonant_omega,
+                                                    resonant_shift, discretisation)) * dyn
         if period_ratio is not None:
             e = e + np.nan_to_num(np.asarray(period_ratio, float) ** 2, nan=0.0)
     return np.minimum(e, 1.0)

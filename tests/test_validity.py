@@ -4,6 +4,7 @@ string, and the warnings of runs whose rows are invalid or whose estimate is too
 
 from __future__ import annotations
 
+import copy
 import subprocess
 import sys
 import tomllib
@@ -257,11 +258,13 @@ def test_the_resonant_modes_own_bending_error_enters_the_estimate(mpi_tmp_path):
     eps = 0.01 ("auto" leaves the bending off: 0.37 % at most) with its anchor q moving in
     plane at its fourth mode's frequency (the in-plane symmetric one): the run records
     that mode's shift as the resonance's, and each row's estimate is the function's with
-    it (error_estimate of the row's tension, angle and moment, to round-off)."""
+    it (error_estimate of the row's tension, angle and moment, to round-off), with the
+    mesh's error in one signed sum, whose sign the rod's own mode confirms."""
     from test_span_bending import sagging
 
     d = sagging(0.01 ** 2, "clamped", "auto")
     d["modal"] = {"modes": 4}
+    probe_case = copy.deepcopy(d)
     probe = run_case(parse_case(d), mpi_tmp_path / "probe", comm, figures=False,
                      progress=False, dynamics=False).summary
     w4 = probe["modes"][3]["omega"]
@@ -286,9 +289,22 @@ def test_the_resonant_modes_own_bending_error_enters_the_estimate(mpi_tmp_path):
                           np.zeros((len(F), 3)), np.array([0.0, 0, -1.0]), s["length"], w4,
                           "exact", 1, s["error_resonance_factor"],
                           s["anchors"]["p"]["static_moment"], None,
-                          s["error_resonance_shift"])["error_estimate"]
+                          s["error_resonance_shift"],
+                          s["error_resonance_mesh"])["error_estimate"]
     # the CSV's 17 digits and the static moment's round trip: 1e-9
     np.testing.assert_allclose(rows["error_estimate"], want, rtol=1e-9)
+    # the estimate amplifies the mode's signed net error, string minus rod: the mesh's
+    # +0.036 % minus the bending's 0.365 % = -0.33 %; the rod's mode 4 measures -0.48 %
+    # (the rest: the hinge's next order, e1 (k ell)^2/2 of theory.md §5.3, whose size the
+    # estimate keeps apart). Same sign, within a factor 2; the sum of the sizes, +0.40 %,
+    # had the opposite sign.
+    net = s["error_resonance_frequency"]
+    assert net == pytest.approx(s["error_resonance_mesh"] - s["error_resonance_shift"],
+                                rel=1e-12)
+    rod = run_case(parse_case(probe_case), mpi_tmp_path / "rod", comm, figures=False,
+                   progress=False, dynamics=False, model="beam").summary
+    measured = probe["modes"][3]["omega"] / rod["modes"][3]["omega"] - 1
+    assert 0.5 < net / measured < 2, (net, measured)
 
 
 @pytest.mark.parametrize("EI, warns", [(9e-4, False), (6.4e-3, True)])
@@ -331,3 +347,27 @@ def test_the_mesh_term_is_left_out_at_a_parametric_resonance(mpi_tmp_path):
                  dynamics=False).summary
     assert s["error_resonance_kind"] == "parametric"
     assert s["error_resonance_mesh"] >= (np.pi / 30) ** 2 / 24
+
+
+@pytest.mark.parametrize("kind, mesh, shift, names", [
+    ("primary", 4.29e-3, 8.2e-4, "mesh.elements"),  # case B on 20 elements (theory.md §5.2)
+    ("primary", 1.2e-4, 3.2e-4, "solver.span_bending"),  # the span's bending the larger
+    ("parametric", 5.1e-4, 7.4e-5, "solver.span_bending")])  # case A: no mesh term added
+def test_a_resonance_warning_names_the_larger_frequency_error(kind, mesh, shift, names):
+    """The estimate amplifies the resonant mode's net frequency error, the mesh's (the
+    string's mode high) minus the span's bending (low): putting the bending in removes
+    only the second, and in case B (+0.43 % against -0.082 %, primary) it would raise the
+    net from 0.35 % to 0.43 %. The warning names the remedy of the larger: more elements
+    where the mesh's is, solver.span_bending where the bending's is (at a parametric
+    resonance the mesh's is not added). Before, it named solver.span_bending always."""
+    from cablefem.app.report import anchor_validity
+
+    summary = {"span_bending": False, "error_resonance_factor": 199.0,
+               "error_resonance_kind": kind, "error_resonance_mesh": mesh,
+               "error_resonance_shift": shift}
+    times = np.linspace(0.0, 3.0, 31)
+    rows = {"valid": np.ones(31), "error_estimate": np.full(31, 0.05)}
+    anchor_validity(summary, "p", times, rows, ERROR_THRESHOLD)
+    (message,) = [w["message"] for w in summary["warnings"]]
+    other = {"mesh.elements": "solver.span_bending", "solver.span_bending": "mesh.elements"}
+    assert names in message and other[names] not in message

@@ -149,9 +149,28 @@ def anchor_validity(summary: dict, name: str, times: np.ndarray, mo: dict,
              f"the factor {summary.get('error_resonance_factor', 1.0):.3g}) are too large"
              + (" (solver.outer_correction = 'hinge' reduces them)"
                 if summary.get("outer_correction") == "none" else "")
-             + (" (near a resonance the span's bending, which the string leaves out, moves "
-                "the resonant frequency: solver.span_bending = true puts it in)"
-                if summary.get("span_bending") is False
-                and summary.get("error_resonance_factor", 1.0) > 1.0 else "")
-             + "; see error_estimate in anchors.csv")
+             + _resonance_hint(summary) + "; see error_estimate in anchors.csv")
     return out
+
+
+def _resonance_hint(summary: dict) -> str:
+    """The remedy for the resonant mode's frequency error, which the estimate amplifies
+    with its sign (docs/theory.md §5.2): the string's mesh puts the mode high by
+    ``error_resonance_mesh`` (added at a primary resonance), the span's bending it leaves
+    out low by ``error_resonance_shift``. Putting the bending in removes the second only:
+    named when that is the larger; more elements when the mesh's is."""
+    if not summary.get("error_resonance_factor", 1.0) > 1.0:
+        return ""
+    mesh = summary.get("error_resonance_mesh") or 0.0
+    if summary.get("error_resonance_kind") != "primary":
+        mesh = 0.0
+    shift = summary.get("error_resonance_shift")
+    if summary.get("span_bending") is False and (shift is None or abs(shift) >= abs(mesh)):
+        return (" (near a resonance the span's bending, which the string leaves out, moves "
+                "the resonant frequency: solver.span_bending = true puts it in)")
+    if mesh > 0:
+        return (f" (near a resonance the string's mesh puts the resonant mode {mesh:.2%} "
+                "high" + (f", more than the span's bending it leaves out puts it low "
+                          f"({shift:.2%})" if shift is not None else "")
+                + ": more mesh.elements reduce it as their length squared)")
+    return ""

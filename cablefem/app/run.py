@@ -443,9 +443,11 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
         if w_r is not None:
             summary["error_resonance_kind"] = "parametric" if parametric else "primary"
         if disc is not None:
-            summary["error_resonance_mesh"] = disc = abs(disc)
+            summary["error_resonance_mesh"] = disc  # signed: P1 stiffens (theory.md §5.2)
             if parametric:
                 disc = None
+            elif shift is not None:  # the net the estimate amplifies, string minus rod
+                summary["error_resonance_frequency"] = disc - shift
             step = model_frequency_error(model, static, w_r, time_step=True)
             if step is not None:
                 summary["error_resonance_time_step"] = step
