@@ -520,7 +520,10 @@ def test_slackening_run_warns_about_rho_inf(mpi_tmp_path):
         dyn = dataclasses.replace(case.dynamics, t_end=0.2, rho_inf=rho)
         res = run_case(dataclasses.replace(case, dynamics=dyn), mpi_tmp_path / f"r{rho}",
                        MPI.COMM_WORLD, progress=False, figures=False, modes=0)
-        msgs = [w["message"] for w in res.summary["warnings"] if "snaps taut" in w["message"]]
+        # the anchors' slack warning (the step-to-step alternation's, on dynamics.dt, also
+        # names a snap as a cause, at either rho_inf)
+        msgs = [w["message"] for w in res.summary["warnings"]
+                if w["key"].startswith("anchors.") and "snaps taut" in w["message"]]
         assert bool(msgs) == warned and all("rho_inf" in m for m in msgs)
 
 

@@ -239,7 +239,10 @@ def test_more_modes_than_free_dofs(mpi_tmp_path, make_case):
     res = run_case(case, mpi_tmp_path / "o", dynamics=False, figures=False, progress=False)
     om = [m["omega"] for m in res.summary["modes"]]
     assert len(om) == 6 and np.all(np.diff(om) >= 0) and om[0] > 0
-    assert [w["key"] for w in res.summary["warnings"]] == ["modal.modes"]
+    keys = [w["key"] for w in res.summary["warnings"]]
+    # besides, 3 elements' modes are outside the mesh's range: the modal table's own
+    # validity (docs/theory.md §5.3) warns under "modal"
+    assert "modal.modes" in keys and set(keys) <= {"modal.modes", "modal"}
 
 
 # ------------------------------------------------------------------ 4. the output folder
