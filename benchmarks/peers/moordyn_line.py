@@ -69,12 +69,13 @@ def write_input(c: dict, folder: Path, segments: int) -> Path:
     dtm = 0.8 * h / math.sqrt(EA / m)
     if beta > 0:
         dtm = min(dtm, 0.25 * m * h * h / (beta * EA))
+    cdt, cat = fl["cd_tangential"], fl.get("ca_tangential", 0.0)
     text = f"""--------------------- MoorDyn Input File ------------------------------------
 cablefem peer benchmark: {c.get('title', '')}
 ----------------------- LINE TYPES ------------------------------------------
 TypeName   Diam    Mass/m     EA         BA/-zeta    EI         Cd     Ca     CdAx    CaAx
 (name)     (m)     (kg/m)     (N)        (N-s/-)     (N-m^2)    (-)    (-)    (-)     (-)
-line       {D}   {sec['mass']}   {EA}   {beta * EA}   0.0   {fl['cd_normal']}   {fl['ca_normal']}   {fl['cd_tangential']}   {fl.get('ca_tangential', 0.0)}
+line  {D}  {sec['mass']}  {EA}  {beta * EA}  0.0  {fl['cd_normal']}  {fl['ca_normal']}  {cdt}  {cat}
 ---------------------- POINTS --------------------------------
 ID    Attachment  X       Y       Z       Mass   Volume  CdA    Ca
 (#)   (-)       (m)     (m)     (m)     (kg)   (m^3)   (m^2)  (-)

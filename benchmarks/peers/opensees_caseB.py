@@ -4,10 +4,11 @@ Run by ``benchmarks/bench_peers.py`` with the benchmark-only interpreter (never 
 cablefem or its tests). One whole process does what a user of OpenSees would do for the
 same answer: read the case (TOML), build a chain of corotational truss elements (as many as
 the case's ``[mesh] elements``, consistent mass, the same stress-free length), statics
-under gravity, the first ``[modal] modes`` eigenvalues, the transient with the same
-generalised-alpha family (Newmark's average acceleration, rho_inf = 1; the same dt) and Rayleigh damping on
-the current tangent, the anchor forces at every step and, from them, the anchor moments by
-cablefem's pure-NumPy inner solution (``cablefem.asymptotics``, leading order, exact form).
+under gravity, the first ``[modal] modes`` eigenvalues, the transient in the same
+generalised-alpha family (Newmark's average acceleration, rho_inf = 1; the same dt) with
+Rayleigh damping on the current tangent, the anchor forces at every step and, from them,
+the anchor moments by cablefem's pure-NumPy inner solution (``cablefem.asymptotics``,
+leading order, exact form).
 
     python opensees_caseB.py CASE.toml OUT.npz [--t-end T]
 """
@@ -95,7 +96,7 @@ def main() -> None:
     if P.any() or Q[1] or Q[2] or g[0] or g[1]:
         raise SystemExit("opensees_caseB: written for anchors (0,0,0), (c,0,0) and gravity -z")
     dyn, damp = c["dynamics"], c["damping"]
-    dt, rho = float(dyn["dt"]), float(dyn.get("rho_inf", 0.9))
+    dt = float(dyn["dt"])  # rho_inf: Newmark below is rho_inf = 1 (docs/benchmarks.md)
     t_end = args.t_end if args.t_end is not None else float(dyn["t_end"])
     z, (w1, w2) = float(damp["ratio"]), (float(f) for f in damp["frequencies"])
     alpha, beta = 2 * z * w1 * w2 / (w1 + w2), 2 * z / (w1 + w2)
@@ -112,7 +113,9 @@ def main() -> None:
         ops.fix(i + 1, 0, 1, 0)
     ops.uniaxialMaterial("Elastic", 1, EA)
     for e in range(n):
-        ops.element("corotTruss", e + 1, e + 1, e + 2, 1.0, 1, "-rho", m, "-cMass", 1, "-doRayleigh", 1)
+        # -doRayleigh 1: without it a corotTruss leaves the Rayleigh damping out altogether
+        ops.element("corotTruss", e + 1, e + 1, e + 2, 1.0, 1, "-rho", m, "-cMass", 1,
+                    "-doRayleigh", 1)
     # The run's clock: statics in pseudo-time [-1, 0] (gravity ramped 0 -> 1, anchors at
     # rest), the transient from t = 0 (gravity held, the anchor on its ellipse).
     nsteps = int(round(t_end / dt))
