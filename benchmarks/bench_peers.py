@@ -36,6 +36,7 @@ import subprocess
 import sys
 import tempfile
 import time
+import tomllib
 from pathlib import Path
 
 import numpy as np
@@ -167,17 +168,23 @@ def case_b(py: Path, runs: int, quick: bool, tmp: Path) -> dict:
             "accuracy": acc, "timing": timing}
 
 
-def tension_stats(t, T, start: float) -> dict:
+def tension_stats(t, T, start: float, omega: float) -> dict:
     """Fairlead tension statistics for t >= start: raw and smoothed over 1 s (the axial
-    and touchdown ringing of both models left out), and the mean."""
+    and touchdown ringing of both models left out), the mean, and the amplitudes of the
+    harmonics k omega (k = 1, 2, 3) of the surge frequency (least squares)."""
     w = t >= start
     dt = t[1] - t[0]
     k = max(1, int(round(1.0 / dt)))
     s = np.convolve(T, np.ones(k) / k, mode="same")
     ws = w & (np.arange(len(t)) >= k) & (np.arange(len(t)) < len(t) - k)
-    return {"peak": float(T[w].max()), "trough": float(T[w].min()),
-            "rms": float(np.sqrt(np.mean(T[w] ** 2))), "mean": float(T[w].mean()),
-            "peak_1s": float(s[ws].max()), "trough_1s": float(s[ws].min())}
+    out = {"peak": float(T[w].max()), "trough": float(T[w].min()),
+           "rms": float(np.sqrt(np.mean(T[w] ** 2))), "mean": float(T[w].mean()),
+           "peak_1s": float(s[ws].max()), "trough_1s": float(s[ws].min())}
+    y = T[w] - T[w].mean()
+    for n in (1, 2, 3):
+        A = np.column_stack([np.cos(n * omega * t[w]), np.sin(n * omega * t[w])])
+        out[f"harmonic_{n}"] = float(np.hypot(*np.linalg.lstsq(A, y, rcond=None)[0]))
+    return out
 
 
 def compare_stats(a: dict, b: dict) -> dict:
@@ -188,6 +195,7 @@ def mooring(py: Path, runs: int, quick: bool, tmp: Path, elements: list[int],
             segments: list[int]) -> dict:
     t_end = ["--t-end", "10"] if quick else []
     text = MOORING.read_text()
+    omega = float(tomllib.loads(text)["anchors"][1]["motion"]["omega"])
     cf_stats, md_stats, cmds = {}, {}, {}
     for n in elements:
         case = tmp / f"mooring_{n}.toml"
@@ -196,7 +204,7 @@ def mooring(py: Path, runs: int, quick: bool, tmp: Path, elements: list[int],
                "--output", str(tmp / f"cf{n}")] + t_end
         timed(cmd, tmp)
         t, N, _ = anchor_rows(tmp / f"cf{n}" / "anchors.csv", "fairlead")
-        cf_stats[n] = tension_stats(t, np.linalg.norm(N, axis=1), t[-1] / 2)
+        cf_stats[n] = tension_stats(t, np.linalg.norm(N, axis=1), t[-1] / 2, omega)
         cmds.setdefault("cablefem", cmd)
     for n in segments:
         cmd = [str(py), str(PEERS / "moordyn_line.py"), str(MOORING), str(tmp / f"md{n}.npz"),
@@ -204,7 +212,7 @@ def mooring(py: Path, runs: int, quick: bool, tmp: Path, elements: list[int],
         timed(cmd, tmp)
         o = np.load(tmp / f"md{n}.npz")
         md_stats[n] = tension_stats(o["time"], np.linalg.norm(o["force"], axis=1),
-                                    o["time"][-1] / 2)
+                                    o["time"][-1] / 2, omega)
         cmds.setdefault("moordyn", cmd)
     e, s = elements, segments
     acc = {"cablefem": {str(n): v for n, v in cf_stats.items()},
