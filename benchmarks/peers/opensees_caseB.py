@@ -79,6 +79,26 @@ def tangent_and_mass(x: np.ndarray, h0: float, EA: float, m: float, n: int):
     return K, M
 
 
+def consistent_start(n: int, h0: float, EA: float, m: float, alpha: float, beta: float,
+                     vb: np.ndarray, ab: np.ndarray) -> None:
+    """cablefem's 'quasi-static' start: the free nodes follow the anchor's velocity ``vb``
+    quasi-statically (K_ff v_f = -K_fb v_b, static tangent) with the acceleration the
+    equations of motion give (generalised-alpha's consistent start), set in OpenSees."""
+    xs = np.array([ops.nodeCoord(i + 1) for i in range(n + 1)]) + np.array(
+        [ops.nodeDisp(i + 1) for i in range(n + 1)])
+    K, M = tangent_and_mass(xs, h0, EA, m, n)
+    free = np.arange(3, 3 * n)
+    bnd = np.arange(3 * n, 3 * n + 3)
+    vf = np.linalg.solve(K[np.ix_(free, free)], -K[np.ix_(free, bnd)] @ vb)
+    C = alpha * M + beta * K
+    af = np.linalg.solve(M[np.ix_(free, free)], -C[np.ix_(free, free)] @ vf
+                         - C[np.ix_(free, bnd)] @ vb - M[np.ix_(free, bnd)] @ ab)
+    for i in range(1, n):
+        for d in range(3):
+            ops.setNodeVel(i + 1, d + 1, float(vf[3 * (i - 1) + d]), "-commit")
+            ops.setNodeAccel(i + 1, d + 1, float(af[3 * (i - 1) + d]), "-commit")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("case", type=Path)
@@ -150,23 +170,7 @@ def main() -> None:
     for i in range(1, n):  # taut: free again across the plane (and held there by tension)
         ops.remove("sp", i + 1, 2)
     omegas = np.sqrt(np.asarray(ops.eigen(int(c["modal"]["modes"]))))
-    # cablefem's 'quasi-static' start: the free nodes follow the anchor's velocity
-    # quasi-statically (K_ff v_f = -K_fb v_b, static tangent) with the acceleration the
-    # equations of motion give (generalised-alpha's consistent start)
-    xs = np.array([ops.nodeCoord(i + 1) for i in range(n + 1)]) + np.array(
-        [ops.nodeDisp(i + 1) for i in range(n + 1)])
-    K, M = tangent_and_mass(xs, h0, EA, m, n)
-    free = np.arange(3, 3 * n)
-    bnd = np.arange(3 * n, 3 * n + 3)
-    vb, ab = v[0], a[0]
-    vf = np.linalg.solve(K[np.ix_(free, free)], -K[np.ix_(free, bnd)] @ vb)
-    C = alpha * M + beta * K
-    af = np.linalg.solve(M[np.ix_(free, free)], -C[np.ix_(free, free)] @ vf
-                         - C[np.ix_(free, bnd)] @ vb - M[np.ix_(free, bnd)] @ ab)
-    for i in range(1, n):
-        for d in range(3):
-            ops.setNodeVel(i + 1, d + 1, float(vf[3 * (i - 1) + d]), "-commit")
-            ops.setNodeAccel(i + 1, d + 1, float(af[3 * (i - 1) + d]), "-commit")
+    consistent_start(n, h0, EA, m, alpha, beta, v[0], a[0])
     ops.wipeAnalysis()
     ops.setTime(0.0)
     ops.constraints("Transformation")
