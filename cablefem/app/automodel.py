@@ -55,7 +55,8 @@ def run_auto(run, case, outdir, comm, **kwargs):
     est = string_estimates(string.summary)
     over = {n: e for n, e in est.items() if e > ERROR_THRESHOLD}
     record = {"asked": "auto", "threshold": ERROR_THRESHOLD, "string_error_estimate": est,
-              "string_wall_time": string.summary["wall_time"]["total"]}
+              # rank 0's clock, as summary.json has it: every rank returns the same record
+              "string_wall_time": comm.bcast(string.summary["wall_time"]["total"], root=0)}
     if not over:
         record.update(decision="string", reason=(
             "the string's estimated moment error is at most the threshold at every clamped "
@@ -81,7 +82,7 @@ def run_auto(run, case, outdir, comm, **kwargs):
     static = {n: string.summary["anchors"][n].get("static_moment") for n in est}
     warnings = string.summary.get("warnings", [])
     rod = run(case, outdir, comm, model="beam", refine=refine, **kwargs)
-    t_rod = rod.summary["wall_time"]["total"]
+    t_rod = comm.bcast(rod.summary["wall_time"]["total"], root=0)
     record.update(decision="beam", reason=why, string_static_moment=static,
                   string_warnings=warnings, rod_wall_time=t_rod,
                   cost_ratio=t_rod / max(record["string_wall_time"], 1e-300))
