@@ -327,6 +327,8 @@ def test_a_fine_rod_finds_the_tensioned_equilibrium():
         assert abs(H[refine] / H[2.0] - 1) < 1e-4, H
 
 
+@pytest.mark.single_rank  # a buckling study (7 s on 2 ranks); the rod's parallel statics:
+# test_cantilever_tip_load_matches_the_elastica
 def test_a_buckled_rod_says_so(mpi_tmp_path, monkeypatch):
     """Should the relaxation not find a tensioned state either (here it is made to fail),
     the rod's Newton result with compressed elements stands: the 8x refined rod of the

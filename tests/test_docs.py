@@ -12,6 +12,8 @@ import pytest
 
 from cablefem.case import format_case_reference
 
+pytestmark = pytest.mark.single_rank  # the docs and the quoted numbers: nothing distributed
+
 
 @pytest.mark.parametrize("marker,network", [("case-keys", False), ("network-keys", True)])
 def test_case_file_keys_current(marker, network):

@@ -69,6 +69,8 @@ def test_second_order_in_time(rho_inf):
     assert observed_order(dts, np.array(errs)) > 1.8, errs
 
 
+@pytest.mark.single_rank  # long free decays (17 s on 2 ranks); damping's parallel
+# assembly: test_rayleigh_current_tangent_is_frame_independent
 @pytest.mark.parametrize("damping_model", ["rayleigh", "rayleigh_k0"])
 def test_rayleigh_damping_ratio(damping_model):
     """Rayleigh damping alpha M + beta K with zeta = 2 % at omega_1 and omega_3 (discrete),
@@ -361,6 +363,8 @@ class _LinearTable:
         return {"type": "linear table (test)"}
 
 
+@pytest.mark.single_rank  # a motion table's values are the same on every rank (10 s on
+# 2 ranks); the anchors' parallel rows: test_step_cut_and_retry and the others
 def test_coarse_table_matches_the_closed_form_motion(mpi_tmp_path):
     """Case A's anchor motion u = A sin(w t) as a table with a row every 2 dt (dt = 0.005,
     about 19 rows per period) gives the anchor-tension history of the closed form, where

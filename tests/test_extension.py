@@ -245,6 +245,8 @@ def test_rod_jacobians_derive_user_dashpot_and_added_mass():
 
 
 # ----------------------------------------------------------------------------- 2. statics
+@pytest.mark.single_rank  # the rod's case (26 s on 2 ranks); a user term's parallel
+# assembly: test_static_spring_and_load_closed_form_through_the_bilateral_twin
 @pytest.mark.parametrize("kind", ["string", "rod"])
 def test_static_load_term_equals_case_load(kind):
     """A distributed load q added as the static term -q.du dx gives the equilibrium of the

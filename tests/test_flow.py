@@ -269,6 +269,8 @@ def test_waves_on_a_held_cable_give_the_morison_force():
     assert err < 3e-3 * np.max(np.abs(expected)), err
 
 
+@pytest.mark.single_rank  # 9 s on 2 ranks; the modal problem's parallel path:
+# test_modal.py, test_dampers.py
 def test_modal_analysis_is_about_the_steady_current():
     """The modes and their damping ratios are those of the cable at rest in the steady
     current, whatever the waves do at the time of the analysis (here waves without a ramp,

@@ -197,6 +197,8 @@ def test_hinge_on_any_mesh_converges_with_the_mesh(kind):
     assert np.all(diff[-1] < 1e-5), diff
 
 
+@pytest.mark.single_rank  # counts fixed-point iterations (13 s on 2 ranks); the hinge
+# on 2 ranks: test_hinge_network and case B's 2 ranks = serial test
 def test_hinge_fixed_point_is_accelerated_and_tight(monkeypatch):
     """The sagging cable at eps = 0.08 on 6 elements (the old limit): the plain fixed point
     contracts by ~0.52 per iteration there and was rejected after 30 iterations (measured
