@@ -236,3 +236,13 @@ def test_output_cut_short_by_the_reader_is_not_an_error():
     err = proc.stderr.read().decode()
     assert proc.wait(timeout=60) == 0, err
     assert "error" not in err.lower(), err
+
+
+def test_one_version_number():
+    """The installed distribution's version is cablefem.__version__ (pyproject.toml said
+    0.1.0 while the package said 0.2.0.dev0)."""
+    import importlib.metadata
+
+    import cablefem
+
+    assert importlib.metadata.version("cablefem") == cablefem.__version__
