@@ -11,18 +11,19 @@ The residual ``F(t, U, V, A)`` is the model's UFL form ``F_dynamic``; the Jacobi
 motion ``g(t)`` enters as the rows ``U − g(t)`` at the stage time.
 
 A step whose Newton solve fails is retried from its start (displacement, velocity and the
-integrator's acceleration: :func:`_retry_from_start`) as 4, 16, ... equal sub-steps up to the
-next point of the nominal time grid (at most ``max_cuts`` times; PETSc's ``alpha2`` with its
-default adaptor would retry with the same step). The first step after a change of step size
-is a backward Euler step (:class:`_BackwardEuler`), which leaves the acceleration the
-equations of motion give at its end: generalised-α's acceleration belongs to its step size,
-and carried into a smaller step it set off a spike in the anchor forces (a mooring line's
-fairlead force 6 % low at the cut). The run then goes on with the sub-steps: returning to
-the larger step from a state the smaller one made set the fairlead force zigzagging by
-±10 % from step to step (``cooldown``, off by default, allows it after that many calm
-nominal steps). Outputs stay on the nominal grid. When it cannot continue,
-:class:`DynamicsError` says at which time, with the last Newton history, and leaves the last
-converged state in ``model.u`` and ``model.v``; everything written up to then stays valid.
+integrator's acceleration: :func:`cablefem.alpha2.retry_from_start`) as 4, 16, ... equal
+sub-steps up to the next point of the nominal time grid (at most ``max_cuts`` times;
+PETSc's ``alpha2`` with its default adaptor would retry with the same step). The first step
+after a change of step size is a backward Euler step (:class:`cablefem.alpha2.BackwardEuler`),
+which leaves the acceleration the equations of motion give at its end: generalised-α's
+acceleration belongs to its step size, and carried into a smaller step it set off a spike in
+the anchor forces (a mooring line's fairlead force 6 % low at the cut). The run then goes on
+with the sub-steps: returning to the larger step from a state the smaller one made set the
+fairlead force zigzagging by ±10 % from step to step (``cooldown``, off by default, allows
+it after that many calm nominal steps). Outputs stay on the nominal grid. When it cannot
+continue, :class:`DynamicsError` says at which time, with the last Newton history, and
+leaves the last converged state in ``model.u`` and ``model.v``; everything written up to
+then stays valid.
 
 Options prefix: the model's (``cable_``): ``-cable_ts_type``, ``-cable_snes_rtol``, ...
 """
@@ -40,6 +41,7 @@ from dolfinx.fem import petsc as fpetsc
 from mpi4py import MPI
 from petsc4py import PETSc
 
+from cablefem.alpha2 import BackwardEuler, retry_from_start
 from cablefem.errors import DynamicsError, Interrupted
 from cablefem.hinge import HingeError
 from cablefem.initial import initial_velocity
@@ -173,74 +175,6 @@ def _make_ts(model, dt: float, rho_inf: float, history: SNESHistory,
         ts.setFromOptions()
     ts.getSNES().setMonitor(history)
     return ts, (F_vec, J_mat)
-
-
-def _retry_from_start(ts: PETSc.TS, t: float, number: int) -> None:
-    """Prepare ``ts`` (``alpha2``, after a step from ``t`` that failed) to retry that step
-    from its start: its displacement, velocity *and acceleration* there. ``TSRollBack``
-    marks the step rolled back, so that the next ``TSStep`` keeps ``alpha2``'s start state
-    (``X0``, ``V0``, ``A0``) instead of copying the failed attempt's acceleration into
-    ``A0``; it also moves the clock back a step, which is set again here.
-
-    The alternatives both changed the answer at every cut: a plain retry starts from the
-    failed iterate's acceleration, and a restart (``TSRestartStep``) re-estimates ``A0``
-    from two backward Euler half steps, which PETSc 3.18 divides by the half step instead
-    of the whole one, twice the acceleration (docs/rod.md, "Noticed, not changed"): the
-    sub-steps' first residual grew fourfold with each cut, and the mooring line of
-    demos/mooring.toml showed spikes in its fairlead force at every cut (issue 29 item 7)."""
-    ts.rollBack()
-    ts.setTime(t)
-    ts.setStepNumber(number)
-
-
-class _BackwardEuler:
-    """Within the block (when ``active``) ``alpha2``'s parameters are those of backward
-    Euler, ``α_m = α_f = γ = 1``, ``β = 1/2`` (PETSc's own for its start-up steps): the
-    equation of motion holds at the step's end, and neither the step nor its end state
-    depends on the acceleration it starts from; its end acceleration is the one the
-    equations of motion give there, generalised-α's consistent start. First order, and
-    strongly damping: used for the one step after a change of step size. petsc4py has no
-    call for ``TSAlpha2SetParams``: it is called through ctypes from the PETSc library
-    petsc4py is linked to."""
-
-    _lib = None
-
-    def __init__(self, ts: PETSc.TS, active: bool) -> None:
-        self.ts, self.active, self.saved = ts, active, None
-
-    @classmethod
-    def _functions(cls):
-        if cls._lib is None:
-            import ctypes
-
-            lib = ctypes.CDLL(PETSc.__file__)  # its dependencies hold libpetsc's symbols
-            real = ctypes.c_double
-            lib.TSAlpha2SetParams.argtypes = [ctypes.c_void_p] + [real] * 4
-            lib.TSAlpha2GetParams.argtypes = [ctypes.c_void_p] + [ctypes.POINTER(real)] * 4
-            cls._lib = (lib, real)
-        return cls._lib
-
-    def _set(self, params) -> None:
-        lib, _ = self._functions()
-        if lib.TSAlpha2SetParams(self.ts.handle, *params) != 0:
-            raise RuntimeError("TSAlpha2SetParams failed")
-
-    def __enter__(self):
-        if self.active:
-            lib, real = self._functions()
-            vals = [real() for _ in range(4)]
-            import ctypes
-
-            if lib.TSAlpha2GetParams(self.ts.handle, *map(ctypes.byref, vals)) != 0:
-                raise RuntimeError("TSAlpha2GetParams failed")
-            self.saved = [v.value for v in vals]
-            self._set((1.0, 1.0, 1.0, 0.5))
-        return self
-
-    def __exit__(self, *exc):
-        if self.saved is not None:
-            self._set(self.saved)
-        return False
 
 
 #: the TS's end time when none is given: PETSc's TSStep refuses to run without one
@@ -436,7 +370,7 @@ class DynamicProblem:
             number = ts.getStepNumber()
             changed = self._done_level is not None and self._done_level != self.level
             try:
-                with _BackwardEuler(ts, changed):
+                with BackwardEuler(ts, changed):
                     ts.step()
             except PETSc.Error:  # raised when the step is rejected (ts_max_reject = 0)
                 if ts.getConvergedReason() >= 0:  # any other error: not a failed step
@@ -451,7 +385,7 @@ class DynamicProblem:
             failed = True
             ts.setConvergedReason(PETSc.TS.ConvergedReason.CONVERGED_ITERATING)
             if not rolled:  # the retry starts from the step's start, acceleration included
-                _retry_from_start(ts, t, number)
+                retry_from_start(ts, t, number)
                 rolled = True
             if self.level == self.max_cuts:
                 self.time = t

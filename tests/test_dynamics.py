@@ -271,7 +271,8 @@ def test_a_force_alternating_from_step_to_step_is_warned(mpi_tmp_path, monkeypat
     the 0.6 rad/s surge is 1.4e-4) and does not warn."""
     from dataclasses import replace
 
-    from cablefem.dynamics import DynamicProblem, _BackwardEuler
+    from cablefem.alpha2 import BackwardEuler
+    from cablefem.dynamics import DynamicProblem
 
     case = _small_mooring()
     case = replace(case, dynamics=replace(case.dynamics, t_end=0.6, checkpoint_every=0))
@@ -279,7 +280,7 @@ def test_a_force_alternating_from_step_to_step_is_warned(mpi_tmp_path, monkeypat
     real = DynamicProblem.step
 
     def kicked(self, t_end=None):
-        with _BackwardEuler(self.ts, self.step_number == 16):
+        with BackwardEuler(self.ts, self.step_number == 16):
             return real(self, t_end)
 
     monkeypatch.setattr(DynamicProblem, "step", kicked)
