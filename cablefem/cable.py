@@ -779,7 +779,8 @@ class CableModel:
 
     # ------------------------------------------------------------------ time
     def set_time(self, t: float) -> None:
-        """Set prescribed anchor displacements and time-dependent loads to time ``t``."""
+        """Set prescribed anchor displacements, time-dependent loads and every term's time
+        law (:meth:`cablefem.forms.CableForms.set_time`) to time ``t``."""
         if t == getattr(self, "_time", None):
             return
         self._time = t
@@ -794,10 +795,7 @@ class CableModel:
             c.value[:] = np.asarray(ld.value) * ld.time.value(t)
         for c, pl in self.point_loads:
             c.value[:] = np.asarray(pl.value) * pl.time.value(t)
-        if getattr(self, "fluid_factor", None) is not None:
-            self.fluid_factor.value = self.case.fluid.time.value(t)
-            # waves at the nodes' positions of the last converged state (fluid.py)
-            self.fluid_motion.update(t)
+        self.forms.set_time(t)  # every term's time law (the fluid's: waves, gusts)
 
     def invalidate_time(self) -> None:
         """Make the next :meth:`set_time` write everything again (the hinges changed)."""

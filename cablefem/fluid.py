@@ -17,13 +17,15 @@ all below the free surface only (the elevation of the current position against t
 surface's). ``|x|`` is regularised, ``sqrt(x·x + δ²)`` with ``δ = DELTA_V`` (m/s), so that
 every force is smooth and its Jacobian (UFL's derivative) exists at zero relative velocity:
 Newton stays quadratic. The waves are P1 functions evaluated at the nodes' positions of the
-last converged step (once per step, in :meth:`CableModel.set_time`): their dependence on
-the position is lagged by a step and not in the Jacobian.
+last converged step (once per step, by the dynamic term's time law, which the model's
+``set_time`` calls): their dependence on the position is lagged by a step and not in the
+Jacobian.
 
 Statics sees the drag of the steady current on the cable at rest (scaled by the load
 factor: the load continuation ramps it) and the buoyancy; dynamics adds the difference
 ``drag(u_f − v) − drag(f_z U)``, the added mass and the inertia. The modal analysis
-linearises about the cable at rest in the steady current (:func:`steady_flow`).
+linearises about the cable at rest in the steady current (:func:`steady_flow`, the dynamic
+term's ``linearised``).
 """
 
 from __future__ import annotations
@@ -38,6 +40,7 @@ from petsc4py import PETSc
 
 from cablefem import forms
 from cablefem.flow import POWER_FLOOR, wave_kinematics
+from cablefem.terms import Term
 from cablefem.water import water_depth_of
 
 __all__ = ["DELTA_V", "add_fluid_terms", "submerged_weight", "water_depth", "FluidMotion",
@@ -131,18 +134,15 @@ class FluidMotion:
 
 
 @contextlib.contextmanager
-def steady_flow(model):
+def steady_flow(factor, motion: FluidMotion):
     """Within the block the fluid is its steady current (time factor 1, no waves or
-    velocity history): the modal analysis linearises about the cable at rest in it."""
-    motion = getattr(model, "fluid_motion", None)
-    if motion is None:
-        yield
-        return
-    parts = [model.fluid_factor, motion.series_v, motion.series_a]
+    velocity history): the modal analysis linearises about the cable at rest in it (the
+    ``fluid_dynamic`` term's ``linearised``). ``factor``: the time function's Constant."""
+    parts = [factor, motion.series_v, motion.series_a]
     saved = [np.array(c.value, copy=True) for c in parts]
     funcs = [f for f in (motion.wave_v, motion.wave_a) if f is not None]
     saved_f = [f.x.array.copy() for f in funcs]
-    model.fluid_factor.value = 1.0
+    factor.value = 1.0
     for c in parts[1:]:
         c.value[:] = 0.0
     for f in funcs:
@@ -157,11 +157,13 @@ def steady_flow(model):
 
 
 def add_fluid_terms(model) -> None:
-    """Add the fluid's terms to ``model.forms``: ``fluid_static`` (steady drag, buoyancy)
-    and ``fluid_dynamic`` (the drag's change with the motion, the fluid's time function,
-    waves and velocity history; added mass and fluid inertia). ``model.fluid_factor`` (a
-    Constant) holds the time function's value and ``model.fluid_motion``
-    (:class:`FluidMotion`) the unsteady flow; :meth:`CableModel.set_time` updates both."""
+    """Add the fluid's terms to ``model.forms``, both forces of the medium (``medium``):
+    ``fluid_static`` (steady drag, buoyancy) and ``fluid_dynamic`` (the drag's change with
+    the motion, the fluid's time function, waves and velocity history; added mass and
+    fluid inertia). The dynamic term's time law sets the time function's value (a
+    Constant) and the unsteady flow (:class:`FluidMotion`) whenever the model's time is
+    set; it linearises about the steady current (:func:`steady_flow`); its added mass
+    turns with the cable (``moves_mass``, derived: it depends on ``u``)."""
     fl = model.case.fluid
     mesh, u, v, a, du, t0 = model.mesh, model.u, model.v, model.a, model.du, model.t0
 
@@ -178,8 +180,8 @@ def add_fluid_terms(model) -> None:
                         ma=const(fl.ca_normal * fl.density) * A,
                         mi=const((1.0 + fl.ca_normal) * fl.density) * A,
                         mt=const(fl.ca_tangential * fl.density) * A)
-    model.fluid_factor = fem.Constant(mesh, PETSc.ScalarType(fl.time.value(0.0)))
-    model.fluid_motion = motion = FluidMotion(model)
+    factor = fem.Constant(mesh, PETSc.ScalarType(fl.time.value(0.0)))
+    motion = FluidMotion(model)
     g = forms.stretch_vector(u, t0)
     lam = ufl.sqrt(ufl.dot(g, g))
     t = g / lam
@@ -195,8 +197,8 @@ def add_fluid_terms(model) -> None:
     if fl.buoyancy:  # ramped with the weight where statics ramps it (a network)
         ramp = model.load_factor if model.ramp_weight else 1.0
         static += ramp * ufl.inner(wet * rho * A * model.gravity, du) * lam * ufl.dx
-    model.forms.add("fluid_static", static, kind="static")
-    u_fluid = model.fluid_factor * uf + motion.velocity()
+    model.forms.add(Term("fluid_static", static, "static", medium=True))
+    u_fluid = factor * uf + motion.velocity()
     drag_change = _drag(rho, k, t, u_fluid - v) - _drag(rho, k, t, uf)
     an = a - ufl.dot(a, t) * t
     af = motion.acceleration()
@@ -204,4 +206,10 @@ def add_fluid_terms(model) -> None:
     at = ufl.dot(a - af, t) * t  # along the cable, relative to the fluid
     dynamic = wet * (-ufl.inner(drag_change, du) + k.ma * ufl.inner(an, du)
                      - k.mi * ufl.inner(afn, du) + k.mt * ufl.inner(at, du)) * lam * ufl.dx
-    model.forms.add("fluid_dynamic", dynamic, kind="dynamic")
+
+    def set_time(time: float) -> None:
+        factor.value = fl.time.value(time)
+        motion.update(time)  # waves at the nodes' positions of the last converged state
+
+    model.forms.add(Term("fluid_dynamic", dynamic, "dynamic", set_time=set_time,
+                         linearised=lambda: steady_flow(factor, motion), medium=True))

@@ -1,9 +1,10 @@
 """UFL forms of the 3D extensible string (``docs/theory.md`` §2).
 
 Nothing else lives here: no meshes, no solvers. Every function takes UFL objects and returns
-UFL expressions or forms. :class:`CableForms` holds a model's residual as named terms (the
-model's own and a user's: drag, buoyancy, a dashpot, ...) and derives every residual,
-Jacobian and mass form the solvers use from them (``model.forms``, ``docs/extending.md``).
+UFL expressions or forms. :class:`CableForms` holds a model's residual as terms
+(:class:`cablefem.terms.Term`: the model's own and a user's: drag, buoyancy, a dashpot, ...)
+and derives every residual, Jacobian and mass form the solvers use from them
+(``model.forms``, ``docs/extending.md``).
 
 Kinematics on a 1D mesh embedded in 3D, with ``s`` the arc length of the mesh (the
 reference configuration). A single cable's mesh is its stress-free geometry; a network's
@@ -25,9 +26,12 @@ Weak form (paper Eq. 16 in weak form), for all admissible ``δu``::
 
 from __future__ import annotations
 
+import contextlib
+
 import ufl
-from ufl.algorithms import estimate_total_polynomial_degree, expand_derivatives
-from ufl.algorithms.check_arities import ArityMismatch, check_form_arity
+from ufl.algorithms import expand_derivatives
+
+from cablefem.terms import KINDS, Term, checked
 
 __all__ = ["CableForms", "reference_tangent", "ds_", "stretch_vector", "stretch", "axial_strain",
            "tension", "layer_law_tension", "layer_stretch_vector",
@@ -250,8 +254,6 @@ def end_moment_work(u, du, t0, EI, T, q, direction, ds):
 
 
 # ----------------------------------------------------------------------------- the residuals
-#: kinds of a user term: where it acts (:meth:`CableForms.add`)
-KINDS = ("static", "dynamic")
 #: names of the model's own terms (reserved)
 MODEL_TERMS = ("internal", "external", "inertia", "damping")
 #: the compiled objects, as :meth:`CableForms.compile` names them
@@ -268,14 +270,16 @@ def _depends_on(form, w, trial) -> bool:
 
 
 class CableForms:
-    """The residual of a model as named terms, and every form derived from them.
+    """The residual of a model as terms (:class:`cablefem.terms.Term`), and every form
+    derived from them.
 
-    Sign convention: the residual is ``internal − external + inertia + damping + Σ user
-    terms`` and the solvers find where it vanishes; a user term is added as it enters the
-    residual (a load ``f`` as ``−f·δu``, a dashpot ``c v`` as ``+c v·δu``).
+    Sign convention: the residual is ``internal − external + inertia + damping + Σ terms``
+    and the solvers find where it vanishes; a term is added as it enters the residual (a
+    load ``f`` as ``−f·δu``, a dashpot ``c v`` as ``+c v·δu``).
 
-    The model supplies its own terms (:meth:`set_model_terms`); a user adds terms with
-    :meth:`add`; :meth:`compile` derives and compiles everything the solvers read:
+    The model supplies its own terms (:meth:`set_model_terms`); its physics (fluid,
+    seabed, dampers, span bending) and a user add terms with :meth:`add`; :meth:`compile`
+    derives and compiles everything the solvers read:
 
     * ``F_static = internal − external + Σ static terms`` and ``J_static = ∂F_static/∂u``;
     * their bilateral twins (the internal work with compression allowed), which statics
@@ -285,6 +289,11 @@ class CableForms:
       with a ``v`` (``a``) part whenever ``F_dynamic`` depends on ``v`` (``a``);
     * the mass form ``M = ∂F_dynamic/∂a`` (the inertia and any dynamic term in ``a``);
     * the output expressions (tension, strain) and the energy forms of the model.
+
+    What the solvers ask of the terms: :meth:`set_time` (every term's time law and the time
+    Constant :attr:`time`), :meth:`linearised` (the modal analysis' state),
+    :attr:`mass_moves` (the anchor reactions' mass matrix) and :attr:`medium_forms` (the
+    forces a kink's sides share).
 
     The UFL forms stay readable (``forms.F_dynamic``, ``forms.J_dynamic``, ...); they are
     derived from the terms at every access, never stored: editing them changes nothing.
@@ -300,7 +309,9 @@ class CableForms:
         self.dx = ufl.dx
         self.internal = self.internal_bilateral = self.external = None
         self.inertia = self.damping = None
-        self.user: dict[str, tuple[ufl.Form, str]] = {}  #: name -> (form, kind)
+        self._terms: dict[str, Term] = {}  # name -> Term, in the order added
+        self._time = None  # the time Constant (created on first use of .time)
+        self._t = None  # the time last set
         #: output expressions by name, compiled to ``<name>_expr`` (tension, strain)
         self.outputs: dict[str, ufl.core.expr.Expr] = {}
         #: kinetic, strain and gravity potential energy (UFL functionals of the model)
@@ -319,85 +330,92 @@ class CableForms:
         self.damping, self.internal_bilateral = damping, internal_bilateral
         self._changes += 1
 
-    def add(self, name: str, form, kind: str = "static") -> None:
-        """Add the term ``form`` (a UFL form linear in the model's test function, with the
-        sign it has in the residual) under ``name``.
+    def add(self, term: Term | str, form=None, kind: str = "static") -> None:
+        """Add a :class:`~cablefem.terms.Term` (its form, kind, time law, linearisation,
+        mass and medium flags), or the term ``form`` of ``kind`` under the name ``term``
+        (``add(name, form, kind)``: a term with no time law, linearised as it stands).
 
         ``kind="static"``: a force of the configuration (a load, a spring): it acts in
         statics and in dynamics, and may depend on ``u`` only (not ``v`` or ``a``).
         ``kind="dynamic"``: it acts in dynamics only (a dashpot ``c v``, an added mass
         ``m_a a``, a load that starts with the motion); linear in ``a`` if it depends on it.
 
-        Every Jacobian is derived again at the next :meth:`compile` (or on the next access
-        of a compiled form)."""
-        if kind not in KINDS:
-            raise ValueError(f"kind must be one of {KINDS}, got {kind!r}")
-        if not isinstance(name, str) or not name or name in MODEL_TERMS or name in self.user:
+        A term with a time law is set to the model's current time at once. Every Jacobian
+        is derived again at the next :meth:`compile` (or on the next access of a compiled
+        form). ValueError (naming the term) when it is not a residual term of its kind."""
+        if not isinstance(term, Term):
+            term = Term(term, form, kind)
+        elif form is not None:
+            raise TypeError("add(term) takes a Term alone, add(name, form, kind) a name")
+        name = term.name
+        if not isinstance(name, str) or not name or name in MODEL_TERMS or name in self._terms:
             raise ValueError(f"term name {name!r} is empty, reserved {MODEL_TERMS} or taken "
-                             f"(terms: {sorted(self.user)}): remove it first")
-        if not isinstance(form, ufl.Form) or form.empty():
-            raise ValueError(f"term {name!r}: expected a UFL form (an integral ... * dx), "
-                             f"got {type(form).__name__}")
-        if form.arguments() != (self.test,):
-            raise ValueError(f"term {name!r}: the form must be linear in the model's test "
-                             f"function (model.du) and have no other argument; its arguments "
-                             f"are {form.arguments()}")
-        self._check_rule(name, form)
-        # derivatives applied now: a term given as a Gateaux derivative in the direction v
-        # (beta dF/du [v]) must show v explicitly for the Jacobian's derivative in v
-        form = expand_derivatives(form)
-        self._check_linear(name, form)
-        if kind == "static":
-            rates = [w.name for w in (self.v, self.a) if w in form.coefficients()]
-            if rates:
-                raise ValueError(f"term {name!r} depends on {', '.join(rates)}: statics has "
-                                 "no velocity or acceleration; add it with kind='dynamic'")
-        self.user[name] = (form, kind)
+                             f"(terms: {sorted(self._terms)}): remove it first")
+        term = checked(term, self.test, self.u, self.v, self.a, self.dx, self._time)
+        self._terms[name] = term
+        if term.set_time is not None and self._t is not None:
+            term.set_time(self._t)
         self._changes += 1
-
-    def _check_linear(self, name: str, form) -> None:
-        """A residual term is linear in the test function (``inner(du, du)*dx`` is not; its
-        Jacobian failed in :meth:`compile` with "too many values to unpack") and, in
-        dynamics, in the acceleration (the integrator's mass matrix is its derivative in
-        ``a``, a constant)."""
-        try:
-            check_form_arity(form, form.arguments())
-        except (ArityMismatch, ValueError):  # UFL 2022's message itself fails to format
-            raise ValueError(f"term {name!r}: the form is not linear in the test function "
-                             "model.du (a product of du with itself, or du inside a "
-                             "nonlinear function): a residual term is f . du, f free of "
-                             "du") from None
-        if self.a in form.coefficients():
-            second = expand_derivatives(ufl.derivative(ufl.derivative(form, self.a), self.a))
-            if not second.empty():
-                raise ValueError(f"term {name!r}: the form is not linear in the acceleration "
-                                 "model.a (the time integrator's mass matrix is the "
-                                 "derivative in a, a constant): an added mass is m_a a . du")
-
-    def _check_rule(self, name: str, form) -> None:
-        """A model that integrates its cells with one point (the rod: ``dx`` with quadrature
-        degree 0) takes user cell integrals of one point only: FFCx 0.5 fails to compile a
-        Jacobian whose cell integrals mix that rule with one of more points (it declares
-        the cell Jacobian twice)."""
-        fixed = self.dx.metadata().get("quadrature_degree")
-        if fixed is None:
-            return
-        for itg in form.integrals_by_type("cell"):
-            degree = itg.metadata().get("quadrature_degree")
-            if degree is None:
-                degree = estimate_total_polynomial_degree(expand_derivatives(itg.integrand()))
-            if degree > 1:  # one Gauss point integrates degree 1 exactly
-                raise ValueError(
-                    f"term {name!r}: this model integrates every cell term with one point; "
-                    f"integrate with model.forms.dx (a product of two P1 fields exactly: "
-                    f"cablefem.rod.p1_product), not a rule of degree {degree}")
 
     def remove(self, name: str) -> None:
-        """Remove the user term ``name``."""
-        if name not in self.user:
-            raise KeyError(f"no user term {name!r} (terms: {sorted(self.user)})")
-        del self.user[name]
+        """Remove the term ``name``."""
+        if name not in self._terms:
+            raise KeyError(f"no user term {name!r} (terms: {sorted(self._terms)})")
+        del self._terms[name]
         self._changes += 1
+
+    def term(self, name: str) -> Term:
+        """The added term ``name`` as stored (derivatives expanded, ``moves_mass`` set)."""
+        return self._terms[name]
+
+    @property
+    def user(self) -> dict[str, tuple[ufl.Form, str]]:
+        """The added terms, name -> (form, kind), in the order added (a copy)."""
+        return {name: (t.form, t.kind) for name, t in self._terms.items()}
+
+    # ------------------------------------------------------------------ what solvers ask
+    @property
+    def time(self):
+        """The time as a UFL Constant (created on first use), set by :meth:`set_time`: a
+        term may use it in its form (``q0 * ufl.sin(w * model.forms.time)``), as dolfiny's
+        time-dependent forms do."""
+        if self._time is None:
+            from dolfinx import fem
+
+            self._time = fem.Constant(self.u.function_space.mesh,
+                                      0.0 if self._t is None else float(self._t))
+        return self._time
+
+    def set_time(self, t: float) -> None:
+        """Set the time Constant and call every term's time law at time ``t``."""
+        self._t = t
+        if self._time is not None:
+            self._time.value = t
+        for term in self._terms.values():
+            if term.set_time is not None:
+                term.set_time(t)
+
+    @contextlib.contextmanager
+    def linearised(self):
+        """Within the block every term is at the state the modal analysis linearises about
+        (each term's ``linearised()`` entered, in the order the terms were added)."""
+        with contextlib.ExitStack() as stack:
+            for term in self._terms.values():
+                if term.linearised is not None:
+                    stack.enter_context(term.linearised())
+            yield
+
+    @property
+    def mass_moves(self) -> bool:
+        """True when a term's mass changes with the state or with time (``moves_mass``):
+        the mass matrix must be assembled again where it is used."""
+        return any(t.moves_mass for t in self._terms.values())
+
+    @property
+    def medium_forms(self) -> tuple:
+        """The forms of the terms of the medium (``medium=True``: the fluid's, the
+        seabed's), in the order added."""
+        return tuple(t.form for t in self._terms.values() if t.medium)
 
     @property
     def terms(self) -> dict[str, tuple[ufl.Form, str]]:
@@ -411,9 +429,9 @@ class CableForms:
         return out
 
     def _sum(self, start, kinds):
-        for form, kind in self.user.values():
-            if kind in kinds:
-                start = start + form
+        for term in self._terms.values():
+            if term.kind in kinds:
+                start = start + term.form
         return start
 
     # ------------------------------------------------------------------ derived UFL
@@ -473,9 +491,9 @@ class CableForms:
     def M_form(self):
         """The mass form ``∂F_dynamic/∂a``: the inertia and the dynamic terms in ``a``."""
         M = self.inertia
-        for form, kind in self.user.values():
-            if kind == "dynamic" and _depends_on(form, self.a, self.trial):
-                M = M + form
+        for term in self._terms.values():
+            if term.kind == "dynamic" and _depends_on(term.form, self.a, self.trial):
+                M = M + term.form
         return ufl.derivative(M, self.a, self.trial)
 
     # ------------------------------------------------------------------ compiled

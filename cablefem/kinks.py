@@ -454,15 +454,11 @@ class KinkMoments:
                 "normal": normal}
 
 
-#: the terms of the residual that hold the fluid's and the seabed's forces on the cable
-MEDIUM_TERMS = ("fluid_static", "fluid_dynamic", "seabed", "seabed_dynamic")
-
-
 def _medium_form(model):
-    """The compiled sum of the model's :data:`MEDIUM_TERMS` (their cell integrals: the
-    forces along the elements), or None when it has none."""
-    terms = getattr(model.forms, "user", {})
-    parts = [terms[name][0] for name in MEDIUM_TERMS if name in terms]
+    """The compiled sum of the model's terms of the medium (``medium``: the fluid's and the
+    seabed's forces on the cable; their cell integrals: the forces along the elements), or
+    None when it has none."""
+    parts = model.forms.medium_forms
     if not parts:
         return None
     integrals = [itg for form in parts for itg in form.integrals()

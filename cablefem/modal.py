@@ -31,9 +31,7 @@ from dolfinx import fem
 from dolfinx.fem import petsc as fpetsc
 from slepc4py import SLEPc
 
-from cablefem.fluid import steady_flow
 from cablefem.petsc_utils import case_options, default_options, lu_options
-from cablefem.seabed import without_friction
 from cablefem.units import unit
 
 __all__ = ["ModalProblem", "ModalResult", "solve_modes", "classify_mode", "free_dofs"]
@@ -168,8 +166,9 @@ class ModalProblem:
         saved = [f.x.array.copy() for f in (model.v, model.a)]
         for f in (model.v, model.a):
             f.x.array[:] = 0.0
-        # about the steady current (no waves, gusts), the seabed's friction left out
-        with steady_flow(model), without_friction(model):
+        # every term at its linearisation state (the fluid's steady current, no waves or
+        # gusts; the seabed without its friction; a user's term's own)
+        with forms.linearised():
             try:
                 # K: the static tangent, plus the dynamic terms' stiffness (dampers' springs)
                 self.K = fpetsc.assemble_matrix(forms.k_dynamic if dynamic_terms else
@@ -235,7 +234,8 @@ class ModalProblem:
         is within 5 % of its frequency; ``ζ = −Re λ/|λ|``. A mode with no complex partner
         (overdamped) gets NaN and a warning. ``K`` and ``C`` are about the cable at rest in
         the steady current, without the seabed's regularised friction
-        (:func:`cablefem.seabed.without_friction`)."""
+        (:func:`cablefem.seabed.without_friction`): every term linearised
+        (:meth:`cablefem.forms.CableForms.linearised`)."""
         model, n = self.model, len(res.omegas)
         pep = SLEPc.PEP().create(model.comm)
         pep.setOptionsPrefix(self.prefix + "pep_")

@@ -75,9 +75,9 @@ class AnchorReactions:
             self.ksp.setFromOptions()
         self.rhs = self.R.duplicate()
         self.da = model.a.vector.duplicate()  # ghosted, like the Function's vector
-        #: the mass turns with the cable (a fluid's added mass is normal to it): the mass
-        #: matrices are assembled again at each evaluation
-        self._mass_moves = "fluid_dynamic" in getattr(model.forms, "user", {})
+        #: a term's mass changes with the state or time (a fluid's added mass is normal to
+        #: the cable; a term's time law): the mass matrices are assembled at each evaluation
+        self._mass_moves = model.forms.mass_moves
 
     def _assemble_mass(self) -> None:
         """The mass matrices at the current state (in place; the KSP refactors)."""

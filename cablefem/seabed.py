@@ -32,6 +32,8 @@ from dolfinx import fem
 from petsc4py import PETSc
 from scipy.optimize import brentq
 
+from cablefem.terms import Term
+
 __all__ = ["PENETRATION_BLEND", "GroundedCatenary", "add_seabed_terms", "network_contact",
            "touchdown", "without_friction", "penalty_offset_factor", "anchor_penalty_force",
            "rigid_touchdown"]
@@ -124,9 +126,10 @@ class GroundedCatenary:
 
 
 def add_seabed_terms(model, w: float) -> None:
-    """Add the seabed's terms to ``model.forms``: ``seabed`` (the contact force, static)
-    and ``seabed_dynamic`` (dashpot and friction); ``w`` the submerged weight per length
-    (N/m), which sets the smoothing of the contact law."""
+    """Add the seabed's terms to ``model.forms``, both forces of the medium (``medium``):
+    ``seabed`` (the contact force, static) and ``seabed_dynamic`` (dashpot and friction,
+    linearised without the friction: :func:`without_friction`); ``w`` the submerged
+    weight per length (N/m), which sets the smoothing of the contact law."""
     sb = model.case.seabed
     mesh, u, v, du = model.mesh, model.u, model.v, model.du
 
@@ -134,7 +137,6 @@ def add_seabed_terms(model, w: float) -> None:
         return fem.Constant(mesh, PETSc.ScalarType(x))
 
     k, c, mu = const(sb.stiffness), const(sb.damping), const(sb.friction)
-    model.seabed_friction = mu  # the modal analysis sets it to 0 (without_friction)
     b = const(PENETRATION_BLEND * max(w, 1e-300) / sb.stiffness)
     v0 = const(sb.friction_velocity)
     up = -model.gravity / ufl.sqrt(ufl.dot(model.gravity, model.gravity))
@@ -144,25 +146,24 @@ def add_seabed_terms(model, w: float) -> None:
                              ufl.conditional(ufl.gt(p, 0.0), p * p / (2 * b), 0.0))
     # per stress-free length of cable (a network's damper cells: none)
     cc = model.c * model.section_field("on_cable", lambda sec: 1.0)
-    model.forms.add("seabed", -k * smooth * ufl.dot(up, du) * cc * ufl.dx, kind="static")
+    model.forms.add(Term("seabed", -k * smooth * ufl.dot(up, du) * cc * ufl.dx, "static",
+                         medium=True))
     touching = ufl.conditional(ufl.gt(p, 0.0), 1.0, 0.0)
     vn = ufl.dot(v, up)
     vh = v - vn * up
     f = -c * touching * vn * up - mu * k * smooth * vh / ufl.sqrt(ufl.dot(vh, vh) + v0 * v0)
-    model.forms.add("seabed_dynamic", -ufl.inner(f, du) * cc * ufl.dx, kind="dynamic")
+    model.forms.add(Term("seabed_dynamic", -ufl.inner(f, du) * cc * ufl.dx, "dynamic",
+                         linearised=lambda: without_friction(mu), medium=True))
 
 
 @contextlib.contextmanager
-def without_friction(model):
-    """Within the block the seabed has no friction. The modal analysis leaves it out:
+def without_friction(mu):
+    """Within the block the seabed's friction coefficient (the Constant ``mu``) is zero:
+    the ``seabed_dynamic`` term's linearisation. The modal analysis leaves it out:
     linearised at rest, the regularised Coulomb law is a dashpot ``μ k s/v0`` per length
     (``μ w/v0`` on the lying part, e.g. 12 kN s/m² for a 250 N/m line with ``v0`` = 1 cm/s),
     an artefact of the regularisation whose slow real roots would crowd out every
     oscillating mode of the damped eigenproblem. The frequencies (K, M) never include it."""
-    mu = getattr(model, "seabed_friction", None)
-    if mu is None:
-        yield
-        return
     saved = float(mu.value)
     mu.value = 0.0
     try:
