@@ -8,6 +8,7 @@ from __future__ import annotations
 import logging
 import time
 from dataclasses import dataclass, field, replace
+from pathlib import Path
 
 import numpy as np
 from mpi4py import MPI
@@ -255,7 +256,7 @@ def modes(b: Built, st: Statics, outdir) -> Modes:
     if not n_modes:
         return out
     modal = b.probe.modal if b.probe else solve_modes(model, n_modes)
-    write_modes(model, modal, outdir / "modes.xdmf")
+    write_modes(model, modal, Path(outdir) / "modes.xdmf")
     entries = [{"omega": w, "frequency_hz": w / (2 * np.pi), **lab}
                for w, lab in zip(modal.omegas, modal.labels)]
     if b.asked == "string" and not is_on(case.solver.span_bending):
