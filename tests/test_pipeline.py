@@ -17,8 +17,9 @@ from cablefem.io.summary import jsonable
 
 
 def taut(**extra) -> dict:
-    """A weightless level cable stretched by 1e-3 (T = EA 1e-3 / (1 + 1e-3)), clamped,
-    without the span's bending: its transverse modes are the taut string's."""
+    """A weightless level cable of stress-free length 1 between anchors 1.001 apart
+    (strain 1e-3), clamped, without the span's bending: its transverse modes are the taut
+    string's."""
     d = level_case(g=0.0, chord=1.001, elements=30, **extra)
     d["solver"]["span_bending"] = False
     d["modal"] = {"modes": 2}
@@ -35,7 +36,7 @@ def test_stages_give_the_taut_string(mpi_tmp_path):
     assert model_kind(b.model) == "string" and b.kind.name == "string"
     st = stages.statics(b)
     EA, L, l0 = case.section.EA, 1.001, 1.0
-    T = EA * (L / l0 - 1) / (1 + 0.0)  # the axial force at strain L/l0 - 1
+    T = EA * (L / l0 - 1)  # the axial force at the strain L / l0 - 1
     # the string's tension is EA times the strain (linear law): exact to the solver's
     # tolerance (1e-9 relative leaves room for it)
     np.testing.assert_allclose(st.entries["max_tension"], T, rtol=1e-9)

@@ -161,7 +161,7 @@ def build(comm: MPI.Comm, case: Case, asked: str, refine: float, n_modes: int | 
         log.info("%s", CHAIN_NOTE)
     for key, message in list(case.warnings) + list(getattr(model, "warnings", [])):
         out.warnings.add(key, message)
-    if asked == "beam":
+    if out.kind.resolves_layers:  # the rod: its mesh and section
         st = model.geometry.stations
         out.beam = {"refine": refine, "min_element": float(np.min(np.diff(st))),
                     "max_element": float(np.max(np.diff(st))),
@@ -259,7 +259,7 @@ def modes(b: Built, st: Statics, outdir) -> Modes:
     write_modes(model, modal, Path(outdir) / "modes.xdmf")
     entries = [{"omega": w, "frequency_hz": w / (2 * np.pi), **lab}
                for w, lab in zip(modal.omegas, modal.labels)]
-    if b.asked == "string" and not is_on(case.solver.span_bending):
+    if not b.kind.resolves_layers and not is_on(case.solver.span_bending):
         # what the span's bending, left out, would do to each (span_bending.py)
         out.shifts = b.probe.shifts if b.probe else frequency_shifts(model, modal)
         for entry, x in zip(entries, out.shifts):
