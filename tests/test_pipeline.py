@@ -11,7 +11,7 @@ from mpi4py import MPI
 from cablefem.app import stages
 from cablefem.app.kinds import model_kind
 from cablefem.app.run import run_case
-from cablefem.app.summary import Stages, assemble
+from cablefem.app.summary import StageResults, assemble
 from cablefem.case import parse_case
 from cablefem.io.summary import jsonable
 
@@ -56,7 +56,7 @@ def test_summary_is_assembled_from_the_stages(mpi_tmp_path):
     d["modal"] = {"modes": 100}
     case = parse_case(d)
     b = stages.build(MPI.COMM_WORLD, case, "string", 1.0, 100, 0.0)
-    r = Stages(b)
+    r = StageResults(b)
     r.statics = stages.statics(b)
     r.modes = stages.modes(b, r.statics, mpi_tmp_path / "stages")
     part = assemble(r)

@@ -1,5 +1,10 @@
-"""The data path of one run: case -> model -> statics -> modes -> dynamics -> anchor forces
--> asymptotics -> output. Used by the command line and importable by scripts and tests.
+"""One run of a case as a function that returns its results (:func:`run_case`), used by
+the command line and importable by scripts and tests: a short sequence of stages, each a
+function returning a dataclass (build, statics, modes: :mod:`cablefem.app.stages`; the
+error near a resonance and the dynamics, which the output listens to:
+:mod:`cablefem.app.integration`; the anchors' and kinks' reports, figures, fatigue:
+:mod:`cablefem.app.reports`), ``summary.json`` assembled from them
+(:mod:`cablefem.app.summary`).
 """
 
 from __future__ import annotations
@@ -19,7 +24,7 @@ from cablefem.app import integration, reports, stages
 from cablefem.app.log import quiet_compiler
 from cablefem.app.output import RunOutput, rod_moment_columns
 from cablefem.app.report import max_excitation, static_sag_ratio, steady_state_stats, warn
-from cablefem.app.summary import Stages, assemble
+from cablefem.app.summary import StageResults, assemble
 from cablefem.cable import CableModel
 from cablefem.case import Case, CaseError, check_table_ends
 from cablefem.create import model_from_case
@@ -175,7 +180,7 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
 
     n_asked = case.modal.modes if modes is None else modes
     b = stages.build(comm, case, model, refine, n_asked, wall0, clean)
-    r = Stages(b)
+    r = StageResults(b)
 
     def save() -> None:  # a folder found after a kill says how far the run got
         write_json(outdir / "summary.json", assemble(r), comm)
@@ -224,7 +229,7 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
     return result
 
 
-def _open_output(b: stages.Built, r: Stages, outdir: Path, form: str):
+def _open_output(b: stages.Built, r: StageResults, outdir: Path, form: str):
     """Open the run's output in the static state, let the moments' error estimate grow
     near a resonance, log the static state and put a resumed run's state in the model:
     the output and the anchors' static entries (:func:`cablefem.app.console.

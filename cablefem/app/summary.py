@@ -12,11 +12,11 @@ from cablefem.app.integration import Dynamics, Resonance, Resume
 from cablefem.app.reports import Fatigue, Reports
 from cablefem.app.stages import Built, Modes, Statics
 
-__all__ = ["Stages", "assemble"]
+__all__ = ["StageResults", "assemble"]
 
 
 @dataclass
-class Stages:
+class StageResults:
     """The results of a run's stages so far (None: not reached)."""
 
     build: Built
@@ -39,7 +39,7 @@ class Stages:
         return out
 
 
-def assemble(r: Stages) -> dict:
+def assemble(r: StageResults) -> dict:
     """The summary of the stages ``r`` reached."""
     b = r.build
     s: dict = {"cablefem": __version__, "status": "running", "case": b.case.to_dict(),
