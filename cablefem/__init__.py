@@ -21,7 +21,7 @@ _API = {
     "load_case": "cablefem.case", "parse_case": "cablefem.case",
     "CableModel": "cablefem.cable", "NetworkModel": "cablefem.network",
     "BeamModel": "cablefem.rod", "run_case": "cablefem.app.run",
-    "model_from_case": "cablefem.app.run",
+    "model_from_case": "cablefem.create",
     # building models in Python (docs/python-api.md)
     "create_cable": "cablefem.create", "create_rod": "cablefem.create",
     "create_network": "cablefem.create", "Anchor": "cablefem.anchor",

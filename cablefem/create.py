@@ -26,7 +26,7 @@ from cablefem.errors import CaseError
 from cablefem.properties import Section
 from cablefem.validation import number_problem
 
-__all__ = ["create_cable", "create_rod", "create_network"]
+__all__ = ["create_cable", "create_rod", "create_network", "model_from_case"]
 
 
 def create_cable(comm: MPI.Comm, anchors: list[Anchor], section: Section, *,
@@ -185,3 +185,24 @@ def _named(cls, comm, description, prefix):
                         description.source)
     return cls(comm, description, prefix)
 
+
+
+def model_from_case(comm: MPI.Comm, case, *, model: str = "string", refine: float = 1.0):
+    """The model of a case (a :class:`cablefem.case.Case`, itself a description) built as
+    the string (:class:`cablefem.cable.CableModel`, a :class:`cablefem.network.NetworkModel`
+    for a network) or, with ``model="beam"``, the reference rod
+    (:class:`cablefem.rod.BeamModel`, mesh density scaled by ``refine``). Collective on
+    ``comm``."""
+    if model not in ("string", "beam"):
+        raise ValueError(f"model must be 'string' or 'beam', got {model!r}")
+    if model == "beam":
+        from cablefem.rod import BeamModel
+
+        return BeamModel(comm, case, refine=refine)
+    if case.network is not None:
+        from cablefem.network import NetworkModel
+
+        return NetworkModel(comm, case)
+    from cablefem.cable import CableModel
+
+    return CableModel(comm, case)

@@ -273,7 +273,8 @@ def test_anchor_moments_give_the_columns_of_anchors_csv(mpi_tmp_path):
     read back exactly; the same operations: 1e-12 relative leaves room for none)."""
     from pathlib import Path
 
-    from cablefem.app.run import _max_excitation, run_case
+    from cablefem.app.report import max_excitation
+    from cablefem.app.run import run_case
     from cablefem.case import load_case
 
     case = load_case(Path(__file__).resolve().parents[1] / "demos" / "paper_inplane.toml")
@@ -288,7 +289,7 @@ def test_anchor_moments_give_the_columns_of_anchors_csv(mpi_tmp_path):
     times = np.array([float(r["time"]) for r in rows if r["anchor"] == names[0]])
     forces = np.array([[float(r[k]) for k in ("Nx", "Ny", "Nz")] for r in rows]
                       ).reshape(times.size, len(names), 3)
-    cols = AnchorMoments.from_model(res.model, _max_excitation(case)).compute(times, forces)
+    cols = AnchorMoments.from_model(res.model, max_excitation(case)).compute(times, forces)
     assert times.size == 21 and sorted(cols) == ["p", "q"]
     for name, out in cols.items():
         csv_cols = {k: np.array([float(r[k]) if r[k] else np.nan for r in rows

@@ -160,7 +160,7 @@ def test_first_row_on_case_a_is_static_plus_damping_of_the_quasi_static_motion(k
 def _spy_on_the_start(monkeypatch) -> dict:
     """Record what the run passes to ``integrate`` and the velocity at its first output
     (t = 0), gathered on rank 0 (None elsewhere)."""
-    import cablefem.app.run as run_module
+    import cablefem.app.integration as run_module  # where the run's dynamics stage runs
 
     seen: dict = {}
     real = run_module.integrate

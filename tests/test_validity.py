@@ -15,7 +15,7 @@ import pytest
 from mpi4py import MPI
 
 from cablefem.app.compare import compare_runs
-from cablefem.app.report import _damping_ratio
+from cablefem.app.report import damping_ratio
 from cablefem.app.run import run_case
 from cablefem.cable import CableModel
 from cablefem.case import load_case, parse_case
@@ -102,7 +102,7 @@ def test_case_A_near_parametric_resonance():
         case = parse_case(data, DEMOS)
         m = CableModel(comm, case)
         F = solve_static(m).anchor_forces[0]
-        amp, w_r = resonance(32.814, solve_modes(m, 2).omegas, _damping_ratio(case))
+        amp, w_r = resonance(32.814, solve_modes(m, 2).omegas, damping_ratio(case))
         assert 100 < amp <= 200  # 1/zeta = 200 bounds it (damping ratio 0.005)
         assert w_r == pytest.approx(32.814 / 2, rel=0.01)  # the parametric resonance
         a = m.anchors[0]

@@ -32,7 +32,7 @@ from mpi4py import MPI
 from cablefem import __version__
 from cablefem.app.compare_kinks import compare_kinks, read_kinks, same_case
 from cablefem.app.plots import MAX_PANELS
-from cablefem.app.run import steady_state_stats
+from cablefem.app.statistics import steady_state_stats
 from cablefem.io.anchorcsv import read_moments
 from cablefem.io.series import jsonable, write_json
 

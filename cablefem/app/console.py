@@ -8,8 +8,9 @@ import logging
 
 import numpy as np
 
-from cablefem.app.output import rod_moment_columns
+from cablefem.composite import section_load
 from cablefem.moments import anchor_moments
+from cablefem.rodcolumns import rod_moment_columns
 from cablefem.units import unit
 
 __all__ = ["static_anchor_entries", "log_static_state", "log_touchdown"]
@@ -21,11 +22,11 @@ log = logging.getLogger(__name__)
 MAX_LINES = 12
 
 
-def static_anchor_entries(model, static, emitter, form: str, kind: str) -> dict[str, dict]:
+def static_anchor_entries(model, static, columns, form: str, kind: str) -> dict[str, dict]:
     """Per anchor: its static tension and, at a clamped anchor, the static moment and its
     layer (the entries of ``summary.json``'s ``anchors.<name>``): the composite moment of
     the static anchor force or, for the rod (``kind == "beam"``), the rod's own moment with
-    the composite beside it. ``emitter`` (:class:`~cablefem.app.output.RunOutput`) gives
+    the composite beside it. ``columns`` (:class:`~cablefem.moments.AnchorMoments`) gives
     the loads at t = 0."""
     out = {}
     for i, a in enumerate(model.anchors):
@@ -34,7 +35,8 @@ def static_anchor_entries(model, static, emitter, form: str, kind: str) -> dict[
         if a.kind == "clamped":
             st = anchor_moments(F[None, :3], a.direction, a.section.EI, a.section.EA,
                                 a.section.mass, np.zeros((1, 3)),
-                                emitter.load_at(0.0, a.section), model.anchor_span(a.name),
+                                section_load(columns, model.case, 0.0, a.section),
+                                model.anchor_span(a.name),
                                 None, form, 1 if getattr(model, "hinges", None) else 0)
             if kind == "beam":  # the rod's own; the composite with the beam's force beside
                 entry["static_moment_composite"] = float(st["moment"][0])
@@ -88,8 +90,8 @@ def static_state_lines(entries: dict[str, dict], kinks: dict[str, float], sag: f
 
 def log_static_state(entries: dict[str, dict], kinkout, sag: float | None,
                      units: str | None, kind: str) -> None:
-    """Log the static state (:func:`static_state_lines`); ``kinkout`` the run's
-    :class:`~cablefem.app.kinkout.KinkOutput` (its static columns)."""
+    """Log the static state (:func:`static_state_lines`); ``kinkout`` the run's kinks
+    (:class:`~cablefem.app.kinkout.KinkHistory`: their static columns)."""
     kinks = {}
     if kinkout is not None and kinkout.kinks:
         kinks = {k.name: float(kinkout.static["moment"][i])

@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -11,7 +12,7 @@ from cablefem.app.report import steady_state_stats
 from cablefem.io import anchorcsv
 from cablefem.kinks import KINK_COLUMNS, KinkMoments, rod_kink_moments
 
-__all__ = ["KinkOutput"]
+__all__ = ["KinkOutput", "KinkHistory"]
 
 
 class KinkOutput:
@@ -85,6 +86,25 @@ class KinkOutput:
         self.flush()
         if self.csv is not None:
             self.csv.close()
+
+    def history(self) -> KinkHistory:
+        """What was recorded (this run's rows and a resumed run's), for the reports."""
+        return KinkHistory(list(self.kinks), self.static, list(self.times), self.rows)
+
+    def summary(self, start: float | None = None) -> dict:
+        """:meth:`KinkHistory.summary` of what was recorded."""
+        return self.history().summary(start)
+
+
+@dataclass
+class KinkHistory:
+    """The kinks' recorded columns: the kinks, their static columns, the output times and
+    per kink the rows of each column (``KINK_COLUMNS[3:]``)."""
+
+    kinks: list
+    static: dict | None
+    times: list[float]
+    rows: dict[str, dict[str, list]]
 
     def summary(self, start: float | None = None) -> dict:
         """Per kink: its station (a network's: its node and section), the static moment,

@@ -17,8 +17,7 @@ from mpi4py import MPI
 
 from cablefem import __version__
 from cablefem.app.plots import anchor_figures
-from cablefem.app.report import anchor_validity
-from cablefem.app.run import _max_excitation, steady_state_stats, warn
+from cablefem.app.report import anchor_validity, max_excitation, steady_state_stats, warn
 from cablefem.app.statistics import warn_drifts
 from cablefem.case import Case
 from cablefem.description import stress_free_length
@@ -75,7 +74,7 @@ def run_post(case: Case, forces_csv: Path, outdir: Path, form: str = "exact",
     sec = case.section
     g_vec = np.asarray(case.gravity.direction, float) * case.gravity.g
     times = hist.times
-    omega = _max_excitation(case)
+    omega = max_excitation(case)
     moments, summary_anchors, warnings = {}, {}, {}
     order = 1 if getattr(case.solver, "outer_correction", "none") == "hinge" else 0
     for a in case.anchors:

@@ -11,7 +11,8 @@ from cablefem.app.statistics import FRACTION, steady_state_stats, window_start
 from cablefem.case import Case
 
 __all__ = ["warn", "steady_state_stats", "static_sag_ratio", "anchor_validity",
-           "modal_damping_ratios", "statistics_start"]
+           "modal_damping_ratios", "statistics_start", "section_name", "max_excitation",
+           "damping_ratio"]
 
 log = logging.getLogger(__name__)
 
@@ -39,13 +40,13 @@ def static_sag_ratio(r: np.ndarray, p: np.ndarray, q: np.ndarray, gdir: np.ndarr
     return float((0.5 * (d @ up) - zc) / np.linalg.norm(d))
 
 
-def _section_name(case: Case, section) -> str | None:
+def section_name(case: Case, section) -> str | None:
     if case.network is None:
         return None
     return next((n for n, s in case.network.sections.items() if s is section), None)
 
 
-def _max_excitation(case: Case) -> float | None:
+def max_excitation(case: Case) -> float | None:
     """Highest circular frequency of the anchor motions and loads (quasi-static check)."""
     om = []
     for a in case.anchors:
@@ -61,7 +62,7 @@ def _max_excitation(case: Case) -> float | None:
     return max(om) if om else None
 
 
-def _damping_ratio(case: Case):
+def damping_ratio(case: Case):
     """The modal damping ratio at omega (rad/s) of the case's damping (0 without)."""
     d = case.damping
     if d is None or getattr(d, "model", "none") == "none":
@@ -74,7 +75,7 @@ def modal_damping_ratios(case: Case, modal) -> np.ndarray:
     (``modal.damping_ratios``, from its complex modes: the ``[damping]`` table, dampers and
     a fluid's linearised drag together), the ``[damping]`` table's ratio at the mode's
     frequency where a mode has no complex partner (NaN) or none was computed."""
-    table = _damping_ratio(case)
+    table = damping_ratio(case)
     own = getattr(modal, "damping_ratios", None)
     out = np.array([table(w) for w in np.asarray(modal.omegas, float)], float)
     if own is not None:
@@ -96,10 +97,6 @@ def statistics_start(summary: dict, case: Case, times: np.ndarray) -> float | No
         return None
     summary["statistics_start"] = float(start)
     return float(start)
-
-
-def _g(x) -> str:
-    return "n/a" if x is None else f"{x:.4g}"
 
 
 def anchor_validity(summary: dict, name: str, times: np.ndarray, mo: dict,
