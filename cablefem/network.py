@@ -29,11 +29,13 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from cablefem import forms
-from cablefem.cable import MAX_PLAUSIBLE_STRAIN, AnchorBC, CableModel
+from cablefem.anchor import AnchorBC
+from cablefem.cable import CableModel
 from cablefem.errors import CaseError
 from cablefem.fluid import submerged_weight
 from cablefem.geometry import MeshError, NetworkMesh, connected_components, read_network_mesh
 from cablefem.jit import quiet_compiler
+from cablefem.plausibility import pretension_warnings
 from cablefem.span_bending import is_on
 from cablefem.water import water_problems
 
@@ -176,6 +178,7 @@ class NetworkModel(CableModel):
 
     ramp_weight = True
     is_network = True
+    _at_node = None  # the cable cells at every node (cable_cells_at), made on first use
 
     def _build_geometry(self):
         case = self.case
@@ -246,13 +249,7 @@ class NetworkModel(CableModel):
             raise CaseError(problems, case.source)
         net, sides = split_clamps(net, case.anchors, cell_damper < 0, case.source)
         secs = spec.sections
-        for i, c in enumerate(spec.cables):
-            strain = c.pretension / secs[c.section].EA
-            if strain > MAX_PLAUSIBLE_STRAIN:
-                self.warnings.append((f"cables[{i}].pretension", (
-                    f"pretension / EA is a strain of {100 * strain:.3g} %, above the "
-                    f"{100 * MAX_PLAUSIBLE_STRAIN:g} % that any cable material stays linear "
-                    "to: check the value and the section")))
+        self.warnings += pretension_warnings(spec.cables, secs)
         cable = cell_damper < 0
         cell_section = [by_group[net.groups[g]].section if net.groups[g] in by_group else None
                         for g in net.cell_group]
@@ -284,7 +281,7 @@ class NetworkModel(CableModel):
 
     def _coefficients(self) -> None:
         geo = self.geometry
-        idx = self._cell_index = self._reference_cells()
+        idx = self.cell_index = self.line.reference_cells()
         self.EA, self.m, self.c = (fem.Function(self.W, name=n) for n in ("EA", "m", "c"))
         for f, arr in ((self.EA, geo.cell_EA), (self.m, geo.cell_m), (self.c, geo.cell_c)):
             f.x.array[:] = arr[idx].astype(PETSc.ScalarType)
@@ -296,30 +293,30 @@ class NetworkModel(CableModel):
         per_cell = np.array([0.0 if n is None else float(value(secs[n]))
                              for n in self.geometry.cell_section])
         f = fem.Function(self.W, name=name)
-        f.x.array[:] = per_cell[self._cell_index].astype(PETSc.ScalarType)
+        f.x.array[:] = per_cell[self.cell_index].astype(PETSc.ScalarType)
         return f
 
     def cable_cells(self) -> np.ndarray:
         n_owned = self.mesh.topology.index_map(1).size_local
-        return self.geometry.is_cable[self._cell_index[:n_owned]]
+        return self.geometry.is_cable[self.cell_index[:n_owned]]
 
     def applies_damper_offsets(self) -> bool:
         """A network's dampers act at the string's node: their cells do not reach the two
         cable elements at their ends (the run estimates what that costs, docs/dampers.md)."""
         return False
 
-    def _damper_work(self, u_t, v_t, us_t, du_t):
+    def damper_work(self, u_t, v_t, us_t, du_t):
         """The dampers' virtual work: each cell of a damper's group a dashpot (and spring)
         between its nodes (:func:`cablefem.dampers.link_work`), on the owned cells."""
         from cablefem.dampers import link_work
 
         n_owned = self.mesh.topology.index_map(1).size_local
-        which = np.asarray(self.geometry.cell_damper)[self._cell_index[:n_owned]]
+        which = np.asarray(self.geometry.cell_damper)[self.cell_index[:n_owned]]
         ents = np.nonzero(which >= 0)[0].astype(np.int32)
         tags = dmesh.meshtags(self.mesh, 1, ents, (which[ents] + 1).astype(np.int32))
         h = fem.Function(self.W, name="damper_length")  # each cell's mesh length
         pts, cells = self.geometry.points, self.geometry.cells
-        ref = cells[self._cell_index]
+        ref = cells[self.cell_index]
         h.x.array[:] = np.linalg.norm(pts[ref[:, 1]] - pts[ref[:, 0]], axis=1)
         dx = ufl.Measure("dx", domain=self.mesh, subdomain_data=tags)
         return link_work(self.mesh, self.case.dampers, dx, h, u_t, v_t, us_t, du_t, self.t0)
@@ -333,7 +330,7 @@ class NetworkModel(CableModel):
 
         def held(name, node, kind, direction, spec, cell):
             geo.anchor_nodes[name] = node
-            dofs = fem.locate_dofs_topological(self.V, 0, self._locate_node(node))
+            dofs = fem.locate_dofs_topological(self.V, 0, self.line.locate_node(node))
             owned = bool(np.any(dofs < imap.size_local))
             section = secs[geo.cell_section[cell]] if cell is not None else None
             X = net.points[node].copy()
@@ -371,7 +368,7 @@ class NetworkModel(CableModel):
             raise RuntimeError("anchor ownership is not unique across ranks")
         return out
 
-    def _bending_nodes(self) -> list[int]:
+    def bending_nodes(self) -> list[int]:
         """With ``solver.span_bending``: the nodes of :meth:`bending_vertices` (tagged in
         :attr:`dS`)."""
         if not is_on(self.case.solver.span_bending):
@@ -386,8 +383,8 @@ class NetworkModel(CableModel):
         outer string's) at each."""
         geo = self.geometry
         cells = np.asarray(geo.cells, np.int64)
-        at = self._cable_cells_at()
-        stops = ({int(k) for k in geo.anchor_nodes.values()} | set(self._node_tag)
+        at = self.cable_cells_at()
+        stops = ({int(k) for k in geo.anchor_nodes.values()} | set(self.line.node_tag)
                  | {int(k) for k in cells[~geo.is_cable].ravel()})
         secs = self.case.network.sections
         length = geo.cell_lengths
@@ -403,9 +400,9 @@ class NetworkModel(CableModel):
         return (np.asarray(rows, np.int64).reshape(-1, 3), np.asarray(EI, float),
                 np.asarray(hbar, float))
 
-    def _add_span_bending(self):
+    def add_span_bending(self):
         """``solver.span_bending`` on a network (docs/theory.md §6.1): the bending energy
-        at every node of :meth:`_bending_nodes`; at every other node of a cable (a clamped
+        at every node of :meth:`bending_nodes`; at every other node of a cable (a clamped
         anchor, a kink, a junction; not a free end or a pinned end) the span's moment
         ``EI κ_s`` is handed over on each of its elements, as at a single cable's clamps
         and kinks. The hand-over is constant along an element (P1: its tension, tangent
@@ -419,15 +416,15 @@ class NetworkModel(CableModel):
         cells = np.asarray(geo.cells, np.int64)
         cable = geo.is_cable
         n = len(geo.points)
-        degree = np.array([len(es) for es in self._cable_cells_at()])
+        degree = np.array([len(es) for es in self.cable_cells_at()])
         clamped = {int(a.node) for a in self.anchors if a.kind == "clamped"}
         hand = (degree >= 2) | np.isin(np.arange(n), sorted(clamped))
-        hand[self._bending_nodes()] = False
+        hand[self.bending_nodes()] = False
         self.EI = self.section_field("EI", lambda sec: sec.EI)
         c0 = fem.Function(self.W, name="c_outer")
-        c0.x.array[:] = np.asarray(geo.cell_c, float)[self._cell_index]
+        c0.x.array[:] = np.asarray(geo.cell_c, float)[self.cell_index]
         energy = (forms.span_bending_energy(self.u, self.t0, self.EI, self.mesh, c0)
-                  * self.dS(self._bend_tag))
+                  * self.dS(self.line.bend_tag))
         self.forms.add("span_bending", ufl.derivative(energy, self.u, self.du),
                        kind="static")
         # each cable element's sum of the unit vectors away from its hand-over ends (zero
@@ -435,10 +432,10 @@ class NetworkModel(CableModel):
         with quiet_compiler():
             space = fem.VectorFunctionSpace(self.mesh, ("DG", 0), dim=3)
         away = fem.Function(space, name="away_from_handover")
-        ends = cells[self._cell_index]
+        ends = cells[self.cell_index]
         d = geo.points[ends[:, 1]] - geo.points[ends[:, 0]]
         d = d / np.linalg.norm(d, axis=1)[:, None]
-        w = (hand[ends[:, 0]].astype(float) - hand[ends[:, 1]]) * cable[self._cell_index]
+        w = (hand[ends[:, 0]].astype(float) - hand[ends[:, 1]]) * cable[self.cell_index]
         away.x.array[:] = (w[:, None] * d).ravel()
         if self.comm.allreduce(int(np.count_nonzero(w)), op=MPI.SUM):
             T = self.forms.outputs["tension"]
@@ -449,9 +446,9 @@ class NetworkModel(CableModel):
             self.forms.add("end_moments", density / h * ufl.dx, kind="static")
         return energy
 
-    def _cable_cells_at(self) -> list[list[int]]:
+    def cable_cells_at(self) -> list[list[int]]:
         """The cable cells (not the dampers') at every node, in cell order (cached)."""
-        if getattr(self, "_at_node", None) is None:
+        if self._at_node is None:
             geo = self.geometry
             cells = np.asarray(geo.cells, np.int64)
             self._at_node = [[] for _ in range(len(geo.points))]
@@ -465,7 +462,7 @@ class NetworkModel(CableModel):
         through nodes of two cable elements that hold no anchor, up to a junction, a free
         end or an anchor: its cells, in order from ``k``, and the node it ends at."""
         geo = self.geometry
-        at, cells = self._cable_cells_at(), np.asarray(geo.cells, np.int64)
+        at, cells = self.cable_cells_at(), np.asarray(geo.cells, np.int64)
         anchored = {int(n) for n in geo.anchor_nodes.values()}
         chain, node, prev = [], int(k), -1
         while True:
@@ -483,5 +480,5 @@ class NetworkModel(CableModel):
         chain, _ = self.chain(self.geometry.anchor_nodes[name])
         return float(np.sum(self.geometry.cell_lengths[chain]))
 
-    def _item_nodes(self, item) -> list[int]:
+    def item_nodes(self, item) -> list[int]:
         return [int(k) for k in self.geometry.net.vertex_groups[item.s]]

@@ -63,10 +63,12 @@ from dolfinx import fem
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from cablefem.cable import CableModel, comm_first
+from cablefem.cable import CableModel
 from cablefem.description import CableDescription
 from cablefem.errors import CaseError
 from cablefem.geometry import straight_cable
+from cablefem.jit import quiet_compiler
+from cablefem.string_terms import add_model_terms
 
 __all__ = ["BeamModel", "beam_stations", "cayley_from_rotation", "cayley_rotation",
            "p1_product", "rotation_matrix", "virtual_rotation_map", "rod_strains", "rod_problems"]
@@ -188,7 +190,7 @@ def rod_strains(w, t0, frame, c=1.0):
     return G, K, d
 
 
-def _p1_product(a, b, t0, mesh):
+def p1_product(a, b, t0, mesh):
     """Integrand whose one-point (midpoint) quadrature gives ``∫ a·b`` exactly for P1
     fields on an element of length ``h``: ``a·b + (h²/12) ∂a·∂b``.
 
@@ -201,14 +203,18 @@ def _p1_product(a, b, t0, mesh):
     return ufl.inner(a, b) + h * h / 12.0 * ufl.inner(ufl.grad(a) * t0, ufl.grad(b) * t0)
 
 
-#: public name of the one-point exact product of two P1 fields (user terms on the rod)
-p1_product = _p1_product
-
-
 def energy_density(G, K, EA, GA, EI, GJ):
     """``Ψ`` per stress-free length."""
     return 0.5 * (EA * G[2] ** 2 + GA * (G[0] ** 2 + G[1] ** 2)
                   + EI * (K[0] ** 2 + K[1] ** 2) + GJ * K[2] ** 2)
+
+
+def rod_axial_damping(model):
+    """The rod's axial strain-rate damping: ``β EA (dΓ3/dt) δΓ3`` (the axial strain
+    ``Γ3`` and the one-point measure as :meth:`BeamModel.build_forms` made them)."""
+    G3, u = model.axial_strain, model.u
+    return (model.beta * model.EA * ufl.derivative(G3, u, model.v)
+            * ufl.derivative(G3, u, model.du) * model.c * model.dx_rod)
 
 
 # ----------------------------------------------------------------------------- the model
@@ -254,7 +260,10 @@ class BeamModel(CableModel):
 
     def __init__(self, comm: MPI.Comm, description: CableDescription, prefix: str = "cable_",
                  refine: float = 1.0):
-        comm, case = comm_first(comm, description)
+        if not isinstance(comm, MPI.Comm) or not isinstance(description, CableDescription):
+            raise TypeError(f"expected (comm, description), got ({type(comm).__name__}, "
+                            f"{type(description).__name__})")
+        case = description
         problems = rod_problems(case)
         if not refine > 0:
             problems.append(("refine", f"must be > 0, got {refine}"))
@@ -272,7 +281,7 @@ class BeamModel(CableModel):
         # a rod's force scale (Newton's tolerances, GA) is at least EI/l^2: a weightless
         # unstressed rod under an end load has no tension to scale with
         self.force_scale = max(self.force_scale, sec.EI / g.length**2)
-        p, q = self._anchor_positions
+        p, q = self.anchor_positions
         length = g.length
         shape = self.catenary_shape  # the string's, through the same anchors
         ends = {}
@@ -299,9 +308,6 @@ class BeamModel(CableModel):
         names = (case.anchors[0].name, case.anchors[1].name)
         geo = straight_cable(p, (q - p) / np.linalg.norm(q - p), stations, names)
         return geo, shape.position(geo.stations)
-
-    def _space(self):
-        return fem.VectorFunctionSpace(self.mesh, ("Lagrange", 1), dim=6)
 
     # ------------------------------------------------------------------ anchors
     def _build_anchors(self):
@@ -331,7 +337,7 @@ class BeamModel(CableModel):
             if anc.kind == "clamped":
                 bcs.append(fem.dirichletbc(self.u_bc, anc.dofs))
                 continue
-            verts = self._locate_node(anc.node)
+            verts = self.line.locate_node(anc.node)
             for k in range(3):
                 dofs = fem.locate_dofs_topological(self.V.sub(k), 0, verts)
                 val = fem.Constant(self.mesh, PETSc.ScalarType(0.0))
@@ -366,7 +372,7 @@ class BeamModel(CableModel):
         self.GA = fem.Constant(m, PETSc.ScalarType(GA))
         self.rhoI = fem.Constant(m, PETSc.ScalarType(self.section_values["rhoI"]))
         # the reference frame: E3 along the chord, E1 in the plane of chord and gravity
-        p, q = self._anchor_positions
+        p, q = self.anchor_positions
         E3 = (q - p) / np.linalg.norm(q - p)
         gdir = np.asarray(self.case.gravity.direction, float)
         trial = gdir - (gdir @ E3) * E3
@@ -393,16 +399,18 @@ class BeamModel(CableModel):
         duu, dqq = split(du)
         au, aq = split(a)
         E3 = self.frame[2]
-        F_inertia = cc * (self.m * _p1_product(au, duu, t0, self.mesh)
-                          + self.rhoI * (_p1_product(aq, dqq, t0, self.mesh)
-                                         + _p1_product(ufl.dot(aq, E3), ufl.dot(dqq, E3),
+        F_inertia = cc * (self.m * p1_product(au, duu, t0, self.mesh)
+                          + self.rhoI * (p1_product(aq, dqq, t0, self.mesh)
+                                         + p1_product(ufl.dot(aq, E3), ufl.dot(dqq, E3),
                                                        t0, self.mesh))) * dxr
-        self._dxr, self._G3 = dxr, G[2]
+        #: Γ3 and the one-point cell measure (rod_axial_damping, translational_inner)
+        self.axial_strain, self.dx_rod = G[2], dxr
         # constant loads on P1 fields: one point integrates them exactly
-        self._set_forms(F_int=F_int,
+        add_model_terms(self, F_int=F_int,
                         F_weight=cc * self.m * ufl.inner(self.gravity, duu) * dxr,
                         F_inertia=F_inertia, du_t=duu, a_t=au, dx=dxr, u_t=split(u)[0],
-                        v_t=split(self.v)[0], us_t=split(self.u_static)[0])
+                        v_t=split(self.v)[0], us_t=split(self.u_static)[0],
+                        axial_damping=rod_axial_damping)
         # output fields (DG0 at the element midpoint, where the strains are sampled)
         self.forms.dx = dxr  # user terms too: FFCx 0.5 cannot mix cell rules (forms.add)
         self.forms.outputs = {"tension": self.EA * G[2], "strain": G[2]}
@@ -413,17 +421,11 @@ class BeamModel(CableModel):
         self.forms.energies = (kin * ufl.dx, self.Pi,
                                -ufl.inner(cc * self.m * self.gravity, split(u)[0]) * ufl.dx)
 
-    def _axial_damping_work(self):
-        """The rod's axial strain-rate damping: ``β EA (dΓ3/dt) δΓ3``."""
-        G3, u = self._G3, self.u
-        return (self.beta * self.EA * ufl.derivative(G3, u, self.v)
-                * ufl.derivative(G3, u, self.du) * self.c * self._dxr)
-
     def _twist_springs(self, pinned):
         _, qq = split(self.u)
         _, dqq = split(self.du)
         E3 = self.frame[2]
-        tags = self._vertex_tags({anc.node: i + 1 for i, anc in enumerate(pinned)})
+        tags = self.line.vertex_tags({anc.node: i + 1 for i, anc in enumerate(pinned)})
         ds = ufl.Measure("ds", domain=self.mesh, subdomain_data=tags)
         st = self.geometry.stations
         form = None
@@ -434,8 +436,14 @@ class BeamModel(CableModel):
             form = term if form is None else form + term
         return form
 
-    def _compile(self) -> None:
-        """The output spaces of three components and the moment expression."""
+    def compile(self) -> None:
+        """The string's (:meth:`CableModel.compile`), then the output spaces of three
+        components and the moment expression."""
+        super().compile()
+        with quiet_compiler():
+            self._compile_outputs()
+
+    def _compile_outputs(self) -> None:
         self.W3 = fem.VectorFunctionSpace(self.mesh, ("DG", 0), dim=3)
         self.V3 = fem.VectorFunctionSpace(self.mesh, ("Lagrange", 1), dim=3)
         # the output copies components node by node: both spaces must number nodes alike
@@ -477,6 +485,16 @@ class BeamModel(CableModel):
         f = fem.Function(self.W3, name=name)
         f.interpolate(self.moment_expr)
         return f
+
+    def translational(self, f):
+        """The displacement part (the first three components) of ``f``."""
+        return ufl.as_vector([f[i] for i in range(3)])
+
+    def translational_inner(self, a, b):
+        """``(integrand, measure)`` of the L2 product of two translational fields as the
+        rod integrates its mass: the one-point rule's exact P1 product (:func:`p1_product`)
+        on :attr:`forms`'s one-point measure."""
+        return p1_product(a, b, self.t0, self.mesh), self.forms.dx
 
     # ------------------------------------------------------------------ statics start
     def static_stages(self):

@@ -67,7 +67,7 @@ class RunOutput:
         self.clamped = [a for a in model.anchors if a.kind == "clamped"]
         #: the moment columns from the anchor forces (the numbers; this class writes them)
         self.moment_columns = AnchorMoments.from_model(model, omega, form)
-        self.network = getattr(model, "is_network", False)
+        self.network = model.is_network
         self.beam = model.is_beam  # a rod: moments from the model, no composite field
         self.rod: dict[str, list[np.ndarray]] = {a.name: [] for a in self.clamped}
         sec = model.case.section  # the single cable's (a network: per anchor, below)
@@ -251,7 +251,7 @@ class RunOutput:
         """Record the anchor forces at ``t`` (written in batches)."""
         self.times.append(t)
         F = np.array(forces, float)  # a copy: the rows below are views of it
-        if getattr(self.model, "hinges", None):  # rows outside the layer law's range
+        if self.model.hinges:  # rows outside the layer law's range
             for name, flag in self.model.hinges.fallback(F).items():
                 self.fallback.setdefault(name, []).append(flag)
         for name, N in zip(self._names, F):

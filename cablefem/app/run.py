@@ -283,10 +283,10 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
                      "degrees_of_freedom": model.bs * len(model.geometry.stations),
                      "dimensionless": groups, "wall_time": {"build": t_build},
                      "warnings": []}
-    if getattr(model, "string_alone", False):  # section.EI = 0 (cablefem.chain)
+    if model.string_alone:  # section.EI = 0 (cablefem.chain)
         summary["bending"] = {"EI": 0.0, "moments": False, "note": CHAIN_NOTE}
         log.info("%s", CHAIN_NOTE)
-    for key, message in list(case.warnings) + list(getattr(model, "warnings", [])):
+    for key, message in list(case.warnings) + list(model.warnings):
         warn(summary, key, message)
     if kind == "beam":
         st = model.geometry.stations
@@ -332,7 +332,7 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
             summary["span_bending_auto"] = auto
     if model.hinges:
         summary["static"]["virtual_hinges"] = model.hinges.report()
-    if getattr(case, "seabed", None) is not None and getattr(model, "is_network", False):
+    if getattr(case, "seabed", None) is not None and model.is_network:
         from cablefem.seabed import network_contact  # per cable group
 
         contact = network_contact(model)
@@ -622,7 +622,7 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
                      "a neighbouring kink or anchor): see valid in kinks.csv")
         if kind != "beam":  # the rod resolves its layers
             _warn_damper_offsets(summary, model, emitter.kinkout.kinks)
-    gaps = getattr(model, "kink_gaps", [])
+    gaps = model.kink_gaps
     if gaps:  # network nodes where a cable kinks but has no kink moment
         k, where, why = gaps[0]
         warn(summary, "kinks", f"{len(gaps)} node(s) where a cable kinks have no kink "
@@ -706,8 +706,8 @@ def _warn_damper_offsets(summary: dict, model, kinks) -> None:
             worst.append((est, k.name, MESH_RATIO * ell))
     if worst:
         est, name, needed = max(worst)
-        why = ("the network's dampers act at the string's node" if getattr(
-            model, "is_network", False) else "at leading order the dampers act at the "
+        why = ("the network's dampers act at the string's node" if model.is_network
+               else "at leading order the dampers act at the "
             "string's node" if not applies else "the elements next to the damper are "
             f"shorter than {MESH_RATIO:g} layer lengths, which limits the offset: "
             f"elements of at least {needed:.3g} {unit(model.case.units, 'length')} there "
