@@ -30,13 +30,15 @@ from cablefem import forms, string_terms
 from cablefem.anchor import AnchorBC
 from cablefem.cable_geometry import cable_geometry
 from cablefem.chain import without_bending
+from cablefem.contract import Builders
 from cablefem.description import CableDescription
 from cablefem.errors import CaseError
 from cablefem.line import LineDiscretisation, anchor_bcs, cable_anchors
 from cablefem.plausibility import MAX_PLAUSIBLE_STRAIN, PLAUSIBLE_LENGTH_RATIO
 from cablefem.water import wave_warnings
 
-__all__ = ["CableModel", "AnchorBC", "MAX_PLAUSIBLE_STRAIN", "PLAUSIBLE_LENGTH_RATIO"]
+__all__ = ["CableModel", "AnchorBC", "MAX_PLAUSIBLE_STRAIN", "PLAUSIBLE_LENGTH_RATIO", "STRING",
+           "string_anchors", "string_bcs"]
 
 log = logging.getLogger(__name__)
 
@@ -45,6 +47,21 @@ def _phase(model, what: str) -> None:
     """Log a build phase of a large problem (rank 0), with the time so far."""
     if len(model.geometry.stations) >= model.LOG_PHASES_FROM:
         log.info("build: %s (%.1f s)", what, time.perf_counter() - model._t_build)
+
+
+def string_anchors(model) -> list[AnchorBC]:
+    """A single cable's two anchors (:func:`cablefem.line.cable_anchors`)."""
+    return cable_anchors(model.line, model.case, model.anchor_positions)
+
+
+def string_bcs(model) -> list:
+    """Every anchor's Dirichlet condition on all its components (the string's)."""
+    return anchor_bcs(model.u_bc, model.anchors)
+
+
+#: what a single cable's string is built from (:class:`cablefem.contract.Builders`)
+STRING = Builders(geometry=cable_geometry, coefficients=string_terms.string_coefficients,
+                  anchors=string_anchors, bcs=string_bcs)
 
 
 class CableModel:
@@ -87,6 +104,7 @@ class CableModel:
     #: first-order correction, with the hinges' ``solver.outer_correction = "hinge"``);
     #: the rod resolves its layers
     kink_offsets = True
+    builders = STRING  #: what the model is built from (cablefem.contract.Builders)
 
     def __init__(self, comm: MPI.Comm, description: CableDescription, prefix: str = "cable_"):
         if not isinstance(comm, MPI.Comm) or not isinstance(description, CableDescription):
@@ -108,7 +126,7 @@ class CableModel:
         self._t_build = time.perf_counter()
         self.warnings += wave_warnings(getattr(case, "fluid", None), case.gravity,
                                        getattr(case, "seabed", None))
-        self.geometry, self.initial_shape = self._build_geometry()
+        self.geometry, self.initial_shape = self.builders.geometry(self)
         self.length = self.geometry.length
         line = self.line = LineDiscretisation(comm, self.geometry, self.bs,
                                               lambda what: _phase(self, what))
@@ -126,7 +144,7 @@ class CableModel:
         self.t0 = forms.reference_tangent(self.mesh)
 
         m = self.mesh
-        self._coefficients()
+        self.builders.coefficients(self)
         self.law = None  # virtual hinges: the layer law's cell fields
         if self.has_hinges():
             string_terms.hinge_law_fields(self)
@@ -139,7 +157,7 @@ class CableModel:
         self.point_loads = [(fem.Constant(m, np.asarray(pl.value, dtype=PETSc.ScalarType)), pl)
                             for pl in case.point_loads]
 
-        self.anchors = self._build_anchors()
+        self.anchors = self.builders.anchors(self)
         self.hinges = None
         if self.has_hinges():
             from cablefem.hinge import HingeError, VirtualHinges
@@ -149,7 +167,7 @@ class CableModel:
             except HingeError as err:
                 raise CaseError([("solver.outer_correction", str(err))],
                                 case.source) from None
-        self.bcs = self._make_bcs()
+        self.bcs = self.builders.bcs(self)
         # point terms' nodes (point masses, point loads, dampers) and their measures
         self.damper_nodes = [self.geometry.node_at(s) for s in self.damper_s]
         line.tag_points({k for item in list(case.point_masses) + list(case.point_loads)
@@ -169,21 +187,6 @@ class CableModel:
         the clamped anchors, :mod:`cablefem.hinge`) and there is a clamped anchor."""
         return (self.case.solver.outer_correction == "hinge"
                 and any(a.kind == "clamped" for a in self.case.anchors))
-
-    # ------------------------------------------------------------------ what a model builds
-    def _build_geometry(self):
-        """The reference geometry and the start of statics (cablefem.cable_geometry)."""
-        return cable_geometry(self)
-
-    def _coefficients(self) -> None:
-        """The section's coefficients EA, m, c (string_terms.string_coefficients)."""
-        string_terms.string_coefficients(self)
-
-    def _build_anchors(self) -> list[AnchorBC]:
-        return cable_anchors(self.line, self.case, self.anchor_positions)
-
-    def _make_bcs(self):
-        return anchor_bcs(self.u_bc, self.anchors)
 
     def initial_guess(self) -> np.ndarray:
         """Nodal start of statics (n, bs): the elastic catenary through the anchors."""

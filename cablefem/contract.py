@@ -14,9 +14,10 @@ This module imports no dolfinx (the annotations are strings).
 from __future__ import annotations
 
 from collections.abc import Callable, Iterator
+from dataclasses import dataclass
 from typing import Any, Protocol, runtime_checkable
 
-__all__ = ["LineModel", "CAPABILITIES"]
+__all__ = ["LineModel", "CAPABILITIES", "Builders"]
 
 #: the capabilities a model declares, with the string's defaults: the solvers branch on
 #: them (a network, a rod, the virtual hinges, the string alone, dampers, pre-solves)
@@ -25,6 +26,22 @@ CAPABILITIES: dict[str, Any] = {
     "law": None, "static_stages": None, "static_options": {}, "ramp_weight": False,
     "damper_s": (), "damper_nodes": (), "kink_gaps": (), "kink_offsets": True,
 }
+
+
+@dataclass(frozen=True)
+class Builders:
+    """What a model is built from, each a function of the model being built, called in
+    this order by :class:`cablefem.cable.CableModel`: ``geometry(model)`` -> (reference
+    geometry, nodal positions statics starts from); ``coefficients(model)`` sets the
+    section's coefficients (``EA``, ``m``, ``c``, ...); ``anchors(model)`` -> the
+    :class:`cablefem.anchor.AnchorBC` list; ``bcs(model)`` -> their Dirichlet conditions.
+    The string's are ``cablefem.cable.STRING``; a network (``cablefem.network.NETWORK``)
+    and the rod (``cablefem.rod.ROD``) provide their own."""
+
+    geometry: Callable[[Any], tuple]
+    coefficients: Callable[[Any], None]
+    anchors: Callable[[Any], list]
+    bcs: Callable[[Any], list]
 
 
 @runtime_checkable
@@ -83,6 +100,7 @@ class LineModel(Protocol):
     damper_nodes: tuple
     kink_gaps: tuple
     kink_offsets: bool
+    builders: Builders  #: what the model was built from
 
     # -- compiled forms (read-only, derived from the terms)
     f_static: Any

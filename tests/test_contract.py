@@ -14,7 +14,7 @@ from test_network import fan_case, fan_mesh
 
 from cablefem.cable import CableModel
 from cablefem.case import parse_case
-from cablefem.contract import CAPABILITIES, LineModel
+from cablefem.contract import CAPABILITIES, Builders, LineModel
 from cablefem.network import NetworkModel
 from cablefem.rod import BeamModel
 
@@ -26,7 +26,10 @@ OWN = {NetworkModel: {"is_network": True, "ramp_weight": True},
 @pytest.mark.parametrize("cls", [CableModel, NetworkModel, BeamModel])
 def test_capabilities_are_declared(cls):
     """Each capability of CAPABILITIES is a class attribute (readable without a model, as
-    the solvers read it), equal to the string's default unless the class sets its own."""
+    the solvers read it), equal to the string's default unless the class sets its own;
+    each class names what it is built from (Builders), its own."""
+    assert isinstance(cls.builders, Builders)
+    assert len({CableModel.builders, NetworkModel.builders, BeamModel.builders}) == 3
     for name, default in CAPABILITIES.items():
         assert hasattr(cls, name), name
         if name == "static_stages" and cls is BeamModel:
@@ -65,7 +68,8 @@ def test_models_satisfy_the_protocol(mpi_tmp_path):
 
 MODULES = ["cablefem.contract", "cablefem.line", "cablefem.plausibility",
            "cablefem.cable_geometry", "cablefem.string_terms", "cablefem.hinge_law",
-           "cablefem.hinge", "cablefem.cable", "cablefem.network", "cablefem.rod",
+           "cablefem.hinge", "cablefem.cable", "cablefem.network", "cablefem.rod_kinematics",
+           "cablefem.rod",
            "cablefem.statics", "cablefem.dynamics"]
 
 
