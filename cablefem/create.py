@@ -167,7 +167,7 @@ def create_network(comm: MPI.Comm, mesh_file: str | os.PathLike, sections: dict[
         (a clamp a cable runs through: one per side, :func:`cablefem.network.split_clamps`).
         ``span_bending``: the bending energy at every node of two cable elements that holds
         no anchor or point term, the span's moment handed over at the others
-        (:meth:`cablefem.network.NetworkModel._add_span_bending`).
+        (:meth:`cablefem.network.NetworkModel.add_span_bending`).
     """
     from cablefem.network import NetworkModel
 

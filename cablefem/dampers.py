@@ -58,8 +58,8 @@ def axial_dampers(model) -> list[tuple[str, str]]:
     :data:`AXIAL_FRACTION`; such a damper only damps the stiff axial motion (the damping
     ratios of the transverse modes are ~1e-15). Collective; every rank gets the list."""
     case = model.case
-    nodes = getattr(model, "damper_nodes", [])
-    if getattr(model, "is_network", False) or not nodes:
+    nodes = model.damper_nodes
+    if model.is_network or not nodes:
         return []
     r = model.gather_nodal(model.u_static)
     out = []

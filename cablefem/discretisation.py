@@ -97,7 +97,7 @@ def model_frequency_error(model, static, omega: float, time_step: bool = False
         dyn = case.dynamics
         return None if dyn is None else frequency_error(omega, 0.0, 0.0, None, dyn.dt,
                                                         dyn.rho_inf)
-    if getattr(model, "is_network", False) or getattr(case, "section", None) is None:
+    if model.is_network or getattr(case, "section", None) is None:
         return None
     stations = getattr(model.geometry, "stations", None)
     if stations is None or not static.min_tension > 0:

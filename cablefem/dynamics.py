@@ -70,9 +70,6 @@ class Checkpoint:
     step: int
     level: int = 0
     calm: int = 0
-    #: unused (virtual hinges once kept their layers' laws here; their law is now set from
-    #: the static state, cablefem.hinge); kept so that older checkpoint files read
-    layers: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
     #: this rank's ``model.u.x.array`` and ``model.v.x.array`` at the checkpoint, when
     #: :meth:`DynamicProblem.checkpoint` took it (a checkpoint read from a file has None:
     #: the state is then put into ``model.u``, ``model.v`` before restoring)
@@ -264,7 +261,7 @@ class DynamicProblem:
                                        petsc_options)  # _work: F and J live as long as ts
         self.ts.setMaxTime(_NO_END)  # PETSc steps only with an end; step(t_end) sets it
         self.reactions = AnchorReactions(model)
-        self.hinges = getattr(model, "hinges", None)
+        self.hinges = model.hinges
         self.time, self.step_number, self.level, self.calm = 0.0, 0, 0, 0
         #: the level of the last step taken (a step at another level starts with backward
         #: Euler); None: the integrator estimates its acceleration itself at its next step
@@ -324,7 +321,6 @@ class DynamicProblem:
         self._state_to_model()
         m = self.model
         return Checkpoint(self.time, self.step_number, self.level, self.calm,
-                          np.zeros((0, 2)),
                           m.u.x.array.copy(), m.v.x.array.copy())
 
     def _state_to_model(self) -> tuple[PETSc.Vec, PETSc.Vec]:

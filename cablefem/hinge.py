@@ -26,10 +26,10 @@ the frequencies (the span turns about H, not about A).
   finer than the layer);
 * the layer's own weight and inertia, ``m sigma_h (g - a_A)``, are added to the hinge
   force, so that the anchor force is the force at the real anchor
-  (:meth:`cablefem.reactions.AnchorForces.compute`); the boundary layer (the anchor moment)
+  (:meth:`cablefem.reactions.AnchorReactions.compute`); the boundary layer (the anchor moment)
   and the hinge itself are computed from it;
 * statics iterates hinge -> equilibrium -> anchor force -> hinge to a fixed point,
-  accelerated (:func:`cablefem.statics._hinge_iterations`).
+  accelerated (:func:`hinge_fixed_point`, which drives statics through its hooks).
 
 In dynamics the node stays where statics put it (it moves with the anchor), and so does the
 region: a prescribed node that jumps with the tension feeds velocity jumps into
@@ -68,7 +68,7 @@ them equal, dynamics moves them apart at first order where the static angle is f
 region cell's force direction is that of its stretch vector shifted by its share of ``dn =
 D_n - h sin(Delta)`` normal to the string, ``g - q (c - (c.e) e)``
 (:func:`cablefem.forms.layer_stretch_vector`), with q linearised about the static state in
-the first element's T and Delta (:meth:`VirtualHinges._offset_derivatives`) and computed,
+the first element's T and Delta (:func:`cablefem.hinge_law.offset_derivatives`) and computed,
 like the law, from the cell's own chord. Without it the hinged string's in-plane
 frequencies of a 10 %-sag cable with horizontal clamps were 1-2 % low (docs/theory.md §6).
 
@@ -96,14 +96,20 @@ longer than REGION_FRACTION of half the cable or of its chain to a junction) rai
 
 from __future__ import annotations
 
+import logging
+
 import numpy as np
 from mpi4py import MPI
 from scipy.spatial import cKDTree
 
-from cablefem.asymptotics import far_field_offsets, far_field_second_order, layer, virtual_hinge
-from cablefem.errors import HingeError
+from cablefem.asymptotics import far_field_second_order, layer, virtual_hinge
+from cablefem.errors import CaseError, HingeError, StaticError
+from cablefem.hinge_law import CEILING, DCOS, FLOOR, cell_values, start_law
 
-__all__ = ["VirtualHinges", "HingeError", "REGION_FRACTION", "FLOOR", "CEILING"]
+__all__ = ["VirtualHinges", "HingeError", "REGION_FRACTION", "FLOOR", "CEILING", "DCOS",
+           "hinge_fixed_point"]
+
+log = logging.getLogger(__name__)
 
 #: In statics the region is chosen so that sigma_h is at most this fraction of it: room for
 #: the layer to grow in dynamics (to 11/8 sigma_h at the FLOOR tension, plus the angle's
@@ -112,15 +118,6 @@ REGION_FRACTION = 0.25
 #: Statics keeps its region while sigma_h stays below GROW x REGION_FRACTION of it (a
 #: region that changed with every iteration would make the fixed point hop).
 GROW = 1.5
-#: Below this fraction of its static tension, a layer no longer follows the tension.
-FLOOR = 0.25
-#: Above this multiple of its static tension, a layer no longer follows the tension (the
-#: linear law removes sigma_h/2 there, the far field 0.71 sigma_h; at 3 T0 it would be 0).
-CEILING = 2.0
-#: Largest change of cos(Delta) the law follows.
-DCOS = 0.25
-#: Step in cos(Delta) of the derivative d sigma / d cos(Delta).
-HCOS = 1e-5
 
 
 class _Hinge:
@@ -157,7 +154,7 @@ class VirtualHinges:
         self._loads = None  # the distributed loads at the anchors (statics, first use)
         self.items: list[_Hinge] = []
         self.g_vec = np.asarray(model.g_vec, float)
-        if getattr(model, "is_network", False):
+        if model.is_network:
             self._network()
             return
         mesh = model.mesh
@@ -225,10 +222,10 @@ class VirtualHinges:
         X = model.V.tabulate_dof_coordinates()
         cells_g = np.asarray(geo.cells, np.int64)
         # the dampers' cells are no part of a chain
-        degree = np.array([len(es) for es in model._cable_cells_at()])
+        degree = np.array([len(es) for es in model.cable_cells_at()])
         anchored = {int(k) for k in geo.anchor_nodes.values()}
         length = geo.cell_lengths
-        idx = np.asarray(model._cell_index, np.int64)  # network cell of each local cell
+        idx = np.asarray(model.cell_index, np.int64)  # network cell of each local cell
         cell_of = np.full(len(cells_g), -1, np.int64)
         cell_of[idx] = np.arange(idx.size)
         for i, anc in enumerate(model.anchors):
@@ -341,41 +338,11 @@ class VirtualHinges:
         return {hg.anchor.name: hg.n for hg in self.items}
 
     # ------------------------------------------------------------------ dynamics
-    def _cell_values(self, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Tension (with the law in force) and cos Delta of every local cell in the state
-        ``u`` (a Function's array with its ghosts; ``model.u`` is left as it was; cos
-        Delta: zero outside the regions)."""
-        m = self.model
-        keep = None
-        if u is not m.u.x.array:
-            keep = m.u.x.array.copy()
-            m.u.x.array[:] = u
-        if self._scratch is None:
-            from dolfinx import fem
-
-            from cablefem.jit import quiet_compiler
-
-            with quiet_compiler():
-                cos = fem.Expression(m.law.cos, m.W.element.interpolation_points())
-            self._scratch = (fem.Function(m.W), fem.Function(m.W), cos)
-        T, C, cos = self._scratch
-        T.interpolate(m.tension_expr)
-        C.interpolate(cos)
-        if keep is not None:
-            m.u.x.array[:] = keep
-        return T.x.array, C.x.array
-
-    def _local(self, hg: _Hinge) -> tuple[np.ndarray, np.ndarray]:
-        """The region elements (indices into ``hg.cells``) on this rank, and their cells."""
-        c = hg.cells[:hg.n]
-        k = np.flatnonzero(c >= 0)
-        return k, c[k]
-
     def _measure(self, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Tension and anchor angle Delta (between the clamp direction and the first
         element) of every hinge's first element in the displacement ``u`` (a Function's
         array, ghosts up to date); from the ranks that have the element, to all ranks."""
-        Tc, Cc = self._cell_values(u)
+        Tc, Cc = cell_values(self, u)
         local = np.zeros((len(self.items), 3))
         for k, hg in enumerate(self.items):
             if hg.nodes is None:
@@ -385,92 +352,13 @@ class VirtualHinges:
         tot = self.model.comm.allreduce(local, op=MPI.SUM)  # every holder has the same values
         return tot[:, 0] / tot[:, 2], tot[:, 1] / tot[:, 2]
 
-    def _sigma_far(self, hg: _Hinge, T, delta):
-        """The stress-free length to remove for the string from the (fixed) node at A + h c
-        to lie on the rod's far-field line at tension T and angle Delta: along the string,
-        ``h cos(Delta) - lambda_inf sigma = D_t(T, Delta)`` (vectorised)."""
-        sec = hg.anchor.section
-        D_t, _ = far_field_offsets(delta, T, sec.EI, sec.EA)
-        return (hg.h * np.cos(delta) - D_t) / (1.0 + np.asarray(T, float) / sec.EA)
-
-    def _derivatives(self, hg: _Hinge, T: np.ndarray, delta: np.ndarray):
-        """``d sigma/dT`` and ``d sigma / d cos(Delta)`` (finite at Delta = 0, where ``d
-        sigma / d Delta`` vanishes) of :meth:`_sigma_far`, by central differences."""
-        dT = 1e-4 * T
-        sig_T = (self._sigma_far(hg, T + dT, delta) - self._sigma_far(hg, T - dT, delta)) \
-            / (2 * dT)
-        hi = np.minimum(np.cos(delta) + HCOS, 1.0)
-        lo = hi - 2.0 * HCOS
-        sig_C = (self._sigma_far(hg, T, np.arccos(hi))
-                 - self._sigma_far(hg, T, np.arccos(lo))) / (hi - lo)
-        return sig_T, sig_C
-
-    def _offset_derivatives(self, hg: _Hinge, T: float, delta: float, cell_delta):
-        """The far field's normal offset from the fixed node, ``dn = D_n(T, Delta) - h
-        sin(Delta)`` (zero at the static state), linearised about the first element's
-        static tension ``T`` and angle ``Delta``, as each region cell sees it: its offset is
-        ``q (c - (c.e) e)`` with ``|c - (c.e) e| = sin(Delta_k)`` at its own angle, and
-        a rotation of the region turns every cell by the same angle, ``d cos(Delta_k) =
-        -sin(Delta_k) dDelta``. Returns ``(dq/dT, dq/d cos(Delta_k))`` per cell; zero
-        where ``sin(Delta_k) < 1e-3`` (the offset is O(Delta^2) there)."""
-        sec = hg.anchor.section
-
-        def dn(T_, d_):
-            return float(far_field_offsets(d_, T_, sec.EI, sec.EA)[1]) - hg.h * np.sin(d_)
-
-        dT, dD = 1e-4 * T, 1e-5
-        n_T = (dn(T + dT, delta) - dn(T - dT, delta)) / (2 * dT)
-        n_D = (dn(T, delta + dD) - dn(T, delta - dD)) / (2 * dD)
-        sin = np.sin(np.asarray(cell_delta, float))
-        ok = sin > 1e-3
-        safe = np.where(ok, sin, 1.0)
-        return np.where(ok, n_T / safe, 0.0), np.where(ok, -n_D / safe**2, 0.0)
-
-    def _start_offset(self, hg: _Hinge, T: float, delta: float, Tc, Cc) -> None:
-        """The far field's normal offset (module docs) on the hinge's region, each cell
-        taking the share ``c0/K`` of it per mesh length, linearised about the first
-        element's static tension ``T`` and angle ``delta`` (``Tc``, ``Cc``: the cells' static
-        tension and cosine)."""
-        m = self.model
-        k, c = self._local(hg)
-        q_T, q_C = self._offset_derivatives(hg, T, delta,
-                                            np.arccos(np.clip(Cc[c], -1.0, 1.0)))
-        share = hg.c0[k] / hg.K
-        m.law_tref.x.array[c] = Tc[c]
-        m.law_qT.x.array[c] = q_T * share
-        m.law_qC.x.array[c] = q_C * share
-
     def start_dynamics(self, u_static: np.ndarray) -> None:
         """Put the layer's law into each region (module docs): linearised about the static
-        state ``u_static``, each cell about its own static tension T0 and cos Delta C0.
-        The law then stays as it is for the whole run (nothing is updated between steps;
-        a restart sets it again from the static state)."""
-        m = self.model
-        T, delta = self._measure(u_static)
-        Tc, Cc = self._cell_values(u_static)
-        for hg, t_k, delta_k in zip(self.items, T, delta):
-            hg.T_static = float(t_k)
-            k, c = self._local(hg)
-            T0, C0 = Tc[c], Cc[c]
-            if np.any(T0 <= 0.0):
-                raise HingeError(f"anchor {hg.anchor.name}: a slack element next to the "
-                                 "virtual hinge in the static state")
-            sig_T, sig_C = self._derivatives(hg, T0, np.arccos(np.clip(C0, -1.0, 1.0)))
-            # the layer shortens as the tension grows (sigma ~ T^-1/2): sig_T < 0 (kept so,
-            # the min/max composition of the law needs the following law the softest)
-            sig_T = np.minimum(sig_T, 0.0)
-            p, sl, c0 = hg.p[k], hg.s[k], hg.c0[k]
-            c_s = c0 * (1.0 - p * hg.sigma / sl)  # the static stress-free length per mesh
-            m.law_a.x.array[c] = c0 * (1.0 - p * (hg.sigma - sig_T * T0) / sl)
-            m.law_b.x.array[c] = c0 * p * sig_C / sl
-            m.law_ka.x.array[c] = c_s / hg.EA0 - c0 * p * sig_T / sl
-            m.law_kb.x.array[c] = c_s / hg.EA0
-            m.law_tf.x.array[c] = FLOOR * T0
-            m.law_tc.x.array[c] = CEILING * T0
-            m.cos_ref.x.array[c] = C0
-            if hg.cells[0] >= 0:
-                hg.sig_T, hg.sig_C = float(sig_T[0]), float(sig_C[0])
-            self._start_offset(hg, t_k, delta_k, Tc, Cc)
+        state ``u_static``, each cell about its own static tension T0 and cos Delta C0
+        (:func:`cablefem.hinge_law.start_law`). The law then stays as it is for the whole
+        run (nothing is updated between steps; a restart sets it again from the static
+        state)."""
+        start_law(self, u_static)
 
     def layer_sigma(self, T: float, delta: float, hg: _Hinge) -> float:
         """The stress-free length the law removes from the first element's region at its
@@ -507,3 +395,120 @@ class VirtualHinges:
         return {hg.anchor.name: {"h": hg.h, "sigma_h": hg.sigma, "elements": hg.n,
                                  "offset": [float(v) for v in hg.anchor.offset]}
                 for hg in self.items}
+
+
+# ---------------------------------------------------------------------- statics' fixed point
+def _input_error(model):
+    """``f(call, *args)``: ``call(*args)``, a :class:`HingeError` made an input error naming
+    ``solver.outer_correction`` (:class:`cablefem.errors.CaseError`)."""
+    def guarded(call, *args):
+        try:
+            return call(*args)
+        except HingeError as err:
+            raise CaseError([("solver.outer_correction", str(err))],
+                            model.case.source) from None
+    return guarded
+
+
+def _reach(hinges, steps, apply, z, z_done, it: int) -> tuple[int, int]:
+    """The equilibrium with the hinges at ``z``: at once, or by continuation from the last
+    hinges with an equilibrium ``z_done`` towards ``z`` (steps halved on failure, grown by
+    1.5 on success). Returns the Newton iterations, in all and of the last solve;
+    StaticError when the step falls below 1/64."""
+    apply(z)  # sets the region for z (kept by the partial steps below)
+    ok, its = steps.solve(it)
+    total, theta, step = its, 0.0, 0.5
+    while not ok:
+        if step < 1.0 / 64:
+            raise StaticError(f"static equilibrium with the virtual hinges (iteration "
+                              f"{it}) not found, also in steps towards them: Newton "
+                              f"history {steps.history()}")
+        steps.restore()
+        apply(z_done + min(1.0, theta + step) * (z - z_done))
+        ok, its = steps.solve(it)
+        total += its
+        if ok:
+            steps.keep()
+            theta = min(1.0, theta + step)
+            step *= 1.5
+            ok = theta >= 1.0
+        else:
+            step *= 0.5
+    return total, its
+
+
+def _anderson(Z: list, G: list, depth: int) -> np.ndarray:
+    """The next iterate of Anderson mixing of depth ``depth`` from the iterates ``Z`` and
+    their images ``G`` (trimmed in place to the last ``depth + 1``): the combination of the
+    last images with least residual (the plain image with one pair)."""
+    del Z[:-(depth + 1)], G[:-(depth + 1)]
+    R = [gg - zz for gg, zz in zip(G, Z)]
+    if len(R) < 2:
+        return G[-1]
+    dR = np.column_stack([R[k + 1] - R[k] for k in range(len(R) - 1)])
+    dG = np.column_stack([G[k + 1] - G[k] for k in range(len(G) - 1)])
+    gamma = np.linalg.lstsq(dR, R[-1], rcond=1e-12)[0]
+    return G[-1] - dG @ gamma
+
+
+def hinge_fixed_point(model, steps, forces: np.ndarray, tol: float | None = None,
+                      max_iterations: int = 30, depth: int = 3) -> int:
+    """Fixed point hinge -> equilibrium -> anchor forces -> hinge of ``model.hinges``,
+    accelerated (Anderson mixing of depth ``depth`` on the hinges' (h, sigma_h, E)).
+
+    Statics is driven through ``steps`` (:class:`cablefem.statics.HingeSteps`, the hooks
+    of a static solve): ``solve(it)`` Newton at the current hinges -> (converged,
+    iterations); ``keep()`` and ``restore()`` the state of the last equilibrium;
+    ``anchor_forces()`` at the current equilibrium; ``rtol``, ``atol`` Newton's tolerances;
+    ``history()`` its last history.
+
+    The hinge depends on the anchor force only through ell ~ T^-1/2 and Delta; the plain
+    iteration contracts by 1e-2 to 1e-3 per step on a taut cable but only by about a half on
+    a sagging one with horizontal clamps (the hinge moves the sag, the sag the angle).
+    Converged when the anchor forces change by less than ``tol`` (default: Newton's own
+    force tolerance, ``max(atol, rtol |F|)`` of the SNES, times 10: the fixed point is then
+    as exact as the equilibrium inside it) between two equilibria, or (h, sigma_h) by less
+    than 1e-10 of sigma_h (the anchor force is exact to ~1e-10 and sigma_h ~ T^-1/2: the
+    iteration's noise floor; near it the force changes by more than Newton's tolerance,
+    the first element being stiff). ``forces`` is updated in place to the last
+    equilibrium's; returns the Newton iterations. A hinge that cannot be placed is an input
+    problem (:class:`cablefem.errors.CaseError` naming ``solver.outer_correction``)."""
+    hinges, guarded = model.hinges, _input_error(model)
+
+    def apply(z):
+        guarded(hinges.apply, z)
+        model.set_time(0.0)
+
+    its_total = 0
+    Z, G = [], []  # iterates and their images
+    z = guarded(hinges.place, forces)
+    scale = float(z[:, 1].max())  # lengths in units of the first sigma_h (fixed)
+    change_F = change_z = np.inf
+    z_done = hinges.current()  # the last hinges with an equilibrium
+    steps.keep()
+    for it in range(1, max_iterations + 1):
+        total, its = _reach(hinges, steps, apply, z, z_done, it)
+        its_total += total
+        z_done = hinges.current()
+        steps.keep()
+        old = forces.copy()
+        forces[:] = steps.anchor_forces()
+        g = guarded(hinges.place, forces)
+        change_F = float(np.abs(forces - old).max())
+        change_z = float(np.abs(g - z).max() / scale)
+        tol_F = tol if tol is not None else 10.0 * max(
+            steps.atol, steps.rtol * float(np.abs(forces).max()))
+        log.info("statics: virtual hinges, iteration %d: anchor force change %.2e (tolerance "
+                 "%.2e), hinge change %.2e of sigma_h, %d Newton iterations", it, change_F,
+                 tol_F, change_z, its)
+        if it > 1 and (change_F <= tol_F or change_z < 1e-10):
+            return its_total
+        Z.append(z.ravel() / scale)
+        G.append(g.ravel() / scale)
+        z = _anderson(Z, G, depth).reshape(-1, 5) * scale
+        if not (np.all(np.isfinite(z)) and np.all(z[:, 1] > 0)):
+            z = g  # a wild extrapolation: the plain step
+            Z, G = [], []
+    raise StaticError(f"the virtual-hinge iteration did not converge in {max_iterations} "
+                      f"iterations (last anchor force change {change_F:.2e} N, hinge change "
+                      f"{change_z:.2e} of sigma_h)")

@@ -87,16 +87,16 @@ class Kink:
 
 def kink_points(model) -> list[Kink]:
     """The kinks of a single cable or of a network (:func:`network_kinks`)."""
-    if getattr(model, "is_network", False):
+    if model.is_network:
         return network_kinks(model)
-    if getattr(model, "string_alone", False):  # EI = 0: no layer, no kink moment
+    if model.string_alone:  # EI = 0: no layer, no kink moment
         return []
     case, geo = model.case, model.geometry
     st = geo.stations
     out, seen = [], set()
     items = ([(f"point_load{i}", pl.s) for i, pl in enumerate(case.point_loads)]
              + [(f"point_mass{i}", pm.s) for i, pm in enumerate(case.point_masses)]
-             + [(f"damper{i}", s) for i, s in enumerate(getattr(model, "damper_s", ()))])
+             + [(f"damper{i}", s) for i, s in enumerate(model.damper_s)])
     for name, s in items:
         k = geo.node_at(s)
         if k in seen or k == 0 or k == len(st) - 1:
@@ -107,7 +107,7 @@ def kink_points(model) -> list[Kink]:
                         cells=(k - 1, k)))
     # the distance from each kink to its nearest other kink or anchor (each way)
     marks = np.array(sorted({0.0, float(st[-1])} | {k.s for k in out}))
-    dampers = {geo.node_at(s) for s in getattr(model, "damper_s", ())}
+    dampers = {geo.node_at(s) for s in model.damper_s}
     for k in out:
         k.spacing = float(np.min(np.abs(marks[marks != k.s] - k.s)))
         k.sides = (float(k.s - marks[marks < k.s].max()), float(marks[marks > k.s].min() - k.s))
@@ -225,7 +225,7 @@ class KinkMoments:
         self.kinks = kink_points(model)
         self.omega = omega
         n = len(self.kinks)
-        if getattr(model, "is_network", False):
+        if model.is_network:
             secs = [model.case.network.sections[k.section] for k in self.kinks]
         else:
             secs = [model.case.section] * n
@@ -260,7 +260,7 @@ class KinkMoments:
         """Kinks next to an element whose law a virtual hinge changed (its stress-free
         length is not the mesh's there, so the tension above would be off): invalid."""
         out = np.zeros(len(self.kinks), bool)
-        hinges = getattr(self.model, "hinges", None)
+        hinges = self.model.hinges
         if not hinges:
             return out
         cells = np.array([k.cells for k in self.kinks], np.int64).reshape(-1, 2)
@@ -278,7 +278,7 @@ class KinkMoments:
         vals = f.x.array[: bs * n_owned].reshape(-1, bs)[:, :3]
         if self._local is None:  # each kink node's owned dof block here (-1: elsewhere)
             where = np.full(len(m.geometry.points), -1, np.int64)
-            where[m._owned_nodes] = np.arange(m._owned_nodes.size)
+            where[m.line.owned_nodes] = np.arange(m.line.owned_nodes.size)
             self._local = where[self.nodes]
         out = np.zeros(self.nodes.shape + (3,))
         mine = self._local >= 0
@@ -413,7 +413,7 @@ class KinkMoments:
         # the clamp along the bisector
         T = size.mean(axis=1)
         bis = f[:, 1] - f[:, 0]
-        network = getattr(self.model, "is_network", False)
+        network = self.model.is_network
         lay = SimpleNamespace(**{k: np.full(n, np.nan) for k in (
             "delta", "moment", "layer_length", "tension")}, valid=np.zeros(n, bool),
             moment_vector=np.full((n, 3), np.nan), normal=np.zeros((n, 3)),

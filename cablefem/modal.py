@@ -157,7 +157,7 @@ class ModalProblem:
         self.n = n
         self.prefix = (model.prefix + "modal_" if petsc_options_prefix is None
                        else petsc_options_prefix)
-        hinges = getattr(model, "hinges", None)
+        hinges = model.hinges
         if hinges:  # linearise what the dynamics solves: the layers' law (module docs)
             hinges.start_dynamics(model.u.x.array)
         forms = model.forms
@@ -309,7 +309,7 @@ class ModalProblem:
         if np.any(np.array(vals)[order] < 0):
             log.warning("modal: negative eigenvalue(s): the static state is not stable")
         shapes = [shapes[i] for i in order]
-        if len(model.anchors) == 2 and not getattr(model, "is_network", False):
+        if len(model.anchors) == 2 and not model.is_network:
             a0, a1 = model.anchors
             chord = a1.position - a0.position
             g = model.case.gravity

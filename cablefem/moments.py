@@ -357,7 +357,7 @@ class AnchorMoments:
                                  model.anchor_span(a.name))
                    for i, a in enumerate(model.anchors) if a.kind == "clamped"]
         loads = [(np.asarray(ld.value, float), ld.time) for _, ld in model.loads]
-        order = 1 if getattr(model, "hinges", None) else 0
+        order = 1 if model.hinges else 0
         return cls(clamped, model.g_vec, model.length, loads, omega, form, order, buoyancy)
 
     def set_resonance(self, amplification: float, static_forces,

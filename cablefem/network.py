@@ -29,15 +29,19 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from cablefem import forms
-from cablefem.cable import MAX_PLAUSIBLE_STRAIN, AnchorBC, CableModel
+from cablefem.anchor import AnchorBC
+from cablefem.cable import CableModel, string_bcs
+from cablefem.contract import Builders
 from cablefem.errors import CaseError
 from cablefem.fluid import submerged_weight
 from cablefem.geometry import MeshError, NetworkMesh, connected_components, read_network_mesh
 from cablefem.jit import quiet_compiler
+from cablefem.plausibility import pretension_warnings
 from cablefem.span_bending import is_on
 from cablefem.water import water_problems
 
-__all__ = ["NetworkModel", "NetworkGeometry", "ClampSide", "split_clamps"]
+__all__ = ["NetworkModel", "NetworkGeometry", "ClampSide", "split_clamps", "NETWORK",
+           "network_geometry", "network_coefficients", "network_anchors"]
 
 log = logging.getLogger(__name__)
 
@@ -171,123 +175,182 @@ class NetworkGeometry:
         return np.arange(len(self.points), dtype=float)
 
 
+def network_geometry(model):
+    """A network's reference geometry (its mesh, the clamps split into their sides) and
+    the positions statics starts from (the mesh); checks the mesh against the case
+    (:class:`CaseError` naming the keys) and warns of implausible pretensions. Sets
+    ``model.submerged_weight`` and ``model.force_scale``."""
+    case = model.case
+    spec = case.network
+    try:
+        net = read_network_mesh(spec.mesh)
+    except MeshError as err:
+        raise CaseError(err.problems, case.source) from None
+    problems = [(f"sections.{name}.EI", "must be > 0 in a network (its kinks and clamps "
+                 "need bending stiffness; EI = 0, the string alone, is for single "
+                 "cables)") for name, sec in spec.sections.items() if not sec.EI > 0]
+    by_group = {c.group: c for c in spec.cables}
+    links = {d.group: i for i, d in enumerate(case.dampers)}
+    for g in net.groups:
+        if g not in by_group and g not in links:
+            problems.append(("cables", f"the mesh's 1D group {g!r} has no [[cables]] "
+                                       "(or [[dampers]]) entry"))
+    for g in by_group:
+        if g not in net.groups:
+            problems.append(("cables", f"group {g!r} is not a 1D group of the mesh "
+                                       f"(its groups: {net.groups})"))
+    for g, i in links.items():
+        if g not in net.groups:
+            problems.append((f"dampers[{i}].group", f"{g!r} is not a 1D group of the "
+                                                    f"mesh (its groups: {net.groups})"))
+    for a in case.anchors:
+        if a.name not in net.vertex_groups:
+            problems.append(("anchors", f"group {a.name!r} is not a 0D group of the mesh "
+                                        f"(its groups: {sorted(net.vertex_groups)})"))
+    for item in list(case.point_masses) + list(case.point_loads):
+        if item.s not in net.vertex_groups:
+            problems.append(("point_masses/point_loads", f"group {item.s!r} is not a 0D "
+                                                         "group of the mesh"))
+    anchored = np.zeros(len(net.points), dtype=bool)
+    for a in case.anchors:
+        if a.name in net.vertex_groups:
+            anchored[net.vertex_groups[a.name]] = True
+    cell_damper = np.array([links.get(net.groups[g], -1) for g in net.cell_group],
+                           np.int64).reshape(-1)
+    on_cable = np.zeros(len(net.points), dtype=bool)
+    on_cable[net.cells[cell_damper < 0].ravel()] = True
+    for e in np.nonzero(cell_damper >= 0)[0]:
+        a, b = (int(k) for k in net.cells[e])
+        i = int(cell_damper[e])
+        lost = [k for k in (a, b) if not (on_cable[k] or anchored[k])]
+        if lost or not (on_cable[a] or on_cable[b]):
+            k = lost[0] if lost else a
+            problems.append((f"dampers[{i}].group", (
+                f"a cell of {case.dampers[i].group!r} ends at node {k} at "
+                f"{net.points[k].tolist()}, " + ("on no cable and no anchor" if lost
+                                                 else "and joins no cable") +
+                ": a damper joins two cable nodes, or a cable node and an anchor "
+                "(one cell each)")))
+            break
+    # the dampers carry nothing in statics: a part held only through them is free
+    comp = connected_components(len(net.points), net.cells[cell_damper < 0])
+    free = sorted(set(comp.tolist()) - set(comp[anchored].tolist()))
+    if free:
+        k = int(np.nonzero(comp == free[0])[0][0])
+        problems.append(("anchors", f"{len(free)} part(s) of the network are held by no "
+                                    f"anchor (disconnected cables), e.g. the one with node "
+                                    f"{k} at {net.points[k].tolist()}"))
+    held = [(a, net.points[k]) for a in case.anchors if a.name in net.vertex_groups
+            for k in net.vertex_groups[a.name]]
+    problems += water_problems([a for a, _ in held], case.gravity, None,
+                               getattr(case, "seabed", None), [p for _, p in held])
+    if problems:
+        raise CaseError(problems, case.source)
+    net, sides = split_clamps(net, case.anchors, cell_damper < 0, case.source)
+    secs = spec.sections
+    model.warnings += pretension_warnings(spec.cables, secs)
+    cable = cell_damper < 0
+    cell_section = [by_group[net.groups[g]].section if net.groups[g] in by_group else None
+                    for g in net.cell_group]
+    # a damper's cell: no axial stiffness, no mass, stress-free at its mesh length
+    EA = np.array([secs[n].EA if n is not None else 0.0 for n in cell_section])
+    m = np.array([secs[n].mass if n is not None else 0.0 for n in cell_section])
+    T0 = np.array([by_group[net.groups[g]].pretension if net.groups[g] in by_group
+                   else 0.0 for g in net.cell_group])
+    c = np.ones(len(EA))
+    c[cable] = 1.0 / (1.0 + T0[cable] / EA[cable])
+    h = np.linalg.norm(net.points[net.cells[:, 1]] - net.points[net.cells[:, 0]], axis=1)
+    length = float(np.sum((c * h)[cable]))
+    geo = NetworkGeometry(net.points, net.cells, length, net, EA, m, c, cell_section,
+                          cell_damper=cell_damper, clamp_sides=sides)
+    # the seabed's contact law is smoothed over a fraction of the lightest cable's
+    # penetration (cablefem.seabed): the least submerged weight of the sections used
+    fl, g = getattr(case, "fluid", None), case.gravity.g
+    used = [secs[n] for n in sorted({n for n in cell_section if n is not None})]
+    w = [submerged_weight(fl, sec.mass, g, fl.diameter_on(sec)) if fl is not None
+         else sec.mass * g for sec in used]
+    model.submerged_weight = float(min([x for x in w if x > 0], default=max(w)))
+    model.force_scale = float(max(np.max(T0, initial=0.0),
+                                 np.max(m, initial=0.0) * case.gravity.g * length, 1e-300))
+    log.info("network %s: %d nodes, %d cells, %d cable groups, %d junctions, %d anchor "
+             "groups, stress-free length %.6g m", spec.mesh.name, len(net.points),
+             len(net.cells), len(net.groups), len(net.junctions), len(case.anchors),
+             length)
+    return geo, net.points.copy()
+
+
+def network_coefficients(model) -> None:
+    """The cell fields EA, m and c of every cell's section (a damper's cells: none)."""
+    geo = model.geometry
+    idx = model.cell_index = model.line.reference_cells()
+    model.EA, model.m, model.c = (fem.Function(model.W, name=n) for n in ("EA", "m", "c"))
+    for f, arr in ((model.EA, geo.cell_EA), (model.m, geo.cell_m), (model.c, geo.cell_c)):
+        f.x.array[:] = arr[idx].astype(PETSc.ScalarType)
+
+
+def network_anchors(model) -> list[AnchorBC]:
+    """An anchor per node of every anchor group (a clamp a cable runs through: one per
+    side, ``clamp`` naming the clamp), in the order of the case's groups."""
+    geo = model.geometry
+    net = geo.net
+    secs = model.case.network.sections
+    out = []
+    imap = model.V.dofmap.index_map
+
+    def held(name, node, kind, direction, spec, cell):
+        geo.anchor_nodes[name] = node
+        dofs = fem.locate_dofs_topological(model.V, 0, model.line.locate_node(node))
+        owned = bool(np.any(dofs < imap.size_local))
+        section = secs[geo.cell_section[cell]] if cell is not None else None
+        X = net.points[node].copy()
+        return AnchorBC(name, node, X, X.copy(), kind, direction, spec.motion, dofs,
+                        owned, section)
+
+    for spec in model.case.anchors:
+        for i, k in enumerate(net.vertex_groups[spec.name]):
+            k = int(k)
+            name = f"{spec.name}:{i}"
+            if k in geo.clamp_sides:  # a clamp a cable runs through: one per side
+                for side in geo.clamp_sides[k]:
+                    out.append(held(side.name, side.node, "clamped", side.direction,
+                                    spec, side.cell))
+                    out[-1].clamp = name
+                continue
+            at = np.nonzero(((net.cells[:, 0] == k) | (net.cells[:, 1] == k))
+                            & geo.is_cable)[0]  # its cables' cells
+            direction = None
+            if spec.kind == "clamped":
+                if at.size == 0:  # only dampers end there
+                    raise CaseError([(f"anchors[{spec.name}].type", f"anchor {name} at "
+                                      f"node {k} holds no cable element, nothing to "
+                                      "clamp: make it 'pinned'")], model.case.source)
+                direction = spec.direction
+                if direction is None:
+                    other = net.cells[at[0]][net.cells[at[0]] != k][0]
+                    d = net.points[other] - net.points[k]
+                    direction = d / np.linalg.norm(d)
+                direction = np.asarray(direction, float) / np.linalg.norm(direction)
+            out.append(held(name, k, spec.kind, direction, spec,
+                            int(at[0]) if at.size else None))
+    owners = model.comm.allreduce(np.array([int(a.owned) for a in out]))
+    if np.any(owners != 1):
+        raise RuntimeError("anchor ownership is not unique across ranks")
+    return out
+
+
+#: what a network is built from (:class:`cablefem.contract.Builders`): its mesh and
+#: sections, the string's boundary conditions
+NETWORK = Builders(geometry=network_geometry, coefficients=network_coefficients,
+                   anchors=network_anchors, bcs=string_bcs)
+
+
 class NetworkModel(CableModel):
     """A cable network, ready to be solved (same API as :class:`CableModel`)."""
 
     ramp_weight = True
     is_network = True
-
-    def _build_geometry(self):
-        case = self.case
-        spec = case.network
-        try:
-            net = read_network_mesh(spec.mesh)
-        except MeshError as err:
-            raise CaseError(err.problems, case.source) from None
-        problems = [(f"sections.{name}.EI", "must be > 0 in a network (its kinks and clamps "
-                     "need bending stiffness; EI = 0, the string alone, is for single "
-                     "cables)") for name, sec in spec.sections.items() if not sec.EI > 0]
-        by_group = {c.group: c for c in spec.cables}
-        links = {d.group: i for i, d in enumerate(case.dampers)}
-        for g in net.groups:
-            if g not in by_group and g not in links:
-                problems.append(("cables", f"the mesh's 1D group {g!r} has no [[cables]] "
-                                           "(or [[dampers]]) entry"))
-        for g in by_group:
-            if g not in net.groups:
-                problems.append(("cables", f"group {g!r} is not a 1D group of the mesh "
-                                           f"(its groups: {net.groups})"))
-        for g, i in links.items():
-            if g not in net.groups:
-                problems.append((f"dampers[{i}].group", f"{g!r} is not a 1D group of the "
-                                                        f"mesh (its groups: {net.groups})"))
-        for a in case.anchors:
-            if a.name not in net.vertex_groups:
-                problems.append(("anchors", f"group {a.name!r} is not a 0D group of the mesh "
-                                            f"(its groups: {sorted(net.vertex_groups)})"))
-        for item in list(case.point_masses) + list(case.point_loads):
-            if item.s not in net.vertex_groups:
-                problems.append(("point_masses/point_loads", f"group {item.s!r} is not a 0D "
-                                                             "group of the mesh"))
-        anchored = np.zeros(len(net.points), dtype=bool)
-        for a in case.anchors:
-            if a.name in net.vertex_groups:
-                anchored[net.vertex_groups[a.name]] = True
-        cell_damper = np.array([links.get(net.groups[g], -1) for g in net.cell_group],
-                               np.int64).reshape(-1)
-        on_cable = np.zeros(len(net.points), dtype=bool)
-        on_cable[net.cells[cell_damper < 0].ravel()] = True
-        for e in np.nonzero(cell_damper >= 0)[0]:
-            a, b = (int(k) for k in net.cells[e])
-            i = int(cell_damper[e])
-            lost = [k for k in (a, b) if not (on_cable[k] or anchored[k])]
-            if lost or not (on_cable[a] or on_cable[b]):
-                k = lost[0] if lost else a
-                problems.append((f"dampers[{i}].group", (
-                    f"a cell of {case.dampers[i].group!r} ends at node {k} at "
-                    f"{net.points[k].tolist()}, " + ("on no cable and no anchor" if lost
-                                                     else "and joins no cable") +
-                    ": a damper joins two cable nodes, or a cable node and an anchor "
-                    "(one cell each)")))
-                break
-        # the dampers carry nothing in statics: a part held only through them is free
-        comp = connected_components(len(net.points), net.cells[cell_damper < 0])
-        free = sorted(set(comp.tolist()) - set(comp[anchored].tolist()))
-        if free:
-            k = int(np.nonzero(comp == free[0])[0][0])
-            problems.append(("anchors", f"{len(free)} part(s) of the network are held by no "
-                                        f"anchor (disconnected cables), e.g. the one with node "
-                                        f"{k} at {net.points[k].tolist()}"))
-        held = [(a, net.points[k]) for a in case.anchors if a.name in net.vertex_groups
-                for k in net.vertex_groups[a.name]]
-        problems += water_problems([a for a, _ in held], case.gravity, None,
-                                   getattr(case, "seabed", None), [p for _, p in held])
-        if problems:
-            raise CaseError(problems, case.source)
-        net, sides = split_clamps(net, case.anchors, cell_damper < 0, case.source)
-        secs = spec.sections
-        for i, c in enumerate(spec.cables):
-            strain = c.pretension / secs[c.section].EA
-            if strain > MAX_PLAUSIBLE_STRAIN:
-                self.warnings.append((f"cables[{i}].pretension", (
-                    f"pretension / EA is a strain of {100 * strain:.3g} %, above the "
-                    f"{100 * MAX_PLAUSIBLE_STRAIN:g} % that any cable material stays linear "
-                    "to: check the value and the section")))
-        cable = cell_damper < 0
-        cell_section = [by_group[net.groups[g]].section if net.groups[g] in by_group else None
-                        for g in net.cell_group]
-        # a damper's cell: no axial stiffness, no mass, stress-free at its mesh length
-        EA = np.array([secs[n].EA if n is not None else 0.0 for n in cell_section])
-        m = np.array([secs[n].mass if n is not None else 0.0 for n in cell_section])
-        T0 = np.array([by_group[net.groups[g]].pretension if net.groups[g] in by_group
-                       else 0.0 for g in net.cell_group])
-        c = np.ones(len(EA))
-        c[cable] = 1.0 / (1.0 + T0[cable] / EA[cable])
-        h = np.linalg.norm(net.points[net.cells[:, 1]] - net.points[net.cells[:, 0]], axis=1)
-        length = float(np.sum((c * h)[cable]))
-        geo = NetworkGeometry(net.points, net.cells, length, net, EA, m, c, cell_section,
-                              cell_damper=cell_damper, clamp_sides=sides)
-        # the seabed's contact law is smoothed over a fraction of the lightest cable's
-        # penetration (cablefem.seabed): the least submerged weight of the sections used
-        fl, g = getattr(case, "fluid", None), case.gravity.g
-        used = [secs[n] for n in sorted({n for n in cell_section if n is not None})]
-        w = [submerged_weight(fl, sec.mass, g, fl.diameter_on(sec)) if fl is not None
-             else sec.mass * g for sec in used]
-        self.submerged_weight = float(min([x for x in w if x > 0], default=max(w)))
-        self.force_scale = float(max(np.max(T0, initial=0.0),
-                                     np.max(m, initial=0.0) * case.gravity.g * length, 1e-300))
-        log.info("network %s: %d nodes, %d cells, %d cable groups, %d junctions, %d anchor "
-                 "groups, stress-free length %.6g m", spec.mesh.name, len(net.points),
-                 len(net.cells), len(net.groups), len(net.junctions), len(case.anchors),
-                 length)
-        return geo, net.points.copy()
-
-    def _coefficients(self) -> None:
-        geo = self.geometry
-        idx = self._cell_index = self._reference_cells()
-        self.EA, self.m, self.c = (fem.Function(self.W, name=n) for n in ("EA", "m", "c"))
-        for f, arr in ((self.EA, geo.cell_EA), (self.m, geo.cell_m), (self.c, geo.cell_c)):
-            f.x.array[:] = arr[idx].astype(PETSc.ScalarType)
+    builders = NETWORK
+    _at_node = None  # the cable cells at every node (cable_cells_at), made on first use
 
     def section_field(self, name: str, value):
         """A cell field (DG0) of ``value(section)`` of each cell's cable section, 0 on a
@@ -296,82 +359,35 @@ class NetworkModel(CableModel):
         per_cell = np.array([0.0 if n is None else float(value(secs[n]))
                              for n in self.geometry.cell_section])
         f = fem.Function(self.W, name=name)
-        f.x.array[:] = per_cell[self._cell_index].astype(PETSc.ScalarType)
+        f.x.array[:] = per_cell[self.cell_index].astype(PETSc.ScalarType)
         return f
 
     def cable_cells(self) -> np.ndarray:
         n_owned = self.mesh.topology.index_map(1).size_local
-        return self.geometry.is_cable[self._cell_index[:n_owned]]
+        return self.geometry.is_cable[self.cell_index[:n_owned]]
 
     def applies_damper_offsets(self) -> bool:
         """A network's dampers act at the string's node: their cells do not reach the two
         cable elements at their ends (the run estimates what that costs, docs/dampers.md)."""
         return False
 
-    def _damper_work(self, u_t, v_t, us_t, du_t):
+    def damper_work(self, u_t, v_t, us_t, du_t):
         """The dampers' virtual work: each cell of a damper's group a dashpot (and spring)
         between its nodes (:func:`cablefem.dampers.link_work`), on the owned cells."""
         from cablefem.dampers import link_work
 
         n_owned = self.mesh.topology.index_map(1).size_local
-        which = np.asarray(self.geometry.cell_damper)[self._cell_index[:n_owned]]
+        which = np.asarray(self.geometry.cell_damper)[self.cell_index[:n_owned]]
         ents = np.nonzero(which >= 0)[0].astype(np.int32)
         tags = dmesh.meshtags(self.mesh, 1, ents, (which[ents] + 1).astype(np.int32))
         h = fem.Function(self.W, name="damper_length")  # each cell's mesh length
         pts, cells = self.geometry.points, self.geometry.cells
-        ref = cells[self._cell_index]
+        ref = cells[self.cell_index]
         h.x.array[:] = np.linalg.norm(pts[ref[:, 1]] - pts[ref[:, 0]], axis=1)
         dx = ufl.Measure("dx", domain=self.mesh, subdomain_data=tags)
         return link_work(self.mesh, self.case.dampers, dx, h, u_t, v_t, us_t, du_t, self.t0)
 
-    def _build_anchors(self) -> list[AnchorBC]:
-        geo = self.geometry
-        net = geo.net
-        secs = self.case.network.sections
-        out = []
-        imap = self.V.dofmap.index_map
-
-        def held(name, node, kind, direction, spec, cell):
-            geo.anchor_nodes[name] = node
-            dofs = fem.locate_dofs_topological(self.V, 0, self._locate_node(node))
-            owned = bool(np.any(dofs < imap.size_local))
-            section = secs[geo.cell_section[cell]] if cell is not None else None
-            X = net.points[node].copy()
-            return AnchorBC(name, node, X, X.copy(), kind, direction, spec.motion, dofs,
-                            owned, section)
-
-        for spec in self.case.anchors:
-            for i, k in enumerate(net.vertex_groups[spec.name]):
-                k = int(k)
-                name = f"{spec.name}:{i}"
-                if k in geo.clamp_sides:  # a clamp a cable runs through: one per side
-                    for side in geo.clamp_sides[k]:
-                        out.append(held(side.name, side.node, "clamped", side.direction,
-                                        spec, side.cell))
-                        out[-1].clamp = name
-                    continue
-                at = np.nonzero(((net.cells[:, 0] == k) | (net.cells[:, 1] == k))
-                                & geo.is_cable)[0]  # its cables' cells
-                direction = None
-                if spec.kind == "clamped":
-                    if at.size == 0:  # only dampers end there
-                        raise CaseError([(f"anchors[{spec.name}].type", f"anchor {name} at "
-                                          f"node {k} holds no cable element, nothing to "
-                                          "clamp: make it 'pinned'")], self.case.source)
-                    direction = spec.direction
-                    if direction is None:
-                        other = net.cells[at[0]][net.cells[at[0]] != k][0]
-                        d = net.points[other] - net.points[k]
-                        direction = d / np.linalg.norm(d)
-                    direction = np.asarray(direction, float) / np.linalg.norm(direction)
-                out.append(held(name, k, spec.kind, direction, spec,
-                                int(at[0]) if at.size else None))
-        owners = self.comm.allreduce(np.array([int(a.owned) for a in out]))
-        if np.any(owners != 1):
-            raise RuntimeError("anchor ownership is not unique across ranks")
-        return out
-
-    def _bending_nodes(self) -> list[int]:
+    def bending_nodes(self) -> list[int]:
         """With ``solver.span_bending``: the nodes of :meth:`bending_vertices` (tagged in
         :attr:`dS`)."""
         if not is_on(self.case.solver.span_bending):
@@ -386,8 +402,8 @@ class NetworkModel(CableModel):
         outer string's) at each."""
         geo = self.geometry
         cells = np.asarray(geo.cells, np.int64)
-        at = self._cable_cells_at()
-        stops = ({int(k) for k in geo.anchor_nodes.values()} | set(self._node_tag)
+        at = self.cable_cells_at()
+        stops = ({int(k) for k in geo.anchor_nodes.values()} | set(self.line.node_tag)
                  | {int(k) for k in cells[~geo.is_cable].ravel()})
         secs = self.case.network.sections
         length = geo.cell_lengths
@@ -403,9 +419,9 @@ class NetworkModel(CableModel):
         return (np.asarray(rows, np.int64).reshape(-1, 3), np.asarray(EI, float),
                 np.asarray(hbar, float))
 
-    def _add_span_bending(self):
+    def add_span_bending(self):
         """``solver.span_bending`` on a network (docs/theory.md §6.1): the bending energy
-        at every node of :meth:`_bending_nodes`; at every other node of a cable (a clamped
+        at every node of :meth:`bending_nodes`; at every other node of a cable (a clamped
         anchor, a kink, a junction; not a free end or a pinned end) the span's moment
         ``EI κ_s`` is handed over on each of its elements, as at a single cable's clamps
         and kinks. The hand-over is constant along an element (P1: its tension, tangent
@@ -419,15 +435,15 @@ class NetworkModel(CableModel):
         cells = np.asarray(geo.cells, np.int64)
         cable = geo.is_cable
         n = len(geo.points)
-        degree = np.array([len(es) for es in self._cable_cells_at()])
+        degree = np.array([len(es) for es in self.cable_cells_at()])
         clamped = {int(a.node) for a in self.anchors if a.kind == "clamped"}
         hand = (degree >= 2) | np.isin(np.arange(n), sorted(clamped))
-        hand[self._bending_nodes()] = False
+        hand[self.bending_nodes()] = False
         self.EI = self.section_field("EI", lambda sec: sec.EI)
         c0 = fem.Function(self.W, name="c_outer")
-        c0.x.array[:] = np.asarray(geo.cell_c, float)[self._cell_index]
+        c0.x.array[:] = np.asarray(geo.cell_c, float)[self.cell_index]
         energy = (forms.span_bending_energy(self.u, self.t0, self.EI, self.mesh, c0)
-                  * self.dS(self._bend_tag))
+                  * self.dS(self.line.bend_tag))
         self.forms.add("span_bending", ufl.derivative(energy, self.u, self.du),
                        kind="static")
         # each cable element's sum of the unit vectors away from its hand-over ends (zero
@@ -435,10 +451,10 @@ class NetworkModel(CableModel):
         with quiet_compiler():
             space = fem.VectorFunctionSpace(self.mesh, ("DG", 0), dim=3)
         away = fem.Function(space, name="away_from_handover")
-        ends = cells[self._cell_index]
+        ends = cells[self.cell_index]
         d = geo.points[ends[:, 1]] - geo.points[ends[:, 0]]
         d = d / np.linalg.norm(d, axis=1)[:, None]
-        w = (hand[ends[:, 0]].astype(float) - hand[ends[:, 1]]) * cable[self._cell_index]
+        w = (hand[ends[:, 0]].astype(float) - hand[ends[:, 1]]) * cable[self.cell_index]
         away.x.array[:] = (w[:, None] * d).ravel()
         if self.comm.allreduce(int(np.count_nonzero(w)), op=MPI.SUM):
             T = self.forms.outputs["tension"]
@@ -449,9 +465,9 @@ class NetworkModel(CableModel):
             self.forms.add("end_moments", density / h * ufl.dx, kind="static")
         return energy
 
-    def _cable_cells_at(self) -> list[list[int]]:
+    def cable_cells_at(self) -> list[list[int]]:
         """The cable cells (not the dampers') at every node, in cell order (cached)."""
-        if getattr(self, "_at_node", None) is None:
+        if self._at_node is None:
             geo = self.geometry
             cells = np.asarray(geo.cells, np.int64)
             self._at_node = [[] for _ in range(len(geo.points))]
@@ -465,7 +481,7 @@ class NetworkModel(CableModel):
         through nodes of two cable elements that hold no anchor, up to a junction, a free
         end or an anchor: its cells, in order from ``k``, and the node it ends at."""
         geo = self.geometry
-        at, cells = self._cable_cells_at(), np.asarray(geo.cells, np.int64)
+        at, cells = self.cable_cells_at(), np.asarray(geo.cells, np.int64)
         anchored = {int(n) for n in geo.anchor_nodes.values()}
         chain, node, prev = [], int(k), -1
         while True:
@@ -483,5 +499,5 @@ class NetworkModel(CableModel):
         chain, _ = self.chain(self.geometry.anchor_nodes[name])
         return float(np.sum(self.geometry.cell_lengths[chain]))
 
-    def _item_nodes(self, item) -> list[int]:
+    def item_nodes(self, item) -> list[int]:
         return [int(k) for k in self.geometry.net.vertex_groups[item.s]]

@@ -30,7 +30,7 @@ from cablefem.petsc_utils import (
     lu_options,
 )
 
-__all__ = ["AnchorReactions", "AnchorForces"]
+__all__ = ["AnchorReactions"]
 
 
 class AnchorReactions:
@@ -163,6 +163,3 @@ class AnchorReactions:
     def __exit__(self, *exc):
         self.destroy()
 
-
-#: the earlier name
-AnchorForces = AnchorReactions

@@ -63,13 +63,28 @@ from dolfinx import fem
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from cablefem.cable import CableModel, comm_first
+from cablefem.cable import CableModel, string_anchors
+from cablefem.cable_geometry import cable_geometry
+from cablefem.contract import Builders
 from cablefem.description import CableDescription
 from cablefem.errors import CaseError
 from cablefem.geometry import straight_cable
+from cablefem.jit import quiet_compiler
+from cablefem.rod_kinematics import (
+    cayley_from_rotation,
+    cayley_rotation,
+    energy_density,
+    p1_product,
+    rod_strains,
+    rotation_matrix,
+    split,
+    virtual_rotation_map,
+)
+from cablefem.string_terms import add_model_terms, string_coefficients
 
-__all__ = ["BeamModel", "beam_stations", "cayley_from_rotation", "cayley_rotation",
-           "p1_product", "rotation_matrix", "virtual_rotation_map", "rod_strains", "rod_problems"]
+__all__ = ["BeamModel", "ROD", "beam_stations", "cayley_from_rotation", "cayley_rotation",
+           "p1_product", "rotation_matrix", "virtual_rotation_map", "rod_strains", "split",
+           "rod_problems", "rod_geometry", "rod_coefficients", "rod_anchors", "rod_bcs"]
 
 log = logging.getLogger(__name__)
 
@@ -79,35 +94,6 @@ log = logging.getLogger(__name__)
 SHEAR_FACTOR = 1.0e5
 #: default torsional stiffness when the case gives none: a solid circle, GJ = EI/(1 + nu)
 POISSON = 0.3
-
-
-# ----------------------------------------------------------------------------- NumPy side
-def _skew(a: np.ndarray) -> np.ndarray:
-    return np.array([[0.0, -a[2], a[1]], [a[2], 0.0, -a[0]], [-a[1], a[0], 0.0]])
-
-
-def rotation_matrix(q: np.ndarray) -> np.ndarray:
-    """``Λ(q)`` for a Cayley vector ``q`` (NumPy)."""
-    q = np.asarray(q, float)
-    Q = _skew(q)
-    return np.eye(3) + 4.0 / (4.0 + q @ q) * (Q + 0.5 * Q @ Q)
-
-
-def cayley_from_rotation(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Cayley vector of the smallest rotation taking unit vector ``a`` to unit vector ``b``:
-    ``q = 2 (a × b)/(1 + a·b)``. Raises ValueError for opposite vectors (180°)."""
-    a = np.asarray(a, float) / np.linalg.norm(a)
-    b = np.asarray(b, float) / np.linalg.norm(b)
-    d = 1.0 + float(a @ b)
-    if d < 1e-8:
-        raise ValueError("a rotation of 180 degrees has no Cayley vector")
-    return 2.0 * np.cross(a, b) / d
-
-
-def virtual_rotation_map(q: np.ndarray) -> np.ndarray:
-    """``H(q)`` with ``δθ = H δq`` (spatial virtual rotation from a variation of ``q``)."""
-    q = np.asarray(q, float)
-    return 4.0 / (4.0 + q @ q) * (np.eye(3) + 0.5 * _skew(q))
 
 
 def beam_stations(length: float, ends: dict[int, float], per_layer: float, growth: float,
@@ -159,56 +145,12 @@ def beam_stations(length: float, ends: dict[int, float], per_layer: float, growt
     return st
 
 
-# ----------------------------------------------------------------------------- UFL side
-def _uskew(a):
-    return ufl.as_matrix([[0.0, -a[2], a[1]], [a[2], 0.0, -a[0]], [-a[1], a[0], 0.0]])
-
-
-def cayley_rotation(q):
-    """``Λ(q)`` as a UFL expression."""
-    Q = _uskew(q)
-    return ufl.Identity(3) + 4.0 / (4.0 + ufl.dot(q, q)) * (Q + 0.5 * Q * Q)
-
-
-def split(w):
-    """Displacement and Cayley vector of the six-component unknown ``w``."""
-    return ufl.as_vector([w[0], w[1], w[2]]), ufl.as_vector([w[3], w[4], w[5]])
-
-
-def rod_strains(w, t0, frame, c=1.0):
-    """Material strains ``(Γ, K, directors)`` of the rod (module docstring)."""
-    u, q = split(w)
-    rs = (t0 + ufl.grad(u) * t0) / c
-    qs = ufl.grad(q) * t0 / c
-    L = cayley_rotation(q)
-    d = [L * E for E in frame]
-    omega = 4.0 / (4.0 + ufl.dot(q, q)) * (qs + 0.5 * ufl.cross(q, qs))
-    G = ufl.as_vector([ufl.dot(d[0], rs), ufl.dot(d[1], rs), ufl.dot(d[2], rs) - 1.0])
-    K = ufl.as_vector([ufl.dot(omega, d[0]), ufl.dot(omega, d[1]), ufl.dot(omega, d[2])])
-    return G, K, d
-
-
-def _p1_product(a, b, t0, mesh):
-    """Integrand whose one-point (midpoint) quadrature gives ``∫ a·b`` exactly for P1
-    fields on an element of length ``h``: ``a·b + (h²/12) ∂a·∂b``.
-
-    Every cell integral of the rod uses one point: FFCx 0.5 cannot compile a form that mixes
-    two quadrature rules on cells (it declares the Jacobian twice), and the stiffness needs
-    the one-point rule (no locking) while the mass must stay consistent."""
-    h = ufl.CellVolume(mesh)
-    if len(a.ufl_shape) == 0:
-        return a * b + h * h / 12.0 * ufl.dot(ufl.grad(a), t0) * ufl.dot(ufl.grad(b), t0)
-    return ufl.inner(a, b) + h * h / 12.0 * ufl.inner(ufl.grad(a) * t0, ufl.grad(b) * t0)
-
-
-#: public name of the one-point exact product of two P1 fields (user terms on the rod)
-p1_product = _p1_product
-
-
-def energy_density(G, K, EA, GA, EI, GJ):
-    """``Ψ`` per stress-free length."""
-    return 0.5 * (EA * G[2] ** 2 + GA * (G[0] ** 2 + G[1] ** 2)
-                  + EI * (K[0] ** 2 + K[1] ** 2) + GJ * K[2] ** 2)
+def rod_axial_damping(model):
+    """The rod's axial strain-rate damping: ``β EA (dΓ3/dt) δΓ3`` (the axial strain
+    ``Γ3`` and the one-point measure as :meth:`BeamModel.build_forms` made them)."""
+    G3, u = model.axial_strain, model.u
+    return (model.beta * model.EA * ufl.derivative(G3, u, model.v)
+            * ufl.derivative(G3, u, model.du) * model.c * model.dx_rod)
 
 
 # ----------------------------------------------------------------------------- the model
@@ -231,6 +173,124 @@ def rod_problems(case) -> list[tuple[str, str]]:
     return []
 
 
+def rod_geometry(model):
+    """The rod's stations, graded towards its clamps' and kinks' layers (:func:`beam_stations`),
+    on the string's chord and catenary (:func:`cablefem.cable_geometry.cable_geometry`)."""
+    g, r0 = cable_geometry(model)  # the string's: length, catenary, anchor nodes
+    case, sec, spec = model.case, model.case.section, model.spec
+    # a rod's force scale (Newton's tolerances, GA) is at least EI/l^2: a weightless
+    # unstressed rod under an end load has no tension to scale with
+    model.force_scale = max(model.force_scale, sec.EI / g.length**2)
+    p, q = model.anchor_positions
+    length = g.length
+    shape = model.catenary_shape  # the string's, through the same anchors
+    ends = {}
+    for end, a in enumerate(case.anchors):
+        if a.kind == "clamped":
+            T = float(shape.tension(np.array([0.0 if end == 0 else length]))[0])
+            # no tension (a weightless cable at its stress-free length): no layer
+            ends[end] = math.sqrt(sec.EI / (T * (1.0 + T / sec.EA))) if T > 0 else length
+            ends[end] = min(ends[end], length)
+    model.layer_lengths = ends
+    extra = ([pm.s for pm in case.point_masses] + [pl.s for pl in case.point_loads]
+             + list(model.damper_s))
+    # the kinks' layers (a point force turns the cable there), at the catenary's tension
+    kinks = {}
+    for s in extra:
+        T = float(shape.tension(np.array([s]))[0])
+        if T > 0:
+            kinks[s] = math.sqrt(sec.EI / (T * (1.0 + T / sec.EA)))
+    # refine scales the whole size function h(s) by 1/refine (a uniform refinement)
+    stations = beam_stations(length, ends, spec.layer_elements * model.refine,
+                             1.0 + (spec.growth - 1.0) / model.refine,
+                             length / (spec.span_elements * model.refine), tuple(extra),
+                             kinks)
+    names = (case.anchors[0].name, case.anchors[1].name)
+    geo = straight_cable(p, (q - p) / np.linalg.norm(q - p), stations, names)
+    return geo, shape.position(geo.stations)
+
+
+def rod_coefficients(model) -> None:
+    """The string's coefficients, the rod's stiffnesses (EI, GJ, GA, rhoI) and its
+    reference frame (E1 in the plane of chord and gravity, E3 along the chord)."""
+    string_coefficients(model)
+    sec, spec = model.case.section, model.case.beam
+    GJ = sec.GJ
+    if GJ <= 0.0:
+        GJ = sec.EI / (1.0 + POISSON)
+        if model.comm.rank == 0:
+            log.info("beam: section.GJ not given; GJ = EI/(1 + %.1f) = %.6g N m^2 (solid "
+                     "circle)", POISSON, GJ)
+    GA = spec.shear_stiffness if spec.shear_stiffness is not None else \
+        SHEAR_FACTOR * model.force_scale
+    model.section_values = {"EA": sec.EA, "EI": sec.EI, "GJ": GJ, "GA": GA,
+                           "rhoI": sec.mass * sec.EI / sec.EA}
+    m = model.mesh
+    model.EI = fem.Constant(m, PETSc.ScalarType(sec.EI))
+    model.GJ = fem.Constant(m, PETSc.ScalarType(GJ))
+    model.GA = fem.Constant(m, PETSc.ScalarType(GA))
+    model.rhoI = fem.Constant(m, PETSc.ScalarType(model.section_values["rhoI"]))
+    # the reference frame: E3 along the chord, E1 in the plane of chord and gravity
+    p, q = model.anchor_positions
+    E3 = (q - p) / np.linalg.norm(q - p)
+    gdir = np.asarray(model.case.gravity.direction, float)
+    trial = gdir - (gdir @ E3) * E3
+    if np.linalg.norm(trial) < 1e-6:  # a vertical chord
+        trial = np.eye(3)[int(np.argmin(np.abs(E3)))]
+        trial = trial - (trial @ E3) * E3
+    E1 = trial / np.linalg.norm(trial)
+    E2 = np.cross(E3, E1)
+    model._frame_np = (E1, E2, E3)
+    model.frame = [fem.Constant(m, np.asarray(E, dtype=PETSc.ScalarType))
+                  for E in model._frame_np]
+
+
+def rod_anchors(model):
+    """The string's anchors with six components per node: a clamp also holds the
+    rotation (its Cayley vector), a pinned anchor the position only."""
+    anchors = string_anchors(model)
+    E3 = model._frame_np[2]
+    for anc in anchors:
+        anc.bs = 6
+        if anc.kind == "clamped":
+            d3 = anc.direction if anc.node == 0 else -anc.direction
+            try:
+                anc.rotation = cayley_from_rotation(E3, d3)
+            except ValueError:
+                raise CaseError([(f"anchors.{anc.name}.direction",
+                                  "the clamp turns the rod by 180 degrees from its "
+                                  "chord: point it into the cable")],
+                                model.case.source) from None
+            anc.comps = (0, 1, 2, 3, 4, 5)
+            anc.moment_map = np.linalg.inv(virtual_rotation_map(anc.rotation)).T
+        else:
+            anc.comps = (0, 1, 2)
+            anc.moment_map = np.eye(3)
+    return anchors
+
+
+def rod_bcs(model):
+    """A clamp's condition on all six components; a pinned anchor's on the three
+    positions (each a Constant set by ``set_time``, ``model._pin_values``)."""
+    bcs, model._pin_values = [], []
+    for anc in model.anchors:
+        if anc.kind == "clamped":
+            bcs.append(fem.dirichletbc(model.u_bc, anc.dofs))
+            continue
+        verts = model.line.locate_node(anc.node)
+        for k in range(3):
+            dofs = fem.locate_dofs_topological(model.V.sub(k), 0, verts)
+            val = fem.Constant(model.mesh, PETSc.ScalarType(0.0))
+            model._pin_values.append((anc, k, val))
+            bcs.append(fem.dirichletbc(val, dofs, model.V.sub(k)))
+    return bcs
+
+
+#: what the rod is built from (:class:`cablefem.contract.Builders`)
+ROD = Builders(geometry=rod_geometry, coefficients=rod_coefficients, anchors=rod_anchors,
+               bcs=rod_bcs)
+
+
 class BeamModel(CableModel):
     """The rod counterpart of :class:`~cablefem.cable.CableModel` (same attributes, with six
     components per node: ``u`` holds displacement and Cayley vector).
@@ -241,6 +301,7 @@ class BeamModel(CableModel):
 
     bs = 6
     is_beam = True
+    builders = ROD
     kink_offsets = False  # the rod resolves its kinks' layers
 
     def has_hinges(self) -> bool:
@@ -254,7 +315,10 @@ class BeamModel(CableModel):
 
     def __init__(self, comm: MPI.Comm, description: CableDescription, prefix: str = "cable_",
                  refine: float = 1.0):
-        comm, case = comm_first(comm, description)
+        if not isinstance(comm, MPI.Comm) or not isinstance(description, CableDescription):
+            raise TypeError(f"expected (comm, description), got ({type(comm).__name__}, "
+                            f"{type(description).__name__})")
+        case = description
         problems = rod_problems(case)
         if not refine > 0:
             problems.append(("refine", f"must be > 0, got {refine}"))
@@ -265,80 +329,6 @@ class BeamModel(CableModel):
         super().__init__(comm, case, prefix)
         self.tension_only = False  # a rod carries compression (bending stiffness)
 
-    # ------------------------------------------------------------------ geometry
-    def _build_geometry(self):
-        g, r0 = super()._build_geometry()  # the string's: length, catenary, anchor nodes
-        case, sec, spec = self.case, self.case.section, self.spec
-        # a rod's force scale (Newton's tolerances, GA) is at least EI/l^2: a weightless
-        # unstressed rod under an end load has no tension to scale with
-        self.force_scale = max(self.force_scale, sec.EI / g.length**2)
-        p, q = self._anchor_positions
-        length = g.length
-        shape = self.catenary_shape  # the string's, through the same anchors
-        ends = {}
-        for end, a in enumerate(case.anchors):
-            if a.kind == "clamped":
-                T = float(shape.tension(np.array([0.0 if end == 0 else length]))[0])
-                # no tension (a weightless cable at its stress-free length): no layer
-                ends[end] = math.sqrt(sec.EI / (T * (1.0 + T / sec.EA))) if T > 0 else length
-                ends[end] = min(ends[end], length)
-        self.layer_lengths = ends
-        extra = ([pm.s for pm in case.point_masses] + [pl.s for pl in case.point_loads]
-                 + list(self.damper_s))
-        # the kinks' layers (a point force turns the cable there), at the catenary's tension
-        kinks = {}
-        for s in extra:
-            T = float(shape.tension(np.array([s]))[0])
-            if T > 0:
-                kinks[s] = math.sqrt(sec.EI / (T * (1.0 + T / sec.EA)))
-        # refine scales the whole size function h(s) by 1/refine (a uniform refinement)
-        stations = beam_stations(length, ends, spec.layer_elements * self.refine,
-                                 1.0 + (spec.growth - 1.0) / self.refine,
-                                 length / (spec.span_elements * self.refine), tuple(extra),
-                                 kinks)
-        names = (case.anchors[0].name, case.anchors[1].name)
-        geo = straight_cable(p, (q - p) / np.linalg.norm(q - p), stations, names)
-        return geo, shape.position(geo.stations)
-
-    def _space(self):
-        return fem.VectorFunctionSpace(self.mesh, ("Lagrange", 1), dim=6)
-
-    # ------------------------------------------------------------------ anchors
-    def _build_anchors(self):
-        anchors = super()._build_anchors()
-        E3 = self._frame_np[2]
-        for anc in anchors:
-            anc.bs = 6
-            if anc.kind == "clamped":
-                d3 = anc.direction if anc.node == 0 else -anc.direction
-                try:
-                    anc.rotation = cayley_from_rotation(E3, d3)
-                except ValueError:
-                    raise CaseError([(f"anchors.{anc.name}.direction",
-                                      "the clamp turns the rod by 180 degrees from its "
-                                      "chord: point it into the cable")],
-                                    self.case.source) from None
-                anc.comps = (0, 1, 2, 3, 4, 5)
-                anc.moment_map = np.linalg.inv(virtual_rotation_map(anc.rotation)).T
-            else:
-                anc.comps = (0, 1, 2)
-                anc.moment_map = np.eye(3)
-        return anchors
-
-    def _make_bcs(self):
-        bcs, self._pin_values = [], []
-        for anc in self.anchors:
-            if anc.kind == "clamped":
-                bcs.append(fem.dirichletbc(self.u_bc, anc.dofs))
-                continue
-            verts = self._locate_node(anc.node)
-            for k in range(3):
-                dofs = fem.locate_dofs_topological(self.V.sub(k), 0, verts)
-                val = fem.Constant(self.mesh, PETSc.ScalarType(0.0))
-                self._pin_values.append((anc, k, val))
-                bcs.append(fem.dirichletbc(val, dofs, self.V.sub(k)))
-        return bcs
-
     def set_time(self, t: float) -> None:
         changed = t != getattr(self, "_time", None)
         super().set_time(t)
@@ -347,38 +337,6 @@ class BeamModel(CableModel):
                 val.value = anc.displacement(t)[k]
 
     # ------------------------------------------------------------------ forms
-    def _coefficients(self) -> None:
-        super()._coefficients()
-        sec, spec = self.case.section, self.case.beam
-        GJ = sec.GJ
-        if GJ <= 0.0:
-            GJ = sec.EI / (1.0 + POISSON)
-            if self.comm.rank == 0:
-                log.info("beam: section.GJ not given; GJ = EI/(1 + %.1f) = %.6g N m^2 (solid "
-                         "circle)", POISSON, GJ)
-        GA = spec.shear_stiffness if spec.shear_stiffness is not None else \
-            SHEAR_FACTOR * self.force_scale
-        self.section_values = {"EA": sec.EA, "EI": sec.EI, "GJ": GJ, "GA": GA,
-                               "rhoI": sec.mass * sec.EI / sec.EA}
-        m = self.mesh
-        self.EI = fem.Constant(m, PETSc.ScalarType(sec.EI))
-        self.GJ = fem.Constant(m, PETSc.ScalarType(GJ))
-        self.GA = fem.Constant(m, PETSc.ScalarType(GA))
-        self.rhoI = fem.Constant(m, PETSc.ScalarType(self.section_values["rhoI"]))
-        # the reference frame: E3 along the chord, E1 in the plane of chord and gravity
-        p, q = self._anchor_positions
-        E3 = (q - p) / np.linalg.norm(q - p)
-        gdir = np.asarray(self.case.gravity.direction, float)
-        trial = gdir - (gdir @ E3) * E3
-        if np.linalg.norm(trial) < 1e-6:  # a vertical chord
-            trial = np.eye(3)[int(np.argmin(np.abs(E3)))]
-            trial = trial - (trial @ E3) * E3
-        E1 = trial / np.linalg.norm(trial)
-        E2 = np.cross(E3, E1)
-        self._frame_np = (E1, E2, E3)
-        self.frame = [fem.Constant(m, np.asarray(E, dtype=PETSc.ScalarType))
-                      for E in self._frame_np]
-
     def build_forms(self) -> None:
         u, a, du, t0, cc = self.u, self.a, self.du, self.t0, self.c
         dxr = ufl.dx(metadata={"quadrature_degree": 0})  # one point: locking-free
@@ -393,16 +351,18 @@ class BeamModel(CableModel):
         duu, dqq = split(du)
         au, aq = split(a)
         E3 = self.frame[2]
-        F_inertia = cc * (self.m * _p1_product(au, duu, t0, self.mesh)
-                          + self.rhoI * (_p1_product(aq, dqq, t0, self.mesh)
-                                         + _p1_product(ufl.dot(aq, E3), ufl.dot(dqq, E3),
+        F_inertia = cc * (self.m * p1_product(au, duu, t0, self.mesh)
+                          + self.rhoI * (p1_product(aq, dqq, t0, self.mesh)
+                                         + p1_product(ufl.dot(aq, E3), ufl.dot(dqq, E3),
                                                        t0, self.mesh))) * dxr
-        self._dxr, self._G3 = dxr, G[2]
+        #: Γ3 and the one-point cell measure (rod_axial_damping, translational_inner)
+        self.axial_strain, self.dx_rod = G[2], dxr
         # constant loads on P1 fields: one point integrates them exactly
-        self._set_forms(F_int=F_int,
+        add_model_terms(self, F_int=F_int,
                         F_weight=cc * self.m * ufl.inner(self.gravity, duu) * dxr,
                         F_inertia=F_inertia, du_t=duu, a_t=au, dx=dxr, u_t=split(u)[0],
-                        v_t=split(self.v)[0], us_t=split(self.u_static)[0])
+                        v_t=split(self.v)[0], us_t=split(self.u_static)[0],
+                        axial_damping=rod_axial_damping)
         # output fields (DG0 at the element midpoint, where the strains are sampled)
         self.forms.dx = dxr  # user terms too: FFCx 0.5 cannot mix cell rules (forms.add)
         self.forms.outputs = {"tension": self.EA * G[2], "strain": G[2]}
@@ -413,17 +373,11 @@ class BeamModel(CableModel):
         self.forms.energies = (kin * ufl.dx, self.Pi,
                                -ufl.inner(cc * self.m * self.gravity, split(u)[0]) * ufl.dx)
 
-    def _axial_damping_work(self):
-        """The rod's axial strain-rate damping: ``β EA (dΓ3/dt) δΓ3``."""
-        G3, u = self._G3, self.u
-        return (self.beta * self.EA * ufl.derivative(G3, u, self.v)
-                * ufl.derivative(G3, u, self.du) * self.c * self._dxr)
-
     def _twist_springs(self, pinned):
         _, qq = split(self.u)
         _, dqq = split(self.du)
         E3 = self.frame[2]
-        tags = self._vertex_tags({anc.node: i + 1 for i, anc in enumerate(pinned)})
+        tags = self.line.vertex_tags({anc.node: i + 1 for i, anc in enumerate(pinned)})
         ds = ufl.Measure("ds", domain=self.mesh, subdomain_data=tags)
         st = self.geometry.stations
         form = None
@@ -434,8 +388,14 @@ class BeamModel(CableModel):
             form = term if form is None else form + term
         return form
 
-    def _compile(self) -> None:
-        """The output spaces of three components and the moment expression."""
+    def compile(self) -> None:
+        """The string's (:meth:`CableModel.compile`), then the output spaces of three
+        components and the moment expression."""
+        super().compile()
+        with quiet_compiler():
+            self._compile_outputs()
+
+    def _compile_outputs(self) -> None:
         self.W3 = fem.VectorFunctionSpace(self.mesh, ("DG", 0), dim=3)
         self.V3 = fem.VectorFunctionSpace(self.mesh, ("Lagrange", 1), dim=3)
         # the output copies components node by node: both spaces must number nodes alike
@@ -477,6 +437,16 @@ class BeamModel(CableModel):
         f = fem.Function(self.W3, name=name)
         f.interpolate(self.moment_expr)
         return f
+
+    def translational(self, f):
+        """The displacement part (the first three components) of ``f``."""
+        return ufl.as_vector([f[i] for i in range(3)])
+
+    def translational_inner(self, a, b):
+        """``(integrand, measure)`` of the L2 product of two translational fields as the
+        rod integrates its mass: the one-point rule's exact P1 product (:func:`p1_product`)
+        on :attr:`forms`'s one-point measure."""
+        return p1_product(a, b, self.t0, self.mesh), self.forms.dx
 
     # ------------------------------------------------------------------ statics start
     def static_stages(self):

@@ -18,13 +18,13 @@ import time
 from dataclasses import dataclass
 
 import numpy as np
-import ufl
 from dolfinx import fem
 from dolfinx.fem import petsc as fpetsc
 from mpi4py import MPI
 from petsc4py import PETSc
 
 from cablefem.errors import StaticError
+from cablefem.hinge import hinge_fixed_point
 from cablefem.petsc_utils import (
     SNESHistory,
     assemble_jacobian,
@@ -37,7 +37,7 @@ from cablefem.petsc_utils import (
 from cablefem.reactions import AnchorReactions
 from cablefem.units import unit
 
-__all__ = ["StaticProblem", "StaticResult", "StaticError", "solve_static"]
+__all__ = ["StaticProblem", "StaticResult", "StaticError", "HingeSteps", "solve_static"]
 
 log = logging.getLogger(__name__)
 
@@ -68,7 +68,7 @@ def _make_snes(model, history: SNESHistory, bilateral: bool = False, prefix: str
                 "snes_atol": max(1e-10 * model.force_scale,
                                  10.0 * model.residual_floor(displaced=True)),
                 "snes_stol": 1e-14,
-                **lu_options(model.comm.size), **getattr(model, "static_options", {}),
+                **lu_options(model.comm.size), **model.static_options,
                 **extra}
     f_form = model.f_static_bilateral if bilateral else model.f_static
     j_form = model.j_static_bilateral if bilateral else model.j_static
@@ -119,127 +119,64 @@ def _fresh_pc(ksp: PETSc.KSP) -> None:
     pc.destroy()
 
 
-def _hinge_iterations(model, snes, x, history, reaction, forces, tol: float | None = None,
-                      max_iterations: int = 30, depth: int = 3) -> int:
-    """Fixed point hinge -> equilibrium -> anchor forces -> hinge (:mod:`cablefem.hinge`),
-    accelerated (Anderson mixing of depth ``depth`` on the hinges' (h, sigma_h, E)).
+class HingeSteps:
+    """Statics' hooks for the virtual hinges' fixed point
+    (:func:`cablefem.hinge.hinge_fixed_point`, which drives them): Newton at the current
+    hinges (:meth:`solve`), the state of the last equilibrium kept and restored, the
+    anchor forces at the equilibrium. ``x`` is the solution vector (updated in place);
+    :meth:`destroy` frees the vectors and solvers made here."""
 
-    The hinge depends on the anchor force only through ell ~ T^-1/2 and Delta; the plain
-    iteration contracts by 1e-2 to 1e-3 per step on a taut cable but only by about a half on
-    a sagging one with horizontal clamps (the hinge moves the sag, the sag the angle).
-    Converged when the anchor forces change by less than ``tol`` (default: Newton's own
-    force tolerance, ``max(atol, rtol |F|)`` of the SNES, times 10: the fixed point is then
-    as exact as the equilibrium inside it) between two equilibria, or (h, sigma_h) by less
-    than 1e-10 of sigma_h (the anchor force is exact to ~1e-10 and sigma_h ~ T^-1/2: the
-    iteration's noise floor; near it the force changes by more than Newton's tolerance,
-    the first element being stiff). ``forces`` is updated in place to the last
-    equilibrium's; returns the Newton iterations. A hinge that cannot be placed is an input
-    problem (:class:`cablefem.errors.CaseError` naming ``solver.outer_correction``)."""
-    from cablefem.errors import CaseError
-    from cablefem.hinge import HingeError
+    def __init__(self, model, snes: PETSc.SNES, x: PETSc.Vec, history: SNESHistory,
+                 reaction: AnchorReactions):
+        self.model, self.snes, self.x, self.reaction = model, snes, x, reaction
+        self._history = history
+        self.rtol, self.atol, _, _ = snes.getTolerances()
+        self.last = x.copy()
+        self.bilateral: PETSc.SNES | None = None  # compression allowed, made on first need
 
-    rtol, atol, _, _ = snes.getTolerances()
-    hinges = model.hinges
-
-    def place(f):
-        try:
-            return hinges.place(f)
-        except HingeError as err:
-            raise CaseError([("solver.outer_correction", str(err))],
-                            model.case.source) from None
-
-    def apply(z):
-        try:
-            hinges.apply(z)
-        except HingeError as err:
-            raise CaseError([("solver.outer_correction", str(err))],
-                            model.case.source) from None
-        model.set_time(0.0)
-
-    bilateral = []  # a SNES with compression allowed, made on first need
-
-    def solve(it):
-        ok, its = _try(snes, x, history)
+    def solve(self, it: int) -> tuple[bool, int]:
+        """Newton at the current hinges from the current state: (converged, iterations)."""
+        model, x, history = self.model, self.x, self._history
+        ok, its = _try(self.snes, x, history)
         if not ok and model.tension_only:
             # as for the leading order: an element the hinge step leaves slack (H is ~h into
             # the first element; a cable's strain T/EA can be far smaller) can make the
             # tension-only Jacobian singular; compression allowed first, then tension-only
-            last.copy(x)
-            if not bilateral:
-                bilateral.append(_make_snes(model, history, bilateral=True)[0])
-            ok2, its2 = _try(bilateral[0], x, history)
+            self.last.copy(x)
+            if self.bilateral is None:
+                self.bilateral = _make_snes(model, history, bilateral=True)[0]
+            ok2, its2 = _try(self.bilateral, x, history)
             its += its2
             if ok2:
-                ok, its3 = _try(snes, x, history)
+                ok, its3 = _try(self.snes, x, history)
                 its += its3
-        if not ok and history.norms and history.norms[-1][1] <= 100.0 * atol:
+        if not ok and history.norms and history.norms[-1][1] <= 100.0 * self.atol:
             ok = True  # stagnated at round-off near Newton's tolerance (a fine mesh)
             log.info("statics: virtual hinges, iteration %d: Newton stagnated at |F| = "
-                     "%.2e (atol %.2e), accepted", it, history.norms[-1][1], atol)
+                     "%.2e (atol %.2e), accepted", it, history.norms[-1][1], self.atol)
         return ok, its
 
-    its_total = 0
-    Z, G = [], []  # iterates and their images
-    z = place(forces)
-    scale = float(z[:, 1].max())  # lengths in units of the first sigma_h (fixed)
-    change_F = change_z = np.inf
-    z_done, last = hinges.current(), x.copy()  # the last hinges with an equilibrium
-    for it in range(1, max_iterations + 1):
-        apply(z)  # sets the region for z (kept by the partial steps below)
-        ok, its = solve(it)
-        its_total += its
-        theta, step, z0 = 0.0, 0.5, z_done
-        while not ok:  # continuation from the last equilibrium's hinges towards z
-            if step < 1.0 / 64:
-                raise StaticError(f"static equilibrium with the virtual hinges (iteration "
-                                  f"{it}) not found, also in steps towards them: Newton "
-                                  f"history {history.text()}")
-            last.copy(x)
-            apply(z0 + min(1.0, theta + step) * (z - z0))
-            ok, its = solve(it)
-            its_total += its
-            if ok:
-                x.copy(last)
-                theta = min(1.0, theta + step)
-                step *= 1.5
-                ok = theta >= 1.0
-                if not ok:
-                    continue
-            else:
-                step *= 0.5
-        z_done = hinges.current()
-        x.copy(last)
-        copy_in(x, model.u)
-        old = forces.copy()
-        forces[:] = reaction.compute(0.0, dynamic=False)
-        g = place(forces)
-        change_F = float(np.abs(forces - old).max())
-        change_z = float(np.abs(g - z).max() / scale)
-        tol_F = tol if tol is not None else 10.0 * max(atol, rtol * float(np.abs(forces).max()))
-        log.info("statics: virtual hinges, iteration %d: anchor force change %.2e (tolerance "
-                 "%.2e), hinge change %.2e of sigma_h, %d Newton iterations", it, change_F,
-                 tol_F, change_z, its)
-        if it > 1 and (change_F <= tol_F or change_z < 1e-10):
-            for b in bilateral:
-                b.destroy()
-            return its_total
-        Z.append(z.ravel() / scale)
-        G.append(g.ravel() / scale)
-        Z, G = Z[-(depth + 1):], G[-(depth + 1):]
-        R = [gg - zz for gg, zz in zip(G, Z)]
-        z_next = G[-1]
-        if len(R) > 1:  # Anderson: the combination of the last images with least residual
-            dR = np.column_stack([R[k + 1] - R[k] for k in range(len(R) - 1)])
-            dG = np.column_stack([G[k + 1] - G[k] for k in range(len(G) - 1)])
-            gamma = np.linalg.lstsq(dR, R[-1], rcond=1e-12)[0]
-            z_next = G[-1] - dG @ gamma
-        z = z_next.reshape(-1, 5) * scale
-        if not (np.all(np.isfinite(z)) and np.all(z[:, 1] > 0)):
-            z = g  # a wild extrapolation: the plain step
-            Z, G = [], []
-    raise StaticError(f"the virtual-hinge iteration did not converge in {max_iterations} "
-                      f"iterations (last anchor force change {change_F:.2e} N, hinge change "
-                      f"{change_z:.2e} of sigma_h)")
+    def keep(self) -> None:
+        """The current state is the last equilibrium."""
+        self.x.copy(self.last)
+
+    def restore(self) -> None:
+        """Back to the last equilibrium."""
+        self.last.copy(self.x)
+
+    def anchor_forces(self) -> np.ndarray:
+        """The anchor forces at the current state (put into ``model.u``)."""
+        copy_in(self.x, self.model.u)
+        return self.reaction.compute(0.0, dynamic=False)
+
+    def history(self) -> str:
+        """The last Newton history."""
+        return self._history.text()
+
+    def destroy(self) -> None:
+        for obj in (self.last, self.bilateral):
+            if obj is not None:
+                obj.destroy()
 
 
 class StaticProblem:
@@ -294,7 +231,7 @@ class StaticProblem:
         #: the strategies tried on the way, said once in the final line (their Newton
         #: histories at debug level): Newton failing from the guess is part of the method
         self.route: list[str] = []
-        stages = getattr(model, "static_stages", None)  # a rod: soft-shear pre-solves
+        stages = model.static_stages  # a rod: soft-shear pre-solves
         if stages is not None:
             last = x.copy()
             for label in stages():
@@ -356,7 +293,11 @@ class StaticProblem:
         reaction = self.reactions
         forces = reaction.compute(0.0, dynamic=False)
         if model.hinges:
-            total_its += _hinge_iterations(model, snes, x, history, reaction, forces)
+            hooks = HingeSteps(model, snes, x, history, reaction)
+            try:
+                total_its += hinge_fixed_point(model, hooks, forces)
+            finally:
+                hooks.destroy()
         model.u_static.x.array[:] = model.u.x.array
         T = model.tension_field()
         n_owned = model.mesh.topology.index_map(1).size_local
@@ -477,14 +418,10 @@ class StaticProblem:
         model, history = self.model, self.history
         prev = fem.Function(model.V, name="relaxation_anchor")
         kappa = fem.Constant(model.mesh, PETSc.ScalarType(self.RELAX_START))
-        u_t = model.u if model.bs == 3 else ufl.as_vector([model.u[i] for i in range(3)])
-        p_t = prev if model.bs == 3 else ufl.as_vector([prev[i] for i in range(3)])
-        d_t = model.du if model.bs == 3 else ufl.as_vector([model.du[i] for i in range(3)])
-        if model.bs == 3:
-            spring, dx = ufl.inner(u_t - p_t, d_t), ufl.dx
-        else:  # a rod integrates every cell term with one point: the P1 product's form
-            from cablefem.rod import p1_product
-            spring, dx = p1_product(u_t - p_t, d_t, model.t0, model.mesh), model.forms.dx
+        # the translational parts, their product as the model integrates its mass (a
+        # rod: every cell term with one point, the exact P1 product)
+        u_t, p_t, d_t = (model.translational(f) for f in (model.u, prev, model.du))
+        spring, dx = model.translational_inner(u_t - p_t, d_t)
         model.forms.add("static_relaxation", kappa * model.m * model.c * spring * dx,
                         kind="static")
         # full Newton steps: each step's problem is strongly convex and starts near its

@@ -25,7 +25,7 @@ def omega_discrete(n: int, k: int = 1) -> float:
 
 def node_value(model, f, k: int, comp: int) -> float:
     """Component ``comp`` of P1 function ``f`` at node ``k`` (station order), all ranks."""
-    idx = np.nonzero(model._owned_nodes == k)[0]
+    idx = np.nonzero(model.line.owned_nodes == k)[0]
     val = f.x.array[3 * idx[0] + comp] if idx.size else 0.0
     return model.comm.allreduce(float(val), op=MPI.SUM)
 

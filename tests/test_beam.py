@@ -99,7 +99,7 @@ def _free_end(model, load_term):
     static residual."""
     model.bcs = model.bcs[:1]
     model.anchors = model.anchors[:1]
-    verts = model._locate_node(len(model.geometry.stations) - 1)
+    verts = model.line.locate_node(len(model.geometry.stations) - 1)
     tags = dmesh.meshtags(model.mesh, 0, verts.astype(np.int32),
                           np.full(verts.size, 7, dtype=np.int32))
     ds = ufl.Measure("ds", domain=model.mesh, subdomain_data=tags)(7)

@@ -135,10 +135,14 @@ def test_rod_from_python_equals_case():
     _same_forces(model, twin)
 
 
-def test_old_argument_order_is_accepted():
-    """CableModel(case, comm), the order of version 0.2, builds the same model."""
+def test_old_argument_order_is_refused():
+    """CableModel(case, comm), the order of version 0.2, is refused since its shim went
+    (a TypeError naming the order, before any work), for the string and the rod alike."""
     case = parse_case(_stay_dict({"length": 202.0}))
-    assert CableModel(case, MPI.COMM_WORLD).length == CableModel(MPI.COMM_WORLD, case).length
+    assert CableModel(MPI.COMM_WORLD, case).length == pytest.approx(202.0, rel=1e-15)
+    for cls in (CableModel, BeamModel):
+        with pytest.raises(TypeError, match="comm, description"):
+            cls(case, MPI.COMM_WORLD)
     with pytest.raises(TypeError, match="comm, description"):
         CableModel(MPI.COMM_WORLD, {"section": {}})
 

@@ -97,7 +97,7 @@ def test_user_dashpot_damps_at_its_ratio_with_newton_at_full_speed():
     n, zeta, per_period, periods = 20, 0.05, 50, 4
     w = omega_discrete(n)
     dt = 2.0 * np.pi / w / per_period
-    model = CableModel(parse_case(_taut(n)), MPI.COMM_WORLD)
+    model = CableModel(MPI.COMM_WORLD, parse_case(_taut(n)))
     c = _constant(model, 2.0 * zeta * M * w)
     model.forms.add("dashpot", c * ufl.inner(model.v, model.du) * ufl.dx, kind="dynamic")
     model.compile()
@@ -199,7 +199,7 @@ def test_string_jacobians_derive_user_dashpot_and_added_mass():
     """A dashpot c v and an added mass m_a a (dynamic terms) on a taut string near its
     static state: J_dynamic's u, v and a parts and the mass form are the derivatives of
     F_dynamic (_check_derivatives), the added mass in the mass form included."""
-    model = CableModel(parse_case(_taut(12)), MPI.COMM_WORLD)
+    model = CableModel(MPI.COMM_WORLD, parse_case(_taut(12)))
     solve_static(model)
     du, dx = model.du, ufl.dx
     model.forms.add("dashpot", _constant(model, 0.3) * ufl.inner(model.v, du) * dx,
@@ -228,7 +228,7 @@ def test_rod_jacobians_derive_user_dashpot_and_added_mass():
     integrated with the rod's one-point rule, exact for P1 products by p1_product): J_dynamic
     and the mass form are the derivatives of F_dynamic (_check_derivatives). A cell integral
     of more points is refused (FFCx 0.5 cannot compile the Jacobian mixing the rules)."""
-    model = BeamModel(parse_case(_rod_case()), MPI.COMM_WORLD)
+    model = BeamModel(MPI.COMM_WORLD, parse_case(_rod_case()))
     solve_static(model)
     (vu, _), (_, aq) = split(model.v), split(model.a)
     duu, dqq = split(model.du)
@@ -256,10 +256,10 @@ def test_static_load_term_equals_case_load(kind):
     q = [0.0, 0.3, -0.2]
     if kind == "string":
         def make(loads):
-            return CableModel(parse_case(level_case(elements=20, **loads)), MPI.COMM_WORLD)
+            return CableModel(MPI.COMM_WORLD, parse_case(level_case(elements=20, **loads)))
     else:
         def make(loads):
-            return BeamModel(parse_case(_rod_case(**loads)), MPI.COMM_WORLD)
+            return BeamModel(MPI.COMM_WORLD, parse_case(_rod_case(**loads)))
     ref = make({"loads": [{"value": q}]})
     r_ref = solve_static(ref)
     user = make({})
@@ -291,7 +291,7 @@ def test_static_spring_and_load_closed_form_through_the_bilateral_twin():
     1e-4 of q/k at most."""
     n, k, qy = 40, 25.0, 2.5e-3
     lam = CHORD / L0
-    model = CableModel(parse_case(_taut(n)), MPI.COMM_WORLD)
+    model = CableModel(MPI.COMM_WORLD, parse_case(_taut(n)))
     u, du, dx = model.u, model.du, ufl.dx
     kk = _constant(model, k)
     model.forms.add("spring", kk * (u[1] * du[1] + u[2] * du[2]) * dx, kind="static")
@@ -322,7 +322,7 @@ def test_static_spring_and_load_closed_form_through_the_bilateral_twin():
 def test_misuse_is_refused():
     """A static term cannot depend on v (statics has none), a name is taken once, and the
     derived forms cannot be replaced: the way to change them is a term."""
-    model = CableModel(parse_case(_taut(4)), MPI.COMM_WORLD)
+    model = CableModel(MPI.COMM_WORLD, parse_case(_taut(4)))
     term = ufl.inner(model.v, model.du) * ufl.dx
     with pytest.raises(ValueError, match="kind='dynamic'"):
         model.forms.add("dashpot", term, kind="static")
@@ -344,7 +344,7 @@ def test_a_term_not_linear_in_du_or_a_is_refused_at_add(kind):
     """inner(du, du)*dx was accepted by add and failed in compile() ("too many values to
     unpack"); a dynamic term quadratic in a was accepted silently: both are refused at add,
     naming the term. A term linear in a (an added mass) is accepted."""
-    model = CableModel(parse_case(_taut(4)), MPI.COMM_WORLD)
+    model = CableModel(MPI.COMM_WORLD, parse_case(_taut(4)))
     du, a = model.du, model.a
     with pytest.raises(ValueError, match="'square'.*not linear in the test function"):
         model.forms.add("square", ufl.inner(du, du) * ufl.dx, kind=kind)
@@ -366,7 +366,7 @@ def test_a_spring_from_the_static_state_leaves_it_at_rest(from_static):
     round-off, 0.2 s); the spring k u, on the displacement from the stress-free reference,
     pulls the statically stretched string (u_x up to CHORD - L0 = 0.01) back and it moves
     (measured 3.6e-6 m at k = 25 N/m^2: far above round-off)."""
-    model = CableModel(parse_case(_taut(8)), MPI.COMM_WORLD)
+    model = CableModel(MPI.COMM_WORLD, parse_case(_taut(8)))
     disp = model.u - model.u_static if from_static else model.u
     model.forms.add("spring", _constant(model, 25.0) * ufl.inner(disp, model.du) * ufl.dx,
                     kind="dynamic")

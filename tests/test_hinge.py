@@ -209,6 +209,7 @@ def test_hinge_fixed_point_is_accelerated_and_tight(monkeypatch):
     import functools
     import logging
 
+    import cablefem.hinge as hinge
     import cablefem.statics as statics
 
     records = []
@@ -220,14 +221,14 @@ def test_hinge_fixed_point_is_accelerated_and_tight(monkeypatch):
     def solve(depth):
         records.clear()
         if depth == 0:
-            monkeypatch.setattr(statics, "_hinge_iterations", functools.partial(
+            monkeypatch.setattr(statics, "hinge_fixed_point", functools.partial(
                 plain, depth=0, max_iterations=200, tol=0.0))
         v, m, _ = _anchor_state(_sagging(6, EI=6.4e-3))
         return v, m, [r for r in records if "anchor force change" in r]
 
-    plain = statics._hinge_iterations
+    plain = hinge.hinge_fixed_point
     h = Keep()
-    logger = logging.getLogger("cablefem.statics")
+    logger = logging.getLogger("cablefem.hinge")
     level = logger.level
     logger.addHandler(h)
     logger.setLevel(logging.INFO)

@@ -328,8 +328,8 @@ def arc_network(path, EI: float, n: int, load: float, span_bending: bool = True)
 
 @pytest.mark.parametrize("load", [0.0, 0.3])
 def test_a_network_bends_like_the_single_cable(mpi_tmp_path, load):
-    """solver.span_bending on a network (cablefem.network.NetworkModel._add_span_bending)
-    against the single cable's (CableModel._add_span_bending, written separately: energy on
+    """solver.span_bending on a network (cablefem.network.NetworkModel.add_span_bending)
+    against the single cable's (string_terms.add_span_bending, written separately: energy on
     interior facets, hand-over on a kink's facet sides; the network's hand-over is
     integrated over the elements): the same cable, the same stress-free elements, 10 % sag
     at eps = 0.05, clamped with the hinges. The first four frequencies and the horizontal

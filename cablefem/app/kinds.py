@@ -39,7 +39,7 @@ def model_kind(model) -> str:
     """The kind of ``model``: ``"beam"``, ``"network"`` or ``"string"``."""
     if model.is_beam:
         return "beam"
-    return "network" if getattr(model, "is_network", False) else "string"
+    return "network" if model.is_network else "string"
 
 
 def kind_of(model) -> ModelKind:

@@ -142,7 +142,7 @@ class RunOutput:
         """Record the anchor forces at ``t`` (written in batches)."""
         self.times.append(t)
         F = np.array(forces, float)  # a copy: the rows below are views of it
-        if getattr(self.model, "hinges", None):  # rows outside the layer law's range
+        if self.model.hinges:  # rows outside the layer law's range
             for name, flag in self.model.hinges.fallback(F).items():
                 self.fallback.setdefault(name, []).append(flag)
         for name, N in zip(self._names, F):

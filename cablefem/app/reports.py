@@ -81,7 +81,7 @@ def report(b: Built, st: Statics, res: Resonance, static_entries: dict, dyn: Dyn
                              "anchor motion (its ramp)")
     if h.kinks.kinks:
         out.kinks = frag["kinks"] = _kinks(b, h, start, out.warnings)
-    gaps = getattr(b.model, "kink_gaps", [])
+    gaps = b.model.kink_gaps
     if gaps:  # network nodes where a cable kinks but has no kink moment
         k, where, why = gaps[0]
         out.warnings.add("kinks", f"{len(gaps)} node(s) where a cable kinks have no kink "

@@ -156,10 +156,10 @@ def build(comm: MPI.Comm, case: Case, asked: str, refine: float, n_modes: int | 
              _g(groups.get("eps_b")))
     out = Built(case, model, asked, refine, kind_of(model), wall, groups, n_modes, probe,
                 auto)
-    if getattr(model, "string_alone", False):  # section.EI = 0 (cablefem.chain)
+    if model.string_alone:  # section.EI = 0 (cablefem.chain)
         out.bending = {"EI": 0.0, "moments": False, "note": CHAIN_NOTE}
         log.info("%s", CHAIN_NOTE)
-    for key, message in list(case.warnings) + list(getattr(model, "warnings", [])):
+    for key, message in list(case.warnings) + list(model.warnings):
         out.warnings.add(key, message)
     if out.kind.resolves_layers:  # the rod: its mesh and section
         st = model.geometry.stations

@@ -34,7 +34,7 @@ class TouchdownOutput:
     def __init__(self, model, outdir: Path, resume_after: float | None = None):
         self.model = model
         self.active = getattr(model.case, "seabed", None) is not None
-        self.network = getattr(model, "is_network", False)
+        self.network = model.is_network
         self.rows: list[tuple] = []  # (time, line, s, x, y, z, grounded length)
         self._pending: list[tuple] = []
         self.csv = None

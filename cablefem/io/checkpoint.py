@@ -45,7 +45,7 @@ def write_checkpoint(model, outdir: Path, ck: Checkpoint, digest: str, extra: di
     if model.comm.rank == 0:
         tmp = Path(outdir) / (CHECKPOINT + ".tmp.npz")
         np.savez(tmp, u=u, v=v, time=ck.time, step=ck.step, level=ck.level, calm=ck.calm,
-                 layers=ck.layers, digest=digest, case=str(model.case.source), **extra)
+                 digest=digest, case=str(model.case.source), **extra)
         kill_point("checkpoint")
         os.replace(tmp, Path(outdir) / CHECKPOINT)
     model.comm.Barrier()
@@ -66,8 +66,7 @@ def read_checkpoint(outdir: Path, comm: MPI.Comm = MPI.COMM_WORLD) -> dict:
         raise ValueError(f"{path}: no checkpoint to restart from (a run writes one every "
                          "dynamics.checkpoint_every steps)")
     data["checkpoint"] = Checkpoint(float(data["time"]), int(data["step"]),
-                                    int(data["level"]), int(data["calm"]),
-                                    np.asarray(data.get("layers", np.zeros((0, 2)))))
+                                    int(data["level"]), int(data["calm"]))
     return data
 
 

@@ -269,7 +269,7 @@ class StringWriter(_SeriesWriter):
             else:  # by the cells (a split clamp's nodes share a point)
                 targets = geo.points
                 try:
-                    idx, ok = m._dof_nodes(S)[:n_owned], True
+                    idx, ok = m.line.dof_nodes(S)[:n_owned], True
                 except RuntimeError:
                     idx, ok = np.zeros(n_owned, np.int64), False
             allidx = m.comm.gather(idx, root=0)
