@@ -113,7 +113,15 @@ def assemble_design(records: list[CaseRecord], design_life_years: float, *,
                       "hours_per_year": r.hours_per_year,
                       "wall_time": r.wall_time if math.isfinite(r.wall_time) else None,
                       "window": None if r.window is None else [float(t) for t in r.window],
-                      "folder": r.folder, "damage": shares.get(id(r), {})})
+                      "folder": r.folder, "damage": shares.get(id(r), {}),
+                      "fatigue_windows": {loc: rep["window"] for loc, rep in r.fatigue.items()
+                                          if rep.get("window") is not None}})
+    whole = sorted({f"{r.name}/{r.seed}" for r in records for rep in r.fatigue.values()
+                    if (rep.get("window_rule") or {}).get("rule") == "all"})
+    if whole:
+        warnings.append(f"the fatigue window of {', '.join(whole)} is the whole run "
+                        "(fatigue.window = 'all'): its start-up counts as if it recurred "
+                        "over the design life")
     extremes = _extremes(groups, extreme_duration, warnings)
     complete = (all(r.status in FINISHED for r in records)
                 and all(f["complete"] for f in fatigue.values())
@@ -128,6 +136,9 @@ def _group(records: list[CaseRecord]) -> dict[str, list[CaseRecord]]:
     for r in records:
         groups.setdefault(r.name, []).append(r)
     for name, recs in groups.items():
+        seeds = [r.seed for r in recs]
+        if len(set(seeds)) < len(seeds):
+            raise ValueError(f"case {name!r}: a seed appears more than once in {seeds}")
         h = {float(r.hours_per_year) for r in recs}
         if len(h) > 1:
             raise ValueError(f"case {name!r}: its records have different hours per year "

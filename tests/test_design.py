@@ -114,6 +114,10 @@ def test_bad_input_is_refused():
     records[1].hours_per_year = 5000.0
     with pytest.raises(ValueError, match="'calm'.*hours per year"):
         assemble_design(records, 25.0)
+    records = two_by_two()
+    records[1].seed = 0
+    with pytest.raises(ValueError, match="'calm': a seed appears more than once"):
+        assemble_design(records, 25.0)
 
 
 def test_gumbel_fit_recovers_exact_moments():
@@ -202,6 +206,8 @@ def test_case_record_from_a_real_run(mpi_tmp_path):
     # the summary's steady-state peak is the same maximum over the same window
     assert r.maxima["p"]["max_moment"] == summary["anchors"]["p"]["steady_state_moment"]["peak"]
     design = assemble_design([r], 20.0)
+    # the demo's fatigue.window is 'all': the start-up is in every window: said
+    assert any("A/0 is the whole run" in w for w in design["warnings"])
     per_s = fat["p"]["damage"] / fat["p"]["duration"]
     # one product of 4 factors: a few roundings
     assert math.isclose(design["fatigue"]["p"]["damage"], per_s * 100 * 3600 * 20,
