@@ -246,12 +246,14 @@ def _extremes(groups: dict[str, list[CaseRecord]], duration: float | None,
                                            "tension_seed")):
             best = None
             for name, recs in done.items():
+                if any(loc not in r.maxima for r in recs):  # not reported by a record
+                    entry["complete"] = False
                 vals = [(float(r.maxima[loc][key]), r.seed, r.window) for r in recs
                         if loc in r.maxima and r.maxima[loc].get(key) is not None
                         and math.isfinite(r.maxima[loc][key])]
                 if not vals:
                     continue
-                if len(vals) < len(groups[name]):
+                if len(vals) < len(recs):  # a seed without the value (e.g. invalid moment)
                     entry["complete"] = False
                 top = max(vals)
                 if best is None or top[0] > best[0]:
@@ -312,6 +314,8 @@ def case_record(folder, name: str, seed: int, hours_per_year: float, *,
     status = str(summary.get("status", "missing"))
     wall = (summary.get("wall_time") or {}).get("total", math.nan)
     window = _summary_window(summary)
+    if window is None and status in FINISHED:  # no moment statistics: pinned anchors only
+        window = _csv_window(folder / "anchors.csv", summary.get("statistics_start"))
     fatigue = {}
     if status in FINISHED:
         try:
@@ -330,6 +334,21 @@ def _summary_window(summary: dict) -> tuple[float, float] | None:
             if w:
                 return float(w[0]), float(w[1])
     return None
+
+
+def _csv_window(path: Path, start: float | None) -> tuple[float, float] | None:
+    """The statistics window of a run's ``anchors.csv`` by the run's rule
+    (:func:`cablefem.app.statistics.window_start`: from ``start``, else the last third)."""
+    from cablefem.app.statistics import window_start
+    from cablefem.io.anchorcsv import read
+
+    if not path.is_file():
+        return None
+    data = read(path, ["tension"], empty_ok=True)
+    times = next(iter(data.values()))["time"] if data else np.zeros(0)
+    if times.size < 2:
+        return None
+    return window_start(times, start), float(times[-1])
 
 
 def _window_max(t: np.ndarray, v: np.ndarray, ok: np.ndarray, window) -> float | None:

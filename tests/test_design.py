@@ -215,3 +215,36 @@ def test_case_record_from_a_real_run(mpi_tmp_path):
     gone = case_record(mpi_tmp_path / "never-ran", "B", 0, 1.0)
     assert gone.status == "missing" and gone.fatigue == {} and gone.maxima == {}
     assert assemble_design([r, gone], 20.0)["complete"] is False
+
+
+def test_case_record_window_and_maxima_from_the_files(tmp_path):
+    """A run with pinned anchors only (no moment statistics in summary.json): the window is
+    the run's rule on anchors.csv's times (0..9 s: the last third, [6, 9]; from
+    statistics_start when the summary has it); the maxima are over it, a kink's over its
+    valid samples only; a pinned anchor has no moment (None)."""
+    from cablefem.io.anchorcsv import ANCHOR_COLUMNS, AnchorCSV
+
+    t = np.arange(10.0)
+    with AnchorCSV(tmp_path / "anchors.csv", ANCHOR_COLUMNS, MPI.COMM_SELF) as out:
+        out.write({"time": t, "anchor": ["a"] * 10, "Nx": t, "Ny": 0 * t, "Nz": 0 * t,
+                   "tension": 100.0 - (t - 7.0) ** 2})  # largest at t = 7: 100
+    moment = [5.0] * 10
+    moment[8], moment[2] = 50.0, 70.0  # t = 8: invalid; t = 2: outside the window
+    with open(tmp_path / "kinks.csv", "w") as fh:
+        fh.write("time,kink,s,tension,delta,moment,Mx,My,Mz,layer_length,valid\n")
+        for k in range(10):
+            fh.write(f"{t[k]},d/main,3.0,{10 + k},0,{moment[k]},0,{moment[k]},0,0.4,"
+                     f"{0 if k == 8 else 1}\n")
+    summary = {"status": "completed", "wall_time": {"total": 2.5},
+               "anchors": {"a": {"kind": "pinned"}}}
+    (tmp_path / "summary.json").write_text(json.dumps(summary))
+    r = case_record(tmp_path, "c", 1, 2.0)
+    assert r.window == (6.0, 9.0) and r.wall_time == 2.5 and r.seed == 1
+    assert r.maxima["a"] == {"max_moment": None, "max_tension": 100.0}
+    assert r.maxima["kink:d/main"] == {"max_moment": 5.0, "max_tension": 19.0}
+    summary["statistics_start"] = 1.5
+    (tmp_path / "summary.json").write_text(json.dumps(summary))
+    r = case_record(tmp_path, "c", 1, 2.0)
+    assert r.window == (1.5, 9.0) and r.maxima["kink:d/main"]["max_moment"] == 70.0
+    d = assemble_design([r], 1.0)
+    assert "max_moment" not in d["extremes"]["a"] and d["extremes"]["a"]["max_tension"] == 100
