@@ -84,8 +84,9 @@ def assemble_design(records: list[CaseRecord], design_life_years: float, *,
     ``complete``, ``definitions``, ``warnings`` (docs/design.md). ``extreme_duration`` (s):
     the duration of the most probable maxima (default: each case's window duration).
     ``year_seconds``: the length of a year, to check that the hours per year fit in one.
-    Raises ValueError for a design life that is not positive and finite, or records of one
-    case with different hours per year."""
+    Raises ValueError for no records, a design life or an ``extreme_duration`` that is not
+    positive and finite, a seed twice in a case, or records of one case with different or
+    negative hours per year."""
     if not (isinstance(design_life_years, (int, float)) and math.isfinite(design_life_years)
             and design_life_years > 0):
         raise ValueError(f"design_life_years must be positive and finite, got "
@@ -111,7 +112,7 @@ def assemble_design(records: list[CaseRecord], design_life_years: float, *,
     for r in records:
         cases.append({"name": r.name, "seed": r.seed, "status": r.status,
                       "hours_per_year": r.hours_per_year,
-                      "wall_time": r.wall_time if math.isfinite(r.wall_time) else None,
+                      "wall_time": _finite(r.wall_time),
                       "window": None if r.window is None else [float(t) for t in r.window],
                       "folder": r.folder, "damage": shares.get(id(r), {}),
                       "fatigue_windows": {loc: rep["window"] for loc, rep in r.fatigue.items()
@@ -131,7 +132,14 @@ def assemble_design(records: list[CaseRecord], design_life_years: float, *,
             "extremes": extremes, "definitions": dict(DEFINITIONS), "warnings": warnings}
 
 
+def _finite(x) -> float | None:
+    """``x`` as a float, or None (JSON null) when it is not a finite number."""
+    return float(x) if isinstance(x, (int, float)) and math.isfinite(x) else None
+
+
 def _group(records: list[CaseRecord]) -> dict[str, list[CaseRecord]]:
+    if not records:
+        raise ValueError("a design needs at least one record")
     groups: dict[str, list[CaseRecord]] = {}
     for r in records:
         groups.setdefault(r.name, []).append(r)

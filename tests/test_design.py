@@ -110,6 +110,8 @@ def test_a_failed_seed_makes_the_design_incomplete():
 def test_bad_input_is_refused():
     with pytest.raises(ValueError, match="design_life_years"):
         assemble_design(two_by_two(), 0.0)
+    with pytest.raises(ValueError, match="at least one record"):
+        assemble_design([], 25.0)
     records = two_by_two()
     records[1].hours_per_year = 5000.0
     with pytest.raises(ValueError, match="'calm'.*hours per year"):
