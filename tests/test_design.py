@@ -15,7 +15,6 @@ import pytest
 from mpi4py import MPI
 
 from cablefem.design import (
-    EULER_GAMMA,
     CaseRecord,
     assemble_design,
     case_record,
@@ -129,7 +128,7 @@ def test_gumbel_fit_recovers_exact_moments():
     mu0 + beta0 ln 10 (a Gumbel is max-stable)."""
     mu0, beta0, window = 1.0e4, 750.0, 600.0
     z = np.array([-1.0, 0.0, 1.0])  # sample mean 0, sample standard deviation (ddof 1) 1
-    x = mu0 + EULER_GAMMA * beta0 + math.pi * beta0 / math.sqrt(6.0) * z
+    x = mu0 + np.euler_gamma * beta0 + math.pi * beta0 / math.sqrt(6.0) * z
     mu, beta = gumbel_moments(x)
     assert math.isclose(mu, mu0, rel_tol=1e-14) and math.isclose(beta, beta0, rel_tol=1e-14)
     records = [CaseRecord("storm", s, 3.0, "finished", 1.0, (100.0, 100.0 + window), {},
@@ -153,7 +152,7 @@ def test_gumbel_fit_of_drawn_maxima_within_sampling_error():
     n, mu0, beta0 = 1000, 5.0, 2.0
     x = np.random.default_rng(11).gumbel(mu0, beta0, n)
     se_beta = beta0 * math.sqrt(1.1 / n)
-    se_mu = math.pi * beta0 / math.sqrt(6.0 * n) + EULER_GAMMA * se_beta
+    se_mu = math.pi * beta0 / math.sqrt(6.0 * n) + np.euler_gamma * se_beta
     records = [CaseRecord("c", s, 1.0, "finished", 1.0, (0.0, 60.0), {},
                           {"p": {"max_moment": float(v), "max_tension": float(v)}}, "")
                for s, v in enumerate(x)]
