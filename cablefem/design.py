@@ -30,7 +30,7 @@ from pathlib import Path
 import numpy as np
 
 __all__ = ["CaseRecord", "assemble_design", "write_design_figures", "case_record",
-           "gumbel_moments", "FINISHED", "EULER_GAMMA"]
+           "gumbel_moments", "window_maxima", "FINISHED", "EULER_GAMMA"]
 
 #: the statuses of a record whose numbers are whole (``cablefem run`` writes "completed")
 FINISHED = ("finished", "completed")
