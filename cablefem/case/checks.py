@@ -17,8 +17,8 @@ from cablefem.motion import (
     TableMotion,
     TimeFunction,
     default_ramp,
-    table_resolution,
 )
+from cablefem.timetables import table_resolution
 
 # ---------------------------------------------------------------------------------------------
 # Parsing, table by table.
@@ -59,9 +59,9 @@ def check_table_ends(case: Case, t_end: float) -> list[tuple[str, str]]:
 _START_FRACTION = 1e-3
 
 
-def _table_warnings(case: Case, dt: float, t_end: float) -> list[tuple[str, str]]:
+def table_warnings(case: Case, dt: float, t_end: float) -> list[tuple[str, str]]:
     """Valid but suspicious tables: what the time step cannot resolve
-    (:func:`cablefem.motion.table_resolution`), a motion table that does not start at the
+    (:func:`cablefem.timetables.table_resolution`), a motion table that does not start at the
     static position and at rest, and a held end where the velocity jumps to 0."""
     out = []
     for key, table in _tables(case):

@@ -53,7 +53,7 @@ _TIME_DOC = TableDoc("table", None, "", "Time factor of the load; default consta
     "hold": KeyDoc("boolean", False, "", "table: hold the last row's factor after the table "
                    "ends (false: a table ending before dynamics.t_end is an error)."),
 })
-_MOTION_KEYS = {
+MOTION_KEYS = {
     "harmonic": ("amplitude", "omega", "phase", "ramp"),
     "ellipse": ("omega", "axis_sin", "axis_cos", "ramp"),
     "table": ("file", "hold"),
