@@ -30,7 +30,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from cablefem.motion import _check_table, _read_csv, _Spline, ramp_factors
+from cablefem.motion import ramp_factors
+from cablefem.timetables import Spline, check_table, read_csv
 
 __all__ = ["Profile", "AiryWave", "VelocitySeries", "wave_number", "wave_kinematics",
            "read_velocity_csv", "flow_problems", "POWER_FLOOR", "jonswap", "jonswap_waves"]
@@ -58,7 +59,7 @@ class Profile:
 
     def __post_init__(self) -> None:
         if self.kind == "table":
-            z, f = _check_table(self.elevations, self.factors, None)
+            z, f = check_table(self.elevations, self.factors, None)
             object.__setattr__(self, "elevations", z)
             object.__setattr__(self, "factors", f)
         elif self.kind == "power":
@@ -221,13 +222,13 @@ class VelocitySeries:
     values: np.ndarray
     source: str | None = None
     hold: bool = False
-    _spline: _Spline = field(init=False, repr=False)
+    _spline: Spline = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
-        times, values = _check_table(self.times, self.values, 3)
+        times, values = check_table(self.times, self.values, 3)
         object.__setattr__(self, "times", times)
         object.__setattr__(self, "values", values)
-        object.__setattr__(self, "_spline", _Spline(times, values))
+        object.__setattr__(self, "_spline", Spline(times, values))
 
     def velocity(self, t: float) -> np.ndarray:
         return self._spline(t)
@@ -246,7 +247,7 @@ class VelocitySeries:
 def read_velocity_csv(path, key: str = "file") -> VelocitySeries:
     """A velocity history from a CSV file with the header ``time,vx,vy,vz`` (s, m/s); the
     rules and errors of :func:`cablefem.motion.read_motion_csv`."""
-    times, values = _read_csv(path, ("time", "vx", "vy", "vz"), key)
+    times, values = read_csv(path, ("time", "vx", "vy", "vz"), key)
     return VelocitySeries(times, values, source=str(path))
 
 
