@@ -18,7 +18,7 @@ from mpi4py import MPI
 from petsc4py import PETSc
 from scipy.integrate import solve_ivp
 
-from cablefem.asymptotics import far_field_offsets, virtual_hinge
+from cablefem.farfield import far_field_offsets, virtual_hinge
 from cablefem.cable import CableModel
 from cablefem.case import CaseError, load_case, parse_case
 from cablefem.modal import solve_modes
