@@ -14,7 +14,7 @@ from typing import Any
 from mpi4py import MPI
 
 from cablefem.anchor import Anchor
-from cablefem.describe import describe_cable, describe_network
+from cablefem.arguments import describe_cable, describe_network
 from cablefem.description import (
     BEAM_BOUNDS,
     BeamSpec,

@@ -4,7 +4,7 @@ geometry, mesh, loads, point masses, damping and solver switches, gathered in
 
 The case schema (:mod:`cablefem.case`) reuses these classes: a :class:`cablefem.case.Case` is
 a :class:`CableDescription` plus the run settings (dynamics, modal, fatigue, title).
-:func:`cablefem.describe.describe_cable` and :func:`~cablefem.describe.describe_network`
+:func:`cablefem.arguments.describe_cable` and :func:`~cablefem.arguments.describe_network`
 check a description built from Python objects; :func:`cablefem.create_cable` and
 :func:`cablefem.create_network` build the model from it.
 Pure Python/NumPy: no dolfinx import.

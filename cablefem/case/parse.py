@@ -10,6 +10,7 @@ import re
 import tomllib
 from pathlib import Path
 
+from cablefem.arguments import anchor_problems
 from cablefem.case.checks import check_table_ends, table_warnings
 from cablefem.case.environment import parse_fluid, parse_seabed
 from cablefem.case.keys import CASE_KEYS
@@ -39,7 +40,6 @@ from cablefem.case.tables import (
     parse_section,
     parse_time,
 )
-from cablefem.describe import anchor_problems
 from cablefem.description import BEAM_BOUNDS, NAME, Damper
 from cablefem.errors import CaseError
 from cablefem.flow import flow_problems

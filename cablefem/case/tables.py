@@ -12,6 +12,7 @@ from typing import Any
 
 import numpy as np
 
+from cablefem.arguments import zero_segments
 from cablefem.case.keys import MOTION_KEYS
 from cablefem.case.reader import Reader
 from cablefem.case.schema import (
@@ -21,7 +22,6 @@ from cablefem.case.schema import (
     Geometry,
     rayleigh_coefficients,
 )
-from cablefem.describe import zero_segments
 from cablefem.description import GEOMETRY_BOUNDS, GEOMETRY_KINDS
 from cablefem.motion import (
     EllipseMotion,
