@@ -242,10 +242,9 @@ def describe_cable(anchors: list[Anchor], section: Section, *, length: float | N
     """A checked description of a single cable (the arguments of
     :func:`cablefem.create_cable`, which see).
 
-    Raises
-    ------
-    CaseError
-        With every problem, each under its argument's name (``sag_ratio``, ``anchors[1].kind``).
+    Raises:
+        CaseError: With every problem, each under its argument's name (``sag_ratio``,
+            ``anchors[1].kind``).
     """
     problems: list[tuple[str, str]] = []
     if not isinstance(section, Section):

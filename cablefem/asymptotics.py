@@ -58,26 +58,25 @@ MAX_PERIOD_RATIO = 0.1
 class AnchorLayer:
     """Inner solution at clamped anchors (docs/theory.md §3, steps 2-8); arrays of shape ``(...)``.
 
-    Attributes
-    ----------
-    tension : T = |N| [N].
-    tangent : (..., 3) string tangent t = N/T at the anchor [-] (NaN where slack).
-    delta : anchor angle Delta = atan2(|c x t|, c.t) in [0, pi] [rad] (step 3).
-    normal : (..., 3) bending-plane normal b = (c x t)/|c x t| (step 4); zeros where
-        Delta ~ 0 (the moment vanishes there), NaN where Delta ~ pi (plane undefined while
-        the moment is not small) or slack.
-    psi0 : azimuth of the bending plane about c in the anchor frame (e1, e2, c), the
-        direction of t's projection on the plane normal to c, in (-pi, pi] [rad] (Eq. 25,
-        32); NaN where Delta ~ 0, Delta ~ pi or slack.
-    layer_length : ell = sqrt(EI / (T (1 + T/EA))) [m] (step 5, Eq. 38).
-    moment : anchor moment magnitude M(0) from the layer alone [N m] (step 8).
-    moment_vector : (..., 3) moment * normal [N m], in the anchor's direction of travel.
-    slack : True where T <= tension_floor or T is not finite: no layer, NaN results.
-    valid : not slack, finite, ell/l <= MAX_LENGTH_RATIO (if ``length`` was given) and
-        period_ratio <= MAX_PERIOD_RATIO (if ``quasi_static`` was given).
-    length_ratio : ell / l [-] (NaN when ``length`` was not given).
-    period_ratio : layer period / excitation period = omega ell^2 sqrt(m/EI) [-] (NaN when
-        ``quasi_static`` was not given).
+    Attributes:
+        tension: T = |N| [N].
+        tangent: (..., 3) string tangent t = N/T at the anchor [-] (NaN where slack).
+        delta: anchor angle Delta = atan2(|c x t|, c.t) in [0, pi] [rad] (step 3).
+        normal: (..., 3) bending-plane normal b = (c x t)/|c x t| (step 4); zeros where Delta ~ 0
+            (the moment vanishes there), NaN where Delta ~ pi (plane undefined while the moment is
+            not small) or slack.
+        psi0: azimuth of the bending plane about c in the anchor frame (e1, e2, c), the direction of
+            t's projection on the plane normal to c, in (-pi, pi] [rad] (Eq. 25, 32); NaN where
+            Delta ~ 0, Delta ~ pi or slack.
+        layer_length: ell = sqrt(EI / (T (1 + T/EA))) [m] (step 5, Eq. 38).
+        moment: anchor moment magnitude M(0) from the layer alone [N m] (step 8).
+        moment_vector: (..., 3) moment * normal [N m], in the anchor's direction of travel.
+        slack: True where T <= tension_floor or T is not finite: no layer, NaN results.
+        valid: not slack, finite, ell/l <= MAX_LENGTH_RATIO (if ``length`` was given) and
+            period_ratio <= MAX_PERIOD_RATIO (if ``quasi_static`` was given).
+        length_ratio: ell / l [-] (NaN when ``length`` was not given).
+        period_ratio: layer period / excitation period = omega ell^2 sqrt(m/EI) [-] (NaN when
+            ``quasi_static`` was not given).
     """
 
     tension: np.ndarray
@@ -116,10 +115,9 @@ def anchor_frame(c: ArrayLike, e1: ArrayLike | None = None) -> tuple[np.ndarray,
     It fixes what psi0 = 0 means: for a horizontal clamp psi0 = 0 is "up". A user-given
     ``e1`` is projected on that plane instead. e2 = c x e1.
 
-    Parameters
-    ----------
-    c : (..., 3) clamp direction (normalised here; must be nonzero).
-    e1 : optional (..., 3) reference direction for psi0 = 0.
+    Args:
+        c: (..., 3) clamp direction (normalised here; must be nonzero).
+        e1: optional (..., 3) reference direction for psi0 = 0.
     """
     c = _unit(c, "c")
     if e1 is not None:
@@ -140,26 +138,25 @@ def layer(N: ArrayLike, c: ArrayLike, EI: ArrayLike, EA: ArrayLike, *, form: str
           quasi_static: tuple[float, float] | None = None) -> AnchorLayer:
     """Boundary layer at clamped anchors from the anchor forces (docs/theory.md §3, steps 2-8).
 
-    Parameters
-    ----------
-    N : (..., 3) force transmitted by the span at the anchor, pointing into the span [N].
-    c : (3,) or (..., 3) clamp direction from the anchor into the cable (normalised here).
-    EI, EA : bending [N m^2] and axial [N] stiffness; ``EA = np.inf`` for inextensible.
-    form : "exact": M(0) = 2 sqrt(EI T) sin(Delta/2) sqrt(1 + (T/EA) cos^2(Delta/2)), the
-        slope of the first integral (Eq. 35); "explicit": M(0) = 2 sqrt(EI T (1 + T/EA))
-        sin(Delta/2), the slope of the explicit profile (Eq. 38-39). They differ by the
-        relative amount (T/EA) sin^2(Delta/2) / 2 to leading order.
-    e1 : reference direction for psi0 = 0 (see ``anchor_frame``).
-    length : stress-free cable length l [m], for the check ell/l <= MAX_LENGTH_RATIO.
-    tension_floor : anchors with T <= tension_floor [N] are slack.
-    quasi_static : (m [kg/m], omega [rad/s]) of the excitation, for the check that the
-        layer responds quasi-statically (Eq. 21-24). Its period is taken as
-        2 pi ell^2 sqrt(m/EI), so that period_ratio = omega ell^2 sqrt(m/EI), the square
-        root of the neglected transverse inertia relative to bending, m omega^2 ell^4/EI, on
-        the layer's length scale. A cantilever of length ell (period 2 pi ell^2
-        sqrt(m/EI)/1.875^2) gives 3.5 times less, a wave of wavenumber 1/ell on a beam
-        under T = EI/ell^2 sqrt(2) times less: this choice errs towards flagging.
-        Required: period_ratio <= MAX_PERIOD_RATIO = 0.1 (neglected inertia ~1 %).
+    Args:
+        N: (..., 3) force transmitted by the span at the anchor, pointing into the span [N].
+        c: (3,) or (..., 3) clamp direction from the anchor into the cable (normalised here).
+        EI, EA: bending [N m^2] and axial [N] stiffness; ``EA = np.inf`` for inextensible.
+        form: "exact": M(0) = 2 sqrt(EI T) sin(Delta/2) sqrt(1 + (T/EA) cos^2(Delta/2)), the slope
+            of the first integral (Eq. 35); "explicit": M(0) = 2 sqrt(EI T (1 + T/EA)) sin(Delta/2),
+            the slope of the explicit profile (Eq. 38-39). They differ by the relative amount (T/EA)
+            sin^2(Delta/2) / 2 to leading order.
+        e1: reference direction for psi0 = 0 (see ``anchor_frame``).
+        length: stress-free cable length l [m], for the check ell/l <= MAX_LENGTH_RATIO.
+        tension_floor: anchors with T <= tension_floor [N] are slack.
+        quasi_static: (m [kg/m], omega [rad/s]) of the excitation, for the check that the layer
+            responds quasi-statically (Eq. 21-24). Its period is taken as 2 pi ell^2 sqrt(m/EI), so
+            that period_ratio = omega ell^2 sqrt(m/EI), the square root of the neglected transverse
+            inertia relative to bending, m omega^2 ell^4/EI, on the layer's length scale. A
+            cantilever of length ell (period 2 pi ell^2 sqrt(m/EI)/1.875^2) gives 3.5 times less, a
+            wave of wavenumber 1/ell on a beam under T = EI/ell^2 sqrt(2) times less: this choice
+            errs towards flagging. Required: period_ratio <= MAX_PERIOD_RATIO = 0.1 (neglected
+            inertia ~1 %).
     """
     if form not in ("exact", "explicit"):
         raise ValueError(f"form must be 'exact' or 'explicit', got {form!r}")
@@ -281,15 +278,14 @@ def string_curvature(tangent: ArrayLike, tension: ArrayLike, mass: ArrayLike,
     From the string's balance of forces (Eq. 16), dt/dsigma = (m a - f)_perp / T, so
     kappa_s = t x (m a - f) / T (the cross product removes the part along t).
 
-    Parameters
-    ----------
-    tangent : (..., 3) string tangent, normalised here; its direction of travel is the one
-        of the result (at an anchor: pointing into the span, away from the anchor).
-    tension : (...) T [N]; NaN is returned where T <= 0.
-    mass : (...) or scalar, m per unit stress-free length [kg/m].
-    accel : (..., 3) acceleration of the point [m/s^2].
-    load : (..., 3) distributed load per unit stress-free length, weight included
-        (f = m g_vec) [N/m].
+    Args:
+        tangent: (..., 3) string tangent, normalised here; its direction of travel is the one of the
+            result (at an anchor: pointing into the span, away from the anchor).
+        tension: (...) T [N]; NaN is returned where T <= 0.
+        mass: (...) or scalar, m per unit stress-free length [kg/m].
+        accel: (..., 3) acceleration of the point [m/s^2].
+        load: (..., 3) distributed load per unit stress-free length, weight included (f = m g_vec)
+            [N/m].
     """
     t = np.asarray(tangent, float)
     T = np.asarray(tension, float)[..., None]
@@ -311,15 +307,14 @@ def composite_curvature(kappa_string: ArrayLike, sigmas: ArrayLike, deltas: Arra
     o_a = d sigma_a/ds: +1 for an anchor at the s = 0 end, -1 at the s = l end. Multiply
     by EI for the moment; at an anchor (o_a = +1) that is M_a(0) b_a + EI kappa_string(0).
 
-    Parameters
-    ----------
-    kappa_string : (..., P, 3) string curvature at P stations [1/m].
-    sigmas : (A, P) stress-free distance [m] of every station from each anchor.
-    deltas, ells : (..., A) anchor angles [rad] and layer lengths [m]; NaN delta (slack)
-        contributes nothing.
-    normals : (..., A, 3) bending-plane normals b_a.
-    orientation : (A,) values +-1 = d sigma_a/ds; by default inferred from the monotony of
-        each row of ``sigmas`` (ValueError when a row is not monotone).
+    Args:
+        kappa_string: (..., P, 3) string curvature at P stations [1/m].
+        sigmas: (A, P) stress-free distance [m] of every station from each anchor.
+        deltas, ells: (..., A) anchor angles [rad] and layer lengths [m]; NaN delta (slack)
+            contributes nothing.
+        normals: (..., A, 3) bending-plane normals b_a.
+        orientation: (A,) values +-1 = d sigma_a/ds; by default inferred from the monotony of each
+            row of ``sigmas`` (ValueError when a row is not monotone).
     """
     ks = np.asarray(kappa_string, float)
     sig = np.asarray(sigmas, float)

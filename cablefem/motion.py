@@ -151,16 +151,12 @@ class HarmonicMotion(_RampedMotion):
     default of this class; a case file's default is :func:`default_ramp`) the motion is not
     zero at ``t = 0`` unless every ``A_k sin(phi_k)`` is, and its velocity jumps there.
 
-    Parameters
-    ----------
-    amplitude : array_like, shape (3,)
-        Amplitudes ``A`` (m).
-    omega : float or array_like, shape (3,)
-        Circular frequencies (rad/s); a scalar applies to all components.
-    phase : float or array_like, shape (3,)
-        Phases ``phi`` (rad), default 0.
-    ramp : float
-        Duration (s) of the smooth start, >= 0; 0: none.
+    Args:
+        amplitude (array_like, shape (3,)): Amplitudes ``A`` (m).
+        omega (float or array_like, shape (3,)): Circular frequencies (rad/s); a scalar applies to
+            all components.
+        phase (float or array_like, shape (3,)): Phases ``phi`` (rad), default 0.
+        ramp (float): Duration (s) of the smooth start, >= 0; 0: none.
     """
 
     amplitude: np.ndarray
@@ -198,14 +194,11 @@ class EllipseMotion(_RampedMotion):
     ``docs/theory.md`` §9 is ``axis_sin = (0, 0, 1e-3)``, ``axis_cos = (0, 5e-4, 0)``,
     ``ramp = 0``.
 
-    Parameters
-    ----------
-    omega : float
-        Circular frequency ``w`` (rad/s).
-    axis_sin, axis_cos : array_like, shape (3,)
-        Semi-axes (m) multiplying ``sin(w t)`` and ``cos(w t) - 1``.
-    ramp : float
-        Duration (s) of the smooth start, >= 0; 0: none.
+    Args:
+        omega (float): Circular frequency ``w`` (rad/s).
+        axis_sin, axis_cos (array_like, shape (3,)): Semi-axes (m) multiplying ``sin(w t)`` and
+            ``cos(w t) - 1``.
+        ramp (float): Duration (s) of the smooth start, >= 0; 0: none.
     """
 
     omega: float
@@ -247,17 +240,12 @@ class TableMotion:
 
     The velocity and acceleration are the spline's first and second derivatives.
 
-    Parameters
-    ----------
-    times : array_like, shape (n,)
-        Strictly increasing times (s), n >= 2.
-    values : array_like, shape (n, 3)
-        Displacements (m) at those times.
-    source : str or None
-        The file the table came from, for :meth:`describe`.
-    hold : bool
-        The case accepts that the table ends before ``dynamics.t_end`` (held at its last
-        row); evaluation holds the end values either way.
+    Args:
+        times (array_like, shape (n,)): Strictly increasing times (s), n >= 2.
+        values (array_like, shape (n, 3)): Displacements (m) at those times.
+        source (str or None): The file the table came from, for :meth:`describe`.
+        hold (bool): The case accepts that the table ends before ``dynamics.t_end`` (held at its
+            last row); evaluation holds the end values either way.
     """
 
     times: np.ndarray
@@ -300,19 +288,14 @@ class TimeFunction:
 
     Build with :meth:`constant`, :meth:`harmonic` or :meth:`table`.
 
-    Parameters
-    ----------
-    kind : {"constant", "harmonic", "table"}
-    omega : float
-        Circular frequency (rad/s), > 0 for ``harmonic``.
-    phase : float
-        Phase (rad) for ``harmonic``.
-    times, factors : ndarray or None
-        Table (s, -) for ``table``: C2 cubic spline (not-a-knot ends), constant outside.
-    source : str or None
-        The file a table came from.
-    hold : bool
-        ``table``: the case accepts that it ends before ``dynamics.t_end`` (held).
+    Args:
+        kind (str): ``"constant"``, ``"harmonic"`` or ``"table"``.
+        omega (float): Circular frequency (rad/s), > 0 for ``harmonic``.
+        phase (float): Phase (rad) for ``harmonic``.
+        times, factors (ndarray or None): Table (s, -) for ``table``: C2 cubic spline (not-a-knot
+            ends), constant outside.
+        source (str or None): The file a table came from.
+        hold (bool): ``table``: the case accepts that it ends before ``dynamics.t_end`` (held).
     """
 
     kind: str = "constant"
@@ -377,19 +360,16 @@ class TimeFunction:
 def read_motion_csv(path: str | os.PathLike, key: str = "file") -> TableMotion:
     """Read an anchor motion table from a CSV file with the header ``time,ux,uy,uz``.
 
-    Parameters
-    ----------
-    path : path-like
-        CSV file: times (s) and displacements (m), one row per time, >= 2 rows, times
-        strictly increasing; whitespace around cells is ignored; blank lines and lines
-        starting with ``#`` are skipped.
-    key : str
-        Key path reported in errors (the case reader passes e.g. ``anchors[1].motion.file``).
+    Args:
+        path (path-like): CSV file: times (s) and displacements (m), one row per time, >= 2 rows,
+            times strictly increasing; whitespace around cells is ignored; blank lines and lines
+            starting with ``#`` are skipped.
+        key (str): Key path reported in errors (the case reader passes e.g.
+            ``anchors[1].motion.file``).
 
-    Raises
-    ------
-    cablefem.case.CaseError
-        Naming the file (its ``source``), the key and the line of every problem.
+    Raises:
+        cablefem.case.CaseError: Naming the file (its ``source``), the key and the line of every
+            problem.
     """
     times, values = read_csv(path, ("time", "ux", "uy", "uz"), key)
     return TableMotion(times, values, source=str(path))

@@ -104,26 +104,18 @@ def parse_case(data: dict, base_dir: str | os.PathLike = Path("."),
                dynamics: bool = True) -> Case:
     """Validate a case given as a dict of the TOML file's shape (see :data:`CASE_KEYS`).
 
-    Parameters
-    ----------
-    data : dict
-        The case.
-    base_dir : path-like
-        Folder against which relative CSV paths are resolved.
-    source : str
-        Name of the case in error messages and in ``Case.source``.
-    t_end : float, optional
-        The run's end (s) against which the tables' lengths are checked (``--t-end``);
-        default ``dynamics.t_end``.
-    dynamics : bool
-        False for a run without dynamics (``--static-only``, ``cablefem modes``): the
-        tables' lengths are not checked.
+    Args:
+        data (dict): The case.
+        base_dir (path-like): Folder against which relative CSV paths are resolved.
+        source (str): Name of the case in error messages and in ``Case.source``.
+        t_end (float, optional): The run's end (s) against which the tables' lengths are checked
+            (``--t-end``); default ``dynamics.t_end``.
+        dynamics (bool): False for a run without dynamics (``--static-only``, ``cablefem modes``):
+            the tables' lengths are not checked.
 
-    Raises
-    ------
-    CaseError
-        With every problem found (unknown keys, types, ranges, missing keys, combinations,
-        CSV files).
+    Raises:
+        CaseError: With every problem found (unknown keys, types, ranges, missing keys,
+            combinations, CSV files).
     """
     if not isinstance(data, dict):
         raise CaseError([("", f"expected a table of keys, got {show(data)}")], source)
@@ -215,10 +207,8 @@ def load_case(path: str | os.PathLike, *, t_end: float | None = None,
     """Read and validate a TOML case file; relative CSV paths are taken from its folder.
     ``t_end``, ``dynamics``: the run's, as in :func:`parse_case`.
 
-    Raises
-    ------
-    CaseError
-        If the file cannot be read, is not valid TOML, or has any problem (all reported).
+    Raises:
+        CaseError: If the file cannot be read, is not valid TOML, or has any problem (all reported).
     """
     path = Path(path)
     try:
