@@ -63,7 +63,15 @@ def _finite(name: str, a: np.ndarray) -> None:
 @dataclass(frozen=True)
 class StressSection:
     """Section for ``sigma = T/A + M/W``: ``area`` A [m^2] and (effective) elastic section
-    modulus ``modulus`` W = I/c_o [m^3], both finite and > 0."""
+    modulus ``modulus`` W = I/c_o [m^3], both finite and > 0.
+
+    Args:
+        area: Area A [m^2].
+        modulus: Elastic section modulus W [m^3].
+
+    Raises:
+        ValueError: A value not finite or not > 0.
+    """
 
     area: float
     modulus: float
@@ -103,6 +111,15 @@ class SNCurve:
 
     Fields: ``detail_category`` ds_C [stress unit] > 0; slopes ``m1, m2`` >= 1; ``knee``
     bool; cycles ``N_C, N_knee, N_cutoff`` > 0 with ``N_knee < N_cutoff``.
+
+    Args:
+        detail_category: ds_C [stress unit], > 0.
+        m1, m2: Slopes, >= 1.
+        knee: Whether the curve has a knee and a cut-off.
+        N_C, N_knee, N_cutoff: Cycles, > 0, ``N_knee < N_cutoff``.
+
+    Raises:
+        ValueError: A field out of its range.
     """
 
     detail_category: float
@@ -167,12 +184,22 @@ class SNCurve:
 
 
 def axial_stress(T: ArrayLike, section: StressSection) -> np.ndarray:
-    """Axial stress ``T/A`` [Pa] from the tension ``T`` [N]."""
+    """Axial stress ``T/A`` [Pa] from the tension ``T`` [N].
+
+    Args:
+        T: Tension [N].
+        section: The stress section.
+    """
     return np.asarray(T, float) / section.area
 
 
 def bending_stress(M: ArrayLike, section: StressSection) -> np.ndarray:
-    """Bending stress ``M/W`` [Pa] at the outer fibre from a signed moment ``M`` [N m]."""
+    """Bending stress ``M/W`` [Pa] at the outer fibre from a signed moment ``M`` [N m].
+
+    Args:
+        M: Signed moment [N m].
+        section: The stress section.
+    """
     return np.asarray(M, float) / section.modulus
 
 
@@ -182,7 +209,16 @@ def fibre_directions(M: ArrayLike, valid: ArrayLike | None = None, fibres: int =
     :func:`cablefem.fibres.scan_angles` (``2 pi k/fibres`` and the opposites: ``fibres`` rows
     for an even count, ``2 fibres`` for an odd one), in the plane ``e1, e2`` of the moment
     vectors ``M`` (n, 3) over the valid samples (:func:`cablefem.fibres.fibre_plane`). The
-    bending stress at direction ``w`` is ``M . w / W``."""
+    bending stress at direction ``w`` is ``M . w / W``.
+
+    Args:
+        M: (n, 3) moment vectors [N m].
+        valid: (n,) 0/1, or None (all finite rows).
+        fibres: Number of scanned directions, >= 1.
+
+    Returns:
+        The unit directions, one per row.
+    """
     M = np.asarray(M, float).reshape(-1, 3)
     ok = np.all(np.isfinite(M), axis=1)
     if valid is not None:
@@ -196,11 +232,17 @@ def anchor_stress(T: ArrayLike, M: ArrayLike, valid: ArrayLike | None, section: 
                   *, fibres: int = 36) -> tuple[np.ndarray, np.ndarray]:
     """Stress ``T/A + M/W`` [Pa] at a clamped anchor and the mask of the valid samples.
 
-    ``T`` (n,) tension [N]; ``M`` (n,) signed moment or (n, 3) moment vector [N m];
-    ``valid`` (n,) 0/1 or None. Returns ``sigma``: (n,), or (n, k) at the k scanned
-    directions of :func:`fibre_directions` for a moment vector, NaN (never zero) at invalid
-    samples; and
-    ``ok`` (n,) bool: ``T`` and ``M`` finite and ``valid`` nonzero.
+    Args:
+        T: (n,) tension [N].
+        M: (n,) signed moment or (n, 3) moment vector [N m].
+        valid: (n,) 0/1, or None.
+        section: The stress section.
+        fibres: Number of scanned directions (moment vectors).
+
+    Returns:
+        ``(sigma, ok)``: ``sigma`` (n,), or (n, k) at the k scanned directions of
+        :func:`fibre_directions` for a moment vector, NaN (never zero) at invalid samples;
+        ``ok`` (n,) bool: ``T`` and ``M`` finite and ``valid`` nonzero.
     """
     T, M = np.asarray(T, float), np.asarray(M, float)
     ok = np.isfinite(T) & (np.all(np.isfinite(M), axis=1) if M.ndim == 2 else np.isfinite(M))
@@ -217,7 +259,14 @@ def rainflow_cycles(series: ArrayLike) -> tuple[np.ndarray, np.ndarray, np.ndarr
     """Rainflow cycles (ASTM E1049-85 5.4.4, ``rainflow.extract_cycles``): ``ranges``,
     ``means`` [stress unit], ``counts`` (1.0 full cycle, 0.5 half cycle: the residue's ranges
     are kept as half cycles). Zero ranges (constant series) are left out; a 2-sample series
-    (for which rainflow 3.2.0 counts nothing) is one half cycle. NaN raises ValueError."""
+    (for which rainflow 3.2.0 counts nothing) is one half cycle. NaN raises ValueError.
+
+    Args:
+        series: 1-D stress history.
+
+    Returns:
+        ``(ranges, means, counts)``.
+    """
     x = np.asarray(series, float)
     if x.ndim != 1:
         raise ValueError(f"series must be 1-D (got shape {x.shape})")
@@ -242,7 +291,16 @@ def _cycles(ranges: ArrayLike, counts: ArrayLike) -> tuple[np.ndarray, np.ndarra
 
 
 def miner_damage(ranges: ArrayLike, counts: ArrayLike, curve: SNCurve) -> float:
-    """Miner's sum ``D = sum n_i / N(ds_i)`` (ranges below the cut-off do no damage)."""
+    """Miner's sum ``D = sum n_i / N(ds_i)`` (ranges below the cut-off do no damage).
+
+    Args:
+        ranges: Stress ranges [stress unit], >= 0.
+        counts: Their cycle counts, >= 0.
+        curve: The S-N curve.
+
+    Returns:
+        The damage D [-].
+    """
     r, n = _cycles(ranges, counts)
     return float(np.sum(n / curve.cycles_to_failure(r)))
 
@@ -254,7 +312,14 @@ def equivalent_stress_range(ranges: ArrayLike, counts: ArrayLike, m: float,
     (``N_C``): the range to compare with the detail category (single slope: ``D =
     (ds_E/ds_C)^m``). The moment of a single slope ``m``: all ranges count, even below a
     cut-off, so with a knee it does not give the curve's damage (the reports use
-    :func:`damage_equivalent_range` and ``ds_C D^(1/m1)``). 0 without cycles."""
+    :func:`damage_equivalent_range` and ``ds_C D^(1/m1)``). 0 without cycles.
+
+    Args:
+        ranges: Stress ranges, >= 0.
+        counts: Their cycle counts, >= 0.
+        m: The slope.
+        n_ref: Reference number of cycles (None: the total).
+    """
     r, n = _cycles(ranges, counts)
     m, total = _number("m", m), float(np.sum(n))
     nref = total if n_ref is None else _number("n_ref", n_ref)
@@ -267,7 +332,13 @@ def damage_equivalent_range(ranges: ArrayLike, counts: ArrayLike, curve: SNCurve
     at or above the cut-off, and nonzero), ``ds_eq`` the constant range of which ``n_d``
     cycles give the spectrum's damage ``D`` under ``curve``: ``N(ds_eq) = n_d / D``, on the
     slope ``m2`` if ``n_d / D > N_knee``. None if D = 0. (``n_d / D <= N_cutoff`` since every
-    damaging cycle has ``N <= N_cutoff``: the inverse exists; the clip is for rounding.)"""
+    damaging cycle has ``N <= N_cutoff``: the inverse exists; the clip is for rounding.)
+
+    Args:
+        ranges: Stress ranges, >= 0.
+        counts: Their cycle counts, >= 0.
+        curve: The S-N curve.
+    """
     r, n = _cycles(ranges, counts)
     N = np.atleast_1d(curve.cycles_to_failure(r))
     hit = np.isfinite(N)
@@ -279,7 +350,12 @@ def damage_equivalent_range(ranges: ArrayLike, counts: ArrayLike, curve: SNCurve
 
 
 def time_to_failure(D: float, duration: float) -> float:
-    """``duration / D``: the simulated loading repeated until ``D = 1`` (inf if D = 0)."""
+    """``duration / D``: the simulated loading repeated until ``D = 1`` (inf if D = 0).
+
+    Args:
+        D: Damage over the loading, >= 0.
+        duration: The loading's duration [time unit], > 0.
+    """
     D, duration = _number("D", D, 0.0, inclusive=True), _number("duration", duration)
     return math.inf if D == 0 else duration / D
 
@@ -353,15 +429,30 @@ def fatigue_report(times: ArrayLike, T: ArrayLike, M: ArrayLike, valid: ArrayLik
                    bins: int = 20, anchor: str = "anchor", year: float | None = None) -> dict:
     """Fatigue of one anchor: stresses, rainflow, Miner's damage, time to failure.
 
-    ``times`` (n,) strictly increasing [time unit]; ``T`` (n,) [N]; ``M`` (n,) signed or
-    (n, 3) vector [N m] (prefer the vector, see the module docstring: the damage is that of
-    the continuous worst direction, :mod:`cablefem.fibres`, scanned first at ``fibres``
-    directions and their opposites); ``valid`` (n,) 0/1 or None; ``invalid``: "raise" or
-    "drop" (the valid samples are then joined across the gaps into one history);
-    ``window``: None (all), "steady" (``t >= t_end - (t_end - t_0)/3``) or (t0, t1)
-    (``t0 <= t <= t1``); ``bins``: of the range histogram; ``anchor``: name for the
-    messages; ``year``: a year's length in the time unit (None: no ``damage_per_year``).
-    Returns a JSON-ready dict whose fields ``docs/fatigue.md`` defines.
+    Args:
+        times: (n,) strictly increasing [time unit].
+        T: (n,) tension [N].
+        M: (n,) signed moment or (n, 3) moment vector [N m] (prefer the vector, see the module
+            docstring: the damage is that of the continuous worst direction,
+            :mod:`cablefem.fibres`, scanned first at ``fibres`` directions and their opposites).
+        valid: (n,) 0/1, or None (all valid).
+        section: The stress section.
+        curve: The S-N curve.
+        invalid: "raise" or "drop" (the valid samples are then joined across the gaps into
+            one history).
+        window: None (all), "steady" (``t >= t_end - (t_end - t_0)/3``) or (t0, t1)
+            (``t0 <= t <= t1``).
+        fibres: Number of scanned directions.
+        bins: Bins of the range histogram.
+        anchor: Name for the messages.
+        year: A year's length in the time unit (None: no ``damage_per_year``).
+
+    Returns:
+        A JSON-ready dict whose fields ``docs/fatigue.md`` defines.
+
+    Raises:
+        ValueError: Inconsistent shapes, times not increasing, an invalid sample with
+            ``invalid="raise"``, or no valid sample in the window.
     """
     t, T, M = (np.asarray(a, float) for a in (times, T, M))
     n = t.size
@@ -441,7 +532,16 @@ def write_report(outdir: str | Path, reports: dict[str, dict], curve: SNCurve,
     """Write ``fatigue.json``, ``fatigue.md`` and ``fatigue_histogram.png`` into ``outdir``
     (atomically); ``reports``: anchor name -> :func:`fatigue_report` (each with its own
     ``section``). The top-level ``section`` is the reports' common one, None where they
-    differ (``section``: for reports without one). Returns the file names."""
+    differ (``section``: for reports without one). Returns the file names.
+
+    Args:
+        outdir: Output folder (created if needed).
+        reports: Anchor name -> :func:`fatigue_report`.
+        curve: The S-N curve.
+        section: The reports' section, for reports without one.
+        units: Name of the stress unit.
+        time_unit: Name of the time unit.
+    """
     out = Path(outdir)
     out.mkdir(parents=True, exist_ok=True)
     given = None if section is None else {"area": section.area, "modulus": section.modulus}
