@@ -219,20 +219,47 @@ def angle_profile(sigma: ArrayLike, delta: ArrayLike, ell: ArrayLike) -> np.ndar
     The angle between rod and string tangents (Eq. 38-39, step 6). ``sigma`` (..., P) >= 0
     [m] broadcasts against ``delta`` (...) [rad] and ``ell`` (...) [m] (a stations axis is
     appended to them).
+
+    Args:
+        sigma: (..., P) stress-free distance from the anchor [m], >= 0.
+        delta: (...) anchor angle [rad].
+        ell: (...) layer length [m].
+
+    Returns:
+        (..., P) angle [rad].
     """
     d, el = np.asarray(delta, float)[..., None], np.asarray(ell, float)[..., None]
     return 4 * np.arctan(np.tan(d / 4) * np.exp(-np.asarray(sigma, float) / el))
 
 
 def curvature_profile(sigma: ArrayLike, delta: ArrayLike, ell: ArrayLike) -> np.ndarray:
-    """Explicit layer curvature kappa(sigma) = (2/ell) sin(phi(sigma)/2) [1/m] (step 7)."""
+    """Explicit layer curvature kappa(sigma) = (2/ell) sin(phi(sigma)/2) [1/m] (step 7).
+
+    Args:
+        sigma: (..., P) stress-free distance from the anchor [m], >= 0.
+        delta: (...) anchor angle [rad].
+        ell: (...) layer length [m].
+
+    Returns:
+        (..., P) curvature [1/m].
+    """
     phi = angle_profile(sigma, delta, ell)
     return 2 / np.asarray(ell, float)[..., None] * np.sin(phi / 2)
 
 
 def moment_profile(sigma: ArrayLike, delta: ArrayLike, ell: ArrayLike,
                    EI: ArrayLike) -> np.ndarray:
-    """Explicit layer moment M(sigma) = EI kappa(sigma) [N m] (step 7)."""
+    """Explicit layer moment M(sigma) = EI kappa(sigma) [N m] (step 7).
+
+    Args:
+        sigma: (..., P) stress-free distance from the anchor [m], >= 0.
+        delta: (...) anchor angle [rad].
+        ell: (...) layer length [m].
+        EI: (...) bending stiffness [N m^2].
+
+    Returns:
+        (..., P) moment [N m].
+    """
     return np.asarray(EI, float)[..., None] * curvature_profile(sigma, delta, ell)
 
 
@@ -247,6 +274,15 @@ def exact_angle_profile(sigma: ArrayLike, delta: ArrayLike, T: ArrayLike, EI: Ar
     sinh(x), x = x0 + sigma/ell, sinh(x0) = q cot(Delta/2). Exact for all beta, Delta in
     [0, pi]; no iteration, and accurate in the exponentially small tail. beta = 0 gives
     the explicit profile. Broadcasting as in ``angle_profile`` (T, EI, EA like delta).
+
+    Args:
+        sigma: (..., P) stress-free distance from the anchor [m], >= 0.
+        delta: (...) anchor angle [rad].
+        T: (...) tension [N].
+        EI, EA: (...) bending [N m^2] and axial [N] stiffness.
+
+    Returns:
+        (..., P) angle [rad].
     """
     d = np.asarray(delta, float)[..., None]
     T = np.asarray(T, float)[..., None]
@@ -263,6 +299,15 @@ def exact_curvature_profile(sigma: ArrayLike, delta: ArrayLike, T: ArrayLike,
     """Exact layer curvature |dphi/dsigma| = (2/ell0) sin(phi/2) sqrt(1 + beta cos^2(phi/2)).
 
     [1/m], along ``exact_angle_profile`` (Eq. 35); times EI it is the exact moment profile.
+
+    Args:
+        sigma: (..., P) stress-free distance from the anchor [m], >= 0.
+        delta: (...) anchor angle [rad].
+        T: (...) tension [N].
+        EI, EA: (...) bending [N m^2] and axial [N] stiffness.
+
+    Returns:
+        (..., P) curvature [1/m].
     """
     phi = exact_angle_profile(sigma, delta, T, EI, EA)
     T = np.asarray(T, float)[..., None]
@@ -365,6 +410,20 @@ def graded_stations(length: float, anchor_s: ArrayLike, ells: ArrayLike, *,
     wider than h (the span, and a grading coarser than h when ell ~ length) is then split
     into equal parts <= h. Sorted, strictly increasing, both ends included, no spacing
     above h. Works for ell << h as well as ell ~ length.
+
+    Args:
+        length: The cable's stress-free length [m], > 0.
+        anchor_s: Stations of the anchors [m], in [0, length].
+        ells: Their layer lengths [m], > 0 (NaN: no grading there).
+        n_layer: Stations in each layer, >= 2.
+        layer_factor: The graded zone's length in layer lengths.
+        n_span: The span's spacing is ``length/n_span``.
+
+    Returns:
+        The stations [m].
+
+    Raises:
+        ValueError: Arguments out of range.
     """
     if not (np.isfinite(length) and length > 0):
         raise ValueError(f"length must be positive and finite, got {length}")

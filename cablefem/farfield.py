@@ -46,6 +46,11 @@ def far_field_offsets(delta: ArrayLike, T: ArrayLike, EI: ArrayLike,
 
     (beta = 0: D_n = 2 ell0 sin(Delta/2), D_t = -2 ell0 (1 - cos(Delta/2))). Returns
     ``(D_t, D_n)`` [m], broadcast over the arguments; NaN where T <= 0.
+
+    Args:
+        delta: Anchor angle Delta [rad].
+        T: Tension [N].
+        EI, EA: Bending [N m^2] and axial [N] stiffness (``EA = inf``: inextensible).
     """
     d = np.asarray(delta, float)
     T = np.asarray(T, float)
@@ -82,6 +87,11 @@ def virtual_hinge(delta: ArrayLike, T: ArrayLike, EI: ArrayLike,
     that the string turns about it as the rod's far field does; at a finite angle it moves
     at first order (:mod:`cablefem.hinge`: the normal offset). Returns ``(h, sigma_h)``
     [m]; NaN where T <= 0 or Delta >= pi.
+
+    Args:
+        delta: Anchor angle Delta [rad].
+        T: Tension [N].
+        EI, EA: Bending [N m^2] and axial [N] stiffness (``EA = inf``: inextensible).
     """
     d = np.asarray(delta, float)
     D_t, D_n = far_field_offsets(d, T, EI, EA)
@@ -117,6 +127,9 @@ def gradient_integrals(delta: ArrayLike) -> dict[str, np.ndarray]:
     rotation of the far field along the layer does to it), J_* what the tension gradient
     does to the line, m1 what it does to the clamp's curvature (the moment). Checked
     against a finite-difference solution of the boundary value problem in the tests.
+
+    Args:
+        delta: Anchor angle Delta [rad].
     """
     d = np.asarray(delta, float)
     c4 = np.cos(d / 4)
@@ -144,6 +157,16 @@ def far_field_second_order(N: ArrayLike, c: ArrayLike, q: ArrayLike, EI: float,
     at the anchor into the span, N; ``c``: clamp direction; ``q``: (3,) N/m. Zero for a
     straight, uniformly tensioned far field; ``I_n n`` and ``J_n n`` are written with
     ``c - (c.t) t`` and their limits at Delta = 0 (1 and -3/4 of it over sin Delta).
+
+    Args:
+        N: (3,) force at the anchor into the span [N].
+        c: (3,) clamp direction (normalised here).
+        q: (3,) ``m a - f`` per stress-free length [N/m].
+        EI: Bending stiffness [N m^2].
+        sigma_h: Stress-free length [m] the hinge removes (:func:`virtual_hinge`).
+
+    Returns:
+        The (3,) shift ``E`` [m].
     """
     N, c, q = (np.asarray(v, float) for v in (N, c, q))
     T0 = float(np.linalg.norm(N))
@@ -173,7 +196,15 @@ def gradient_moment_factor(delta: ArrayLike, tension: ArrayLike, tangent: ArrayL
     along the layer by ``T' = q.t`` per stress-free length (docs/theory.md §6.2; ``m1`` of
     :func:`gradient_integrals`; 1/4 at small Delta, where M ~ sqrt(T): the moment of the
     tension half a layer into the span). ``tangent`` (..., 3) into the span, ``q`` (..., 3)
-    = m a - f, N/m; NaN where T <= 0."""
+    = m a - f, N/m; NaN where T <= 0.
+
+    Args:
+        delta: Anchor angle Delta [rad].
+        tension: Tension T0 [N].
+        tangent: (..., 3) string tangent into the span.
+        q: (..., 3) ``m a - f`` [N/m].
+        EI: Bending stiffness [N m^2].
+    """
     T = np.asarray(tension, float)
     t = np.asarray(tangent, float)
     Tp = np.sum(t * np.asarray(q, float), axis=-1) / np.linalg.norm(t, axis=-1)

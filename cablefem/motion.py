@@ -45,9 +45,14 @@ __all__ = [
 #: the motion's lowest circular frequency (``2 pi / omega`` each)
 DEFAULT_RAMP_PERIODS = 3.0
 
+
 @runtime_checkable
 class Motion(Protocol):
-    """A prescribed anchor displacement ``u(t)`` from the static position (m)."""
+    """A prescribed anchor displacement ``u(t)`` from the static position (m).
+
+    Implementations: :class:`HarmonicMotion`, :class:`EllipseMotion`, :class:`TableMotion`,
+    or a user's class with these four methods, each taking the time ``t`` (s).
+    """
 
     def displacement(self, t: float) -> np.ndarray:
         """Displacement (m), shape (3,)."""
@@ -80,6 +85,13 @@ def ramp_factors(t: float, ramp: float) -> tuple[float, float, float]:
     ``r = 10 x^3 - 15 x^4 + 6 x^5`` with ``x = t/ramp`` on ``0 <= t <= ramp``, 0 before and
     1 after: ``r(0) = 0``, ``r(ramp) = 1``, and ``r'``, ``r''`` vanish at both ends, so ``r``
     is C2 everywhere. ``ramp = 0``: 1 at all times (no ramp).
+
+    Args:
+        t: Time (s).
+        ramp: The ramp's duration (s), >= 0.
+
+    Returns:
+        ``(r, dr/dt, d2r/dt2)``.
     """
     if ramp <= 0.0 or t >= ramp:
         return 1.0, 0.0, 0.0
@@ -94,7 +106,15 @@ def ramp_factors(t: float, ramp: float) -> tuple[float, float, float]:
 
 def default_ramp(omega: Any, amplitude: Any = None) -> float:
     """:data:`DEFAULT_RAMP_PERIODS` periods of the lowest circular frequency (rad/s) among the
-    components of non-zero ``amplitude`` (all components without one, or if all are zero)."""
+    components of non-zero ``amplitude`` (all components without one, or if all are zero).
+
+    Args:
+        omega: Circular frequency (rad/s), a scalar or per component (3,).
+        amplitude: Amplitudes per component (3,), or None.
+
+    Returns:
+        The ramp (s); inf for a frequency so small that its periods overflow.
+    """
     w = np.broadcast_to(np.asarray(omega, dtype=float), (3,))
     if amplitude is not None:
         moving = np.asarray(amplitude, dtype=float) != 0
@@ -379,6 +399,16 @@ def read_factor_csv(path: str | os.PathLike, key: str = "file") -> TimeFunction:
     """Read a load-factor table from a CSV file with the header ``time,factor``.
 
     Same rules and errors as :func:`read_motion_csv`; times in s, factors dimensionless.
+
+    Args:
+        path: The CSV file.
+        key: Key path reported in errors.
+
+    Returns:
+        A table :class:`TimeFunction`.
+
+    Raises:
+        cablefem.case.CaseError: Naming the file, the key and the line of every problem.
     """
     times, factors = read_csv(path, ("time", "factor"), key)
     return TimeFunction.table(times, factors[:, 0], source=str(path))

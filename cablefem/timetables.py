@@ -29,7 +29,19 @@ ACCELERATION_STEP_FRACTION = 0.1
 
 
 def check_table(times: Any, values: Any, columns: int | None) -> tuple[np.ndarray, np.ndarray]:
-    """Validate a table: >= 2 strictly increasing finite times, matching finite values."""
+    """Validate a table: >= 2 strictly increasing finite times, matching finite values.
+
+    Args:
+        times: (n,) times (s).
+        values: (n,) values, or (n, columns).
+        columns: Number of columns of ``values``, or None for a 1-D table.
+
+    Returns:
+        ``(times, values)`` as read-only float arrays.
+
+    Raises:
+        ValueError: Naming what is wrong.
+    """
     times = np.array(times, dtype=float)
     values = np.array(values, dtype=float)
     if times.ndim != 1 or times.size < 2:
@@ -47,7 +59,14 @@ def check_table(times: Any, values: Any, columns: int | None) -> tuple[np.ndarra
 
 
 class Spline:
-    """C2 cubic spline (not-a-knot ends) through a table, held constant outside it."""
+    """C2 cubic spline (not-a-knot ends) through a table, held constant outside it.
+
+    Args:
+        times: (n,) strictly increasing times (s), n >= 2.
+        values: (n,) or (n, k) values at those times.
+
+    Calling it with ``(t, nu)`` gives the ``nu``-th time derivative at ``t`` (s).
+    """
 
     def __init__(self, times: np.ndarray, values: np.ndarray) -> None:
         from scipy.interpolate import CubicSpline
@@ -67,7 +86,13 @@ def table_resolution(times: np.ndarray, values: np.ndarray, dt: float) -> list[s
     """What a time step ``dt`` (s) cannot resolve of a table's spline: rows closer than
     ``dt`` (what happens between two steps is lost), and an acceleration (second derivative,
     piecewise linear in the spline) that changes within one step by more than
-    :data:`ACCELERATION_STEP_FRACTION` of its range over the table. Messages, [] if none."""
+    :data:`ACCELERATION_STEP_FRACTION` of its range over the table. Messages, [] if none.
+
+    Args:
+        times: (n,) times of the rows (s).
+        values: (n,) or (n, k) values at the rows.
+        dt: The time step (s).
+    """
     times = np.asarray(times, float)
     values = np.asarray(values, float).reshape(times.size, -1)
     out = []
@@ -113,6 +138,15 @@ def read_csv(path: str | os.PathLike, columns: tuple[str, ...],
     """Read a numeric CSV with the header ``columns``; return (first column, other columns).
 
     Blank lines and lines starting with ``#`` are skipped. Every problem names its line.
+
+    Args:
+        path: The CSV file.
+        columns: The header's column names, the first the time.
+        key: Key path reported in errors.
+
+    Raises:
+        CaseError: Naming the file, the key and the line of every problem (at most 10,
+            then their count).
     """
 
 
