@@ -92,11 +92,24 @@ def create_rod(comm: MPI.Comm, anchors: list[Anchor], section: Section, *,
                layer_elements: float = 8.0, growth: float = 1.1, span_elements: int = 100,
                shear_stiffness: float | None = None, refine: float = 1.0, **options):
     """The reference rod (:class:`cablefem.rod.BeamModel`, geometrically exact, bending
-    stiffness everywhere) of the same cable as :func:`create_cable` (same arguments, but
-    not a polyline; ``elements``, ``grading``, ``tension_only``, ``outer_correction`` and
-    ``span_bending`` do not apply). Its mesh: ``layer_elements`` per layer length at a
-    clamp, ``growth`` ratio of neighbouring elements, at most l / ``span_elements`` long,
-    all scaled by ``refine``; ``shear_stiffness`` GA (N), default 1e5 times the largest tension."""
+    stiffness everywhere) of the same cable as :func:`create_cable`.
+
+    Args:
+        comm: MPI communicator (collective).
+        anchors: The two :class:`cablefem.anchor.Anchor` (first at ``s = 0``).
+        section: The cross-section (:class:`cablefem.properties.Section`).
+        layer_elements: Elements per layer length at a clamp.
+        growth: Ratio of the lengths of neighbouring elements.
+        span_elements: Elements are at most l / ``span_elements`` long.
+        shear_stiffness: GA (N); default 1e5 times the largest tension.
+        refine: Scales the mesh density (> 0).
+        **options: The keyword arguments of :func:`create_cable`, but not ``polyline``;
+            ``elements``, ``grading``, ``tension_only``, ``outer_correction`` and
+            ``span_bending`` do not apply.
+
+    Raises:
+        CaseError: Every problem of the arguments, each under the argument's name.
+    """
     from cablefem.rod import BeamModel
 
     prefix = options.pop("petsc_options_prefix", "cable_")

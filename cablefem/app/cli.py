@@ -244,7 +244,14 @@ def _compare(args) -> int:
 
 def main(argv: list[str] | None = None) -> int:
     """Entry point; an unexpected exception becomes one line (``CABLEFEM_DEBUG=1``: the
-    traceback) and exit code 1."""
+    traceback) and exit code 1.
+
+    Args:
+        argv: The arguments (default ``sys.argv[1:]``).
+
+    Returns:
+        The exit code (see the module docstring).
+    """
     try:
         return _main(argv)
     except KeyboardInterrupt:  # outside a run's own handling (e.g. while reading input)

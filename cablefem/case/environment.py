@@ -15,6 +15,14 @@ from cablefem.motion import TimeFunction
 
 
 def parse_seabed(r: Reader | None) -> Seabed | None:
+    """``[seabed]``: the seabed's elevation, stiffness, damping and friction.
+
+    Args:
+        r: The table's reader, or None (no seabed).
+
+    Returns:
+        The :class:`~cablefem.description.Seabed`, or None.
+    """
     return None if r is None else Seabed(
         r.number("z"), r.number("stiffness", gt=0), r.number("damping", ge=0),
         r.number("friction", ge=0), r.number("friction_velocity", gt=0))
@@ -22,7 +30,16 @@ def parse_seabed(r: Reader | None) -> Seabed | None:
 
 def parse_fluid(r: Reader | None, section, base_dir: Path) -> Fluid | None:
     """``[fluid]``: the diameter defaults to the section's (``section`` None, a network's:
-    to each cable's section's, checked by the caller; the diameter stays None)."""
+    to each cable's section's, checked by the caller; the diameter stays None).
+
+    Args:
+        r: The table's reader, or None (no fluid).
+        section: The cable's section, or None (a network).
+        base_dir: Folder of the case file (for a velocity table's CSV file).
+
+    Returns:
+        The :class:`~cablefem.description.Fluid`, or None.
+    """
     if r is None:
         return None
     D = r.number("diameter", gt=0)

@@ -39,7 +39,20 @@ from cablefem.water import water_problems
 
 def parse_network_case(data: dict, base_dir: Path, source: str) -> Case:
     """A network case (see :data:`NETWORK_KEYS`); the mesh itself is read and checked when
-    the model is built (:func:`cablefem.geometry.read_network_mesh`)."""
+    the model is built (:func:`cablefem.geometry.read_network_mesh`).
+
+    Args:
+        data: The case, as a dict of the TOML file's shape.
+        base_dir: Folder of the case file (the mesh and CSV files are relative to it).
+        source: Name of the case in the messages.
+
+    Returns:
+        The :class:`~cablefem.case.schema.Case` (its ``network`` set), not yet checked
+        against the run's time range.
+
+    Raises:
+        CaseError: With every problem found.
+    """
     problems: list = []
     top = Reader(data, "", NETWORK_KEYS, problems)
 

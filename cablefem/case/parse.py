@@ -205,7 +205,14 @@ def parse_case(data: dict, base_dir: str | os.PathLike = Path("."),
 def load_case(path: str | os.PathLike, *, t_end: float | None = None,
               dynamics: bool = True) -> Case:
     """Read and validate a TOML case file; relative CSV paths are taken from its folder.
-    ``t_end``, ``dynamics``: the run's, as in :func:`parse_case`.
+
+    Args:
+        path: The case file.
+        t_end: The run's end (s), as in :func:`parse_case`.
+        dynamics: False for a run without dynamics, as in :func:`parse_case`.
+
+    Returns:
+        The validated :class:`~cablefem.case.schema.Case`.
 
     Raises:
         CaseError: If the file cannot be read, is not valid TOML, or has any problem (all reported).

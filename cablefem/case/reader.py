@@ -21,7 +21,15 @@ _UNSET = object()
 
 
 class Reader:
-    """One table of the case: unknown keys are reported on creation, getters type-check."""
+    """One table of the case: unknown keys are reported on creation, getters type-check.
+
+    Args:
+        data: The table's keys and values.
+        path: Its key path (``""`` for the top level).
+        doc: Its keys' :class:`~cablefem.case.keys.KeyDoc` and
+            :class:`~cablefem.case.keys.TableDoc`.
+        problems: The list every problem is appended to, as ``(key path, message)``.
+    """
 
     def __init__(self, data: dict, path: str, doc: dict, problems: list) -> None:
         self.data, self.path, self.doc, self.problems = data, path, doc, problems

@@ -40,11 +40,23 @@ _TOL = 1e-9  # relative tolerance for coincident points and parallel directions
 
 
 def any_missing(*parts: Any) -> bool:
-    """True if any part failed to parse (is None); safe with NumPy arrays."""
+    """True if any part failed to parse (is None); safe with NumPy arrays.
+
+    Args:
+        *parts: Parsed values, None where parsing failed.
+    """
     return any(p is None for p in parts)
 
 
 def parse_section(r: Reader) -> Section | None:
+    """``[section]`` (or one of ``[[sections]]``): the cross-section.
+
+    Args:
+        r: The table's reader (problems go to its list).
+
+    Returns:
+        The :class:`~cablefem.properties.Section`, or None (problems reported).
+    """
     values = (r.number("EA", gt=0), r.number("EI", ge=0), r.number("GJ", ge=0),
               r.number("mass", gt=0))
     diameter = r.number("diameter", gt=0)
@@ -54,6 +66,14 @@ def parse_section(r: Reader) -> Section | None:
 
 
 def parse_geometry(r: Reader) -> Geometry | None:
+    """``[geometry]``: exactly one of the geometry kinds.
+
+    Args:
+        r: The table's reader (problems go to its list).
+
+    Returns:
+        The :class:`~cablefem.case.schema.Geometry`, or None (problems reported).
+    """
     given = [k for k in GEOMETRY_KINDS if r.has(k)]
     if len(given) != 1:
         got = " and ".join(given) if given else "none"
@@ -90,6 +110,15 @@ def _parse_polyline(r: Reader) -> np.ndarray | None:
 
 
 def parse_motion(r: Reader | None, base_dir: Path) -> Motion | None:
+    """``[anchors.motion]``: a harmonic, elliptic or table motion.
+
+    Args:
+        r: The table's reader, or None (no motion).
+        base_dir: Folder of the case file (for a table's CSV file).
+
+    Returns:
+        The :class:`~cablefem.motion.Motion`, or None (none given, or problems reported).
+    """
     if r is None:
         return None
     kind = r.string("type", choices=tuple(MOTION_KEYS))
@@ -141,6 +170,15 @@ def _finite_ramp(r: Reader, ramp: float) -> bool:
 
 
 def parse_time(r: Reader | None, base_dir: Path) -> TimeFunction | None:
+    """``[loads.time]`` (and the others): a load's time factor.
+
+    Args:
+        r: The table's reader, or None (a constant factor 1).
+        base_dir: Folder of the case file (for a table's CSV file).
+
+    Returns:
+        The :class:`~cablefem.motion.TimeFunction`, or None (problems reported).
+    """
     if r is None:
         return TimeFunction.constant()
     kind = r.string("type", choices=("constant", "harmonic", "table"))
@@ -164,6 +202,14 @@ def parse_time(r: Reader | None, base_dir: Path) -> TimeFunction | None:
 
 
 def parse_damping(r: Reader | None) -> Damping | None:
+    """``[damping]``: Rayleigh, stiffness-proportional or axial damping, or none.
+
+    Args:
+        r: The table's reader, or None (no damping).
+
+    Returns:
+        The :class:`~cablefem.case.schema.Damping`, or None (problems reported).
+    """
     if r is None:
         return Damping("none", 0.0, 0.0)
     model = r.string("model", choices=("rayleigh", "rayleigh_k0", "axial", "none"))
@@ -212,6 +258,14 @@ def parse_damping(r: Reader | None) -> Damping | None:
 
 
 def parse_dynamics(r: Reader | None) -> DynamicsSpec | None:
+    """``[dynamics]``: the time integration's settings.
+
+    Args:
+        r: The table's reader, or None (no dynamics).
+
+    Returns:
+        The :class:`~cablefem.case.schema.DynamicsSpec`, or None.
+    """
     if r is None:
         return None
     t_end, dt = r.number("t_end", gt=0), r.number("dt", gt=0)
@@ -231,6 +285,14 @@ def parse_dynamics(r: Reader | None) -> DynamicsSpec | None:
 
 
 def parse_petsc_options(r: Reader) -> dict:
+    """``solver.petsc_options``: options without ``-`` or the ``cable_`` prefix.
+
+    Args:
+        r: The table's reader (problems go to its list).
+
+    Returns:
+        The options (empty if none given).
+    """
     value, given = r.raw("petsc_options")
     if not given:
         return {}
@@ -251,6 +313,15 @@ def parse_petsc_options(r: Reader) -> dict:
 
 
 def parse_fatigue(r: Reader | None, section: Section | None) -> FatigueSpec | None:
+    """``[fatigue]``: the S-N curve, the section for stresses and the window.
+
+    Args:
+        r: The table's reader, or None (no fatigue assessment).
+        section: The cable's section (its diameter for stresses), or None.
+
+    Returns:
+        The :class:`~cablefem.case.schema.FatigueSpec`, or None.
+    """
     if r is None:
         return None
     vals = dict(detail_category=r.number("detail_category", gt=0), m1=r.number("m1", ge=1),
