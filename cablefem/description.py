@@ -67,7 +67,13 @@ class Gravity:
 class Geometry:
     """How the stress-free length is given: ``kind`` is 'length' | 'horizontal_tension' |
     'sag_ratio' | 'polyline'; ``value`` is l (m), H (N) or the sag ratio (-), and for a
-    polyline its length l (m); ``polyline`` (n, 3) the stress-free points (m)."""
+    polyline its length l (m); ``polyline`` (n, 3) the stress-free points (m).
+
+    Args:
+        kind: 'length', 'horizontal_tension', 'sag_ratio' or 'polyline'.
+        value: l (m), H (N), the sag ratio (-) or the polyline's length (m).
+        polyline: (n, 3) stress-free points (m), for 'polyline'.
+    """
 
     kind: str
     value: float | None
@@ -81,7 +87,12 @@ class Geometry:
 
 @dataclass
 class MeshSpec:
-    """Number of string elements and the mid-span / end element length ratio."""
+    """Number of string elements and the mid-span / end element length ratio.
+
+    Args:
+        elements: Number of string elements, >= 1.
+        grading: Mid-span / end element length ratio, >= 1.
+    """
 
     elements: int = 30
     grading: float = 1.0
@@ -290,7 +301,15 @@ class Damping:
 class SolverSpec:
     """The model's switches: the tension-only law, the first-order outer correction
     ('none' | 'hinge'), the span's own bending (string only) and PETSc options of its
-    solvers (without the options prefix)."""
+    solvers (without the options prefix).
+
+    Args:
+        tension_only: No compression (``T = EA max(strain, 0)``).
+        petsc_options: Options of the model's solvers, without the prefix.
+        outer_correction: 'hinge' or 'none'.
+        span_bending: True, False or "auto".
+        model: "string", "beam" or "auto".
+    """
 
     tension_only: bool = True
     petsc_options: dict = field(default_factory=dict)
@@ -306,7 +325,14 @@ class SolverSpec:
 
 @dataclass
 class BeamSpec:
-    """Mesh grading and shear stiffness of the reference rod (:mod:`cablefem.rod`)."""
+    """Mesh grading and shear stiffness of the reference rod (:mod:`cablefem.rod`).
+
+    Args:
+        layer_elements: Elements per layer length at a clamp.
+        growth: Ratio of the lengths of neighbouring elements.
+        span_elements: Elements are at most l / ``span_elements`` long.
+        shear_stiffness: GA (N), or None (1e5 times the largest tension).
+    """
 
     layer_elements: float = 8.0
     growth: float = 1.1
@@ -331,7 +357,14 @@ class CableSpec:
 
 @dataclass
 class NetworkSpec:
-    """A cable network: the mesh file, the named sections and the cable families."""
+    """A cable network: the mesh file, the named sections and the cable families.
+
+    Args:
+        mesh: The gmsh file.
+        sections: Section name -> :class:`cablefem.properties.Section`.
+        cables: The cable families.
+        kinks: The interior kinks reported: "all", "loaded" or "none".
+    """
 
     mesh: Path
     sections: dict[str, Section]
@@ -393,6 +426,13 @@ def rayleigh_coefficients(ratios: tuple[float, float],
     """Rayleigh ``alpha`` (1/s), ``beta`` (s) giving damping ratios ``z1, z2`` at circular
     frequencies ``w1 != w2`` (rad/s), from ``z(w) = alpha/(2 w) + beta w/2``:
     ``alpha = 2 w1 w2 (z1 w2 - z2 w1)/(w2^2 - w1^2)``, ``beta = 2 (z2 w2 - z1 w1)/(w2^2 - w1^2)``.
+
+    Args:
+        ratios: ``(z1, z2)`` (-).
+        frequencies: ``(w1, w2)`` (rad/s), distinct.
+
+    Returns:
+        ``(alpha, beta)``.
     """
     (z1, z2), (w1, w2) = ratios, frequencies
     d = w2**2 - w1**2
