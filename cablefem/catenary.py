@@ -325,9 +325,6 @@ def length_for_horizontal_tension(span: float, rise: float, H: float, w: float,
         w: Weight [N/m], >= 0.
         EA: Axial stiffness [N] (``inf``: inextensible).
 
-    Returns:
-        The stress-free length [m].
-
     Raises:
         ValueError: ``H`` out of the reachable range (which the message gives).
     """
@@ -357,9 +354,6 @@ def length_for_sag_ratio(span: float, rise: float, sag_ratio: float, w: float,
         sag_ratio: Mid-span sag over chord length [-], > 0.
         w: Weight [N/m], > 0.
         EA: Axial stiffness [N] (``inf``: inextensible).
-
-    Returns:
-        The stress-free length [m].
 
     Raises:
         ValueError: ``sag_ratio`` out of the reachable range (which the message gives).
@@ -512,8 +506,7 @@ def catenary_between(p: ArrayLike, q: ArrayLike, length: float, w: float, EA: fl
 
 def irvine_lambda2(span: float, H: float, m: float, g: float, EA: float, sag: float) -> float:
     """Irvine's parameter ``lambda^2 = (m g L/H)^2 L / (H L_e/EA)`` [-] with
-    ``L_e = L (1 + 8 (d/L)^2)``; span ``L`` [m], ``H`` [N], mass ``m`` [kg/m], ``g``
-    [m/s^2], ``EA`` [N], mid-span sag ``d`` [m] (docs/theory.md §8).
+    ``L_e = L (1 + 8 (d/L)^2)`` (docs/theory.md §8).
 
     Args:
         span: Span ``L`` [m], > 0.
@@ -522,9 +515,6 @@ def irvine_lambda2(span: float, H: float, m: float, g: float, EA: float, sag: fl
         g: Gravitational acceleration [m/s^2], > 0.
         EA: Axial stiffness [N] (``inf``: inextensible).
         sag: Mid-span sag ``d`` [m], >= 0.
-
-    Returns:
-        ``lambda^2`` [-].
     """
     L, H = _check("span", span, 0.0), _check("H", H, 0.0)
     m, g = _check("m", m, 0.0), _check("g", g, 0.0)
@@ -545,9 +535,6 @@ def irvine_symmetric_frequency(lambda2: float, n: int = 1) -> float:
     Args:
         lambda2: Irvine's parameter (:func:`irvine_lambda2`), > 0 or ``inf``.
         n: Number of the symmetric mode, >= 1.
-
-    Returns:
-        ``omega_bar`` [-].
     """
     lam2 = _check("lambda2", lambda2, 0.0, allow_inf=True)
     if int(n) != n or n < 1:
