@@ -26,7 +26,7 @@ _API = {
     "create_cable": "cablefem.create", "create_rod": "cablefem.create",
     "create_network": "cablefem.create", "Anchor": "cablefem.anchor",
     "Section": "cablefem.properties", "CableDescription": "cablefem.description",
-    "describe_cable": "cablefem.describe", "describe_network": "cablefem.describe",
+    "describe_cable": "cablefem.arguments", "describe_network": "cablefem.arguments",
     "Gravity": "cablefem.description", "DistributedLoad": "cablefem.description",
     "PointMass": "cablefem.description", "PointLoad": "cablefem.description",
     "Damper": "cablefem.description", "DamperLink": "cablefem.description",

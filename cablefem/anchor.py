@@ -22,19 +22,17 @@ ANCHOR_KINDS = ("clamped", "pinned")
 class Anchor:
     """An anchor of a cable (or an anchor group of a network's mesh).
 
-    Parameters
-    ----------
-    name : str
-        Its name in the outputs (A-Z a-z 0-9 _ -); for a network, the 0D group of the mesh.
-    position : (3,) array or None
-        Static position (m). ``None``: a network's (the mesh's nodes), or the polyline's end.
-    kind : str
-        ``"clamped"`` (holds the tangent: the anchor moment is computed) or ``"pinned"``.
-    direction : (3,) array or None
-        Unit clamp direction pointing into the cable (clamped only); ``None``: along the
-        chord (single cable) or along the one cell at the anchor (network).
-    motion : Motion or None
-        Prescribed displacement from the static position (:mod:`cablefem.motion`), or None.
+    Args:
+        name (str): Its name in the outputs (A-Z a-z 0-9 _ -); for a network, the 0D group of the
+            mesh.
+        position ((3,) array or None): Static position (m). ``None``: a network's (the mesh's
+            nodes), or the polyline's end.
+        kind (str): ``"clamped"`` (holds the tangent: the anchor moment is computed) or
+            ``"pinned"``.
+        direction ((3,) array or None): Unit clamp direction pointing into the cable (clamped only);
+            ``None``: along the chord (single cable) or along the one cell at the anchor (network).
+        motion (Motion or None): Prescribed displacement from the static position
+            (:mod:`cablefem.motion`), or None.
     """
 
     name: str

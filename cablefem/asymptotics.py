@@ -26,6 +26,16 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
+# the layer's far field (the virtual hinge, the second order) has its own module; its names
+# stay available here, where the layer's users look for them
+from cablefem.farfield import (
+    far_field_offsets,
+    far_field_second_order,
+    gradient_integrals,
+    gradient_moment_factor,
+    virtual_hinge,
+)
+
 __all__ = [
     "AnchorLayer", "anchor_frame", "layer", "angle_profile", "curvature_profile",
     "moment_profile", "exact_angle_profile", "exact_curvature_profile", "string_curvature",
@@ -48,26 +58,25 @@ MAX_PERIOD_RATIO = 0.1
 class AnchorLayer:
     """Inner solution at clamped anchors (docs/theory.md §3, steps 2-8); arrays of shape ``(...)``.
 
-    Attributes
-    ----------
-    tension : T = |N| [N].
-    tangent : (..., 3) string tangent t = N/T at the anchor [-] (NaN where slack).
-    delta : anchor angle Delta = atan2(|c x t|, c.t) in [0, pi] [rad] (step 3).
-    normal : (..., 3) bending-plane normal b = (c x t)/|c x t| (step 4); zeros where
-        Delta ~ 0 (the moment vanishes there), NaN where Delta ~ pi (plane undefined while
-        the moment is not small) or slack.
-    psi0 : azimuth of the bending plane about c in the anchor frame (e1, e2, c), the
-        direction of t's projection on the plane normal to c, in (-pi, pi] [rad] (Eq. 25,
-        32); NaN where Delta ~ 0, Delta ~ pi or slack.
-    layer_length : ell = sqrt(EI / (T (1 + T/EA))) [m] (step 5, Eq. 38).
-    moment : anchor moment magnitude M(0) from the layer alone [N m] (step 8).
-    moment_vector : (..., 3) moment * normal [N m], in the anchor's direction of travel.
-    slack : True where T <= tension_floor or T is not finite: no layer, NaN results.
-    valid : not slack, finite, ell/l <= MAX_LENGTH_RATIO (if ``length`` was given) and
-        period_ratio <= MAX_PERIOD_RATIO (if ``quasi_static`` was given).
-    length_ratio : ell / l [-] (NaN when ``length`` was not given).
-    period_ratio : layer period / excitation period = omega ell^2 sqrt(m/EI) [-] (NaN when
-        ``quasi_static`` was not given).
+    Attributes:
+        tension: T = |N| [N].
+        tangent: (..., 3) string tangent t = N/T at the anchor [-] (NaN where slack).
+        delta: anchor angle Delta = atan2(|c x t|, c.t) in [0, pi] [rad] (step 3).
+        normal: (..., 3) bending-plane normal b = (c x t)/|c x t| (step 4); zeros where Delta ~ 0
+            (the moment vanishes there), NaN where Delta ~ pi (plane undefined while the moment is
+            not small) or slack.
+        psi0: azimuth of the bending plane about c in the anchor frame (e1, e2, c), the direction of
+            t's projection on the plane normal to c, in (-pi, pi] [rad] (Eq. 25, 32); NaN where
+            Delta ~ 0, Delta ~ pi or slack.
+        layer_length: ell = sqrt(EI / (T (1 + T/EA))) [m] (step 5, Eq. 38).
+        moment: anchor moment magnitude M(0) from the layer alone [N m] (step 8).
+        moment_vector: (..., 3) moment * normal [N m], in the anchor's direction of travel.
+        slack: True where T <= tension_floor or T is not finite: no layer, NaN results.
+        valid: not slack, finite, ell/l <= MAX_LENGTH_RATIO (if ``length`` was given) and
+            period_ratio <= MAX_PERIOD_RATIO (if ``quasi_static`` was given).
+        length_ratio: ell / l [-] (NaN when ``length`` was not given).
+        period_ratio: layer period / excitation period = omega ell^2 sqrt(m/EI) [-] (NaN when
+            ``quasi_static`` was not given).
     """
 
     tension: np.ndarray
@@ -106,10 +115,9 @@ def anchor_frame(c: ArrayLike, e1: ArrayLike | None = None) -> tuple[np.ndarray,
     It fixes what psi0 = 0 means: for a horizontal clamp psi0 = 0 is "up". A user-given
     ``e1`` is projected on that plane instead. e2 = c x e1.
 
-    Parameters
-    ----------
-    c : (..., 3) clamp direction (normalised here; must be nonzero).
-    e1 : optional (..., 3) reference direction for psi0 = 0.
+    Args:
+        c: (..., 3) clamp direction (normalised here; must be nonzero).
+        e1: optional (..., 3) reference direction for psi0 = 0.
     """
     c = _unit(c, "c")
     if e1 is not None:
@@ -130,26 +138,25 @@ def layer(N: ArrayLike, c: ArrayLike, EI: ArrayLike, EA: ArrayLike, *, form: str
           quasi_static: tuple[float, float] | None = None) -> AnchorLayer:
     """Boundary layer at clamped anchors from the anchor forces (docs/theory.md §3, steps 2-8).
 
-    Parameters
-    ----------
-    N : (..., 3) force transmitted by the span at the anchor, pointing into the span [N].
-    c : (3,) or (..., 3) clamp direction from the anchor into the cable (normalised here).
-    EI, EA : bending [N m^2] and axial [N] stiffness; ``EA = np.inf`` for inextensible.
-    form : "exact": M(0) = 2 sqrt(EI T) sin(Delta/2) sqrt(1 + (T/EA) cos^2(Delta/2)), the
-        slope of the first integral (Eq. 35); "explicit": M(0) = 2 sqrt(EI T (1 + T/EA))
-        sin(Delta/2), the slope of the explicit profile (Eq. 38-39). They differ by the
-        relative amount (T/EA) sin^2(Delta/2) / 2 to leading order.
-    e1 : reference direction for psi0 = 0 (see ``anchor_frame``).
-    length : stress-free cable length l [m], for the check ell/l <= MAX_LENGTH_RATIO.
-    tension_floor : anchors with T <= tension_floor [N] are slack.
-    quasi_static : (m [kg/m], omega [rad/s]) of the excitation, for the check that the
-        layer responds quasi-statically (Eq. 21-24). Its period is taken as
-        2 pi ell^2 sqrt(m/EI), so that period_ratio = omega ell^2 sqrt(m/EI), the square
-        root of the neglected transverse inertia relative to bending, m omega^2 ell^4/EI, on
-        the layer's length scale. A cantilever of length ell (period 2 pi ell^2
-        sqrt(m/EI)/1.875^2) gives 3.5 times less, a wave of wavenumber 1/ell on a beam
-        under T = EI/ell^2 sqrt(2) times less: this choice errs towards flagging.
-        Required: period_ratio <= MAX_PERIOD_RATIO = 0.1 (neglected inertia ~1 %).
+    Args:
+        N: (..., 3) force transmitted by the span at the anchor, pointing into the span [N].
+        c: (3,) or (..., 3) clamp direction from the anchor into the cable (normalised here).
+        EI, EA: bending [N m^2] and axial [N] stiffness; ``EA = np.inf`` for inextensible.
+        form: "exact": M(0) = 2 sqrt(EI T) sin(Delta/2) sqrt(1 + (T/EA) cos^2(Delta/2)), the slope
+            of the first integral (Eq. 35); "explicit": M(0) = 2 sqrt(EI T (1 + T/EA)) sin(Delta/2),
+            the slope of the explicit profile (Eq. 38-39). They differ by the relative amount (T/EA)
+            sin^2(Delta/2) / 2 to leading order.
+        e1: reference direction for psi0 = 0 (see ``anchor_frame``).
+        length: stress-free cable length l [m], for the check ell/l <= MAX_LENGTH_RATIO.
+        tension_floor: anchors with T <= tension_floor [N] are slack.
+        quasi_static: (m [kg/m], omega [rad/s]) of the excitation, for the check that the layer
+            responds quasi-statically (Eq. 21-24). Its period is taken as 2 pi ell^2 sqrt(m/EI), so
+            that period_ratio = omega ell^2 sqrt(m/EI), the square root of the neglected transverse
+            inertia relative to bending, m omega^2 ell^4/EI, on the layer's length scale. A
+            cantilever of length ell (period 2 pi ell^2 sqrt(m/EI)/1.875^2) gives 3.5 times less, a
+            wave of wavenumber 1/ell on a beam under T = EI/ell^2 sqrt(2) times less: this choice
+            errs towards flagging. Required: period_ratio <= MAX_PERIOD_RATIO = 0.1 (neglected
+            inertia ~1 %).
     """
     if form not in ("exact", "explicit"):
         raise ValueError(f"form must be 'exact' or 'explicit', got {form!r}")
@@ -212,20 +219,47 @@ def angle_profile(sigma: ArrayLike, delta: ArrayLike, ell: ArrayLike) -> np.ndar
     The angle between rod and string tangents (Eq. 38-39, step 6). ``sigma`` (..., P) >= 0
     [m] broadcasts against ``delta`` (...) [rad] and ``ell`` (...) [m] (a stations axis is
     appended to them).
+
+    Args:
+        sigma: (..., P) stress-free distance from the anchor [m], >= 0.
+        delta: (...) anchor angle [rad].
+        ell: (...) layer length [m].
+
+    Returns:
+        (..., P) angle [rad].
     """
     d, el = np.asarray(delta, float)[..., None], np.asarray(ell, float)[..., None]
     return 4 * np.arctan(np.tan(d / 4) * np.exp(-np.asarray(sigma, float) / el))
 
 
 def curvature_profile(sigma: ArrayLike, delta: ArrayLike, ell: ArrayLike) -> np.ndarray:
-    """Explicit layer curvature kappa(sigma) = (2/ell) sin(phi(sigma)/2) [1/m] (step 7)."""
+    """Explicit layer curvature kappa(sigma) = (2/ell) sin(phi(sigma)/2) [1/m] (step 7).
+
+    Args:
+        sigma: (..., P) stress-free distance from the anchor [m], >= 0.
+        delta: (...) anchor angle [rad].
+        ell: (...) layer length [m].
+
+    Returns:
+        (..., P) curvature [1/m].
+    """
     phi = angle_profile(sigma, delta, ell)
     return 2 / np.asarray(ell, float)[..., None] * np.sin(phi / 2)
 
 
 def moment_profile(sigma: ArrayLike, delta: ArrayLike, ell: ArrayLike,
                    EI: ArrayLike) -> np.ndarray:
-    """Explicit layer moment M(sigma) = EI kappa(sigma) [N m] (step 7)."""
+    """Explicit layer moment M(sigma) = EI kappa(sigma) [N m] (step 7).
+
+    Args:
+        sigma: (..., P) stress-free distance from the anchor [m], >= 0.
+        delta: (...) anchor angle [rad].
+        ell: (...) layer length [m].
+        EI: (...) bending stiffness [N m^2].
+
+    Returns:
+        (..., P) moment [N m].
+    """
     return np.asarray(EI, float)[..., None] * curvature_profile(sigma, delta, ell)
 
 
@@ -240,6 +274,15 @@ def exact_angle_profile(sigma: ArrayLike, delta: ArrayLike, T: ArrayLike, EI: Ar
     sinh(x), x = x0 + sigma/ell, sinh(x0) = q cot(Delta/2). Exact for all beta, Delta in
     [0, pi]; no iteration, and accurate in the exponentially small tail. beta = 0 gives
     the explicit profile. Broadcasting as in ``angle_profile`` (T, EI, EA like delta).
+
+    Args:
+        sigma: (..., P) stress-free distance from the anchor [m], >= 0.
+        delta: (...) anchor angle [rad].
+        T: (...) tension [N].
+        EI, EA: (...) bending [N m^2] and axial [N] stiffness.
+
+    Returns:
+        (..., P) angle [rad].
     """
     d = np.asarray(delta, float)[..., None]
     T = np.asarray(T, float)[..., None]
@@ -256,6 +299,15 @@ def exact_curvature_profile(sigma: ArrayLike, delta: ArrayLike, T: ArrayLike,
     """Exact layer curvature |dphi/dsigma| = (2/ell0) sin(phi/2) sqrt(1 + beta cos^2(phi/2)).
 
     [1/m], along ``exact_angle_profile`` (Eq. 35); times EI it is the exact moment profile.
+
+    Args:
+        sigma: (..., P) stress-free distance from the anchor [m], >= 0.
+        delta: (...) anchor angle [rad].
+        T: (...) tension [N].
+        EI, EA: (...) bending [N m^2] and axial [N] stiffness.
+
+    Returns:
+        (..., P) curvature [1/m].
     """
     phi = exact_angle_profile(sigma, delta, T, EI, EA)
     T = np.asarray(T, float)[..., None]
@@ -271,15 +323,14 @@ def string_curvature(tangent: ArrayLike, tension: ArrayLike, mass: ArrayLike,
     From the string's balance of forces (Eq. 16), dt/dsigma = (m a - f)_perp / T, so
     kappa_s = t x (m a - f) / T (the cross product removes the part along t).
 
-    Parameters
-    ----------
-    tangent : (..., 3) string tangent, normalised here; its direction of travel is the one
-        of the result (at an anchor: pointing into the span, away from the anchor).
-    tension : (...) T [N]; NaN is returned where T <= 0.
-    mass : (...) or scalar, m per unit stress-free length [kg/m].
-    accel : (..., 3) acceleration of the point [m/s^2].
-    load : (..., 3) distributed load per unit stress-free length, weight included
-        (f = m g_vec) [N/m].
+    Args:
+        tangent: (..., 3) string tangent, normalised here; its direction of travel is the one of the
+            result (at an anchor: pointing into the span, away from the anchor).
+        tension: (...) T [N]; NaN is returned where T <= 0.
+        mass: (...) or scalar, m per unit stress-free length [kg/m].
+        accel: (..., 3) acceleration of the point [m/s^2].
+        load: (..., 3) distributed load per unit stress-free length, weight included (f = m g_vec)
+            [N/m].
     """
     t = np.asarray(tangent, float)
     T = np.asarray(tension, float)[..., None]
@@ -301,15 +352,14 @@ def composite_curvature(kappa_string: ArrayLike, sigmas: ArrayLike, deltas: Arra
     o_a = d sigma_a/ds: +1 for an anchor at the s = 0 end, -1 at the s = l end. Multiply
     by EI for the moment; at an anchor (o_a = +1) that is M_a(0) b_a + EI kappa_string(0).
 
-    Parameters
-    ----------
-    kappa_string : (..., P, 3) string curvature at P stations [1/m].
-    sigmas : (A, P) stress-free distance [m] of every station from each anchor.
-    deltas, ells : (..., A) anchor angles [rad] and layer lengths [m]; NaN delta (slack)
-        contributes nothing.
-    normals : (..., A, 3) bending-plane normals b_a.
-    orientation : (A,) values +-1 = d sigma_a/ds; by default inferred from the monotony of
-        each row of ``sigmas`` (ValueError when a row is not monotone).
+    Args:
+        kappa_string: (..., P, 3) string curvature at P stations [1/m].
+        sigmas: (A, P) stress-free distance [m] of every station from each anchor.
+        deltas, ells: (..., A) anchor angles [rad] and layer lengths [m]; NaN delta (slack)
+            contributes nothing.
+        normals: (..., A, 3) bending-plane normals b_a.
+        orientation: (A,) values +-1 = d sigma_a/ds; by default inferred from the monotony of each
+            row of ``sigmas`` (ValueError when a row is not monotone).
     """
     ks = np.asarray(kappa_string, float)
     sig = np.asarray(sigmas, float)
@@ -332,170 +382,6 @@ def composite_curvature(kappa_string: ArrayLike, sigmas: ArrayLike, deltas: Arra
     kap = np.where(active[..., None], curvature_profile(sig, d, el), 0.0) * o[:, None]
     nrm = np.where(active[..., None], np.asarray(normals, float), 0.0)
     return ks + np.einsum("...ap,...ak->...pk", kap, nrm)
-
-
-#: Gauss-Legendre nodes and weights on [0, 1] for the far-field integrals over the angle.
-#: Their integrands are analytic in phi on [0, pi]: 16 points give round-off (checked in
-#: tests/test_hinge.py against an integration of the elastica along sigma).
-_GL_X, _GL_W = np.polynomial.legendre.leggauss(16)
-_GL_X, _GL_W = 0.5 * (_GL_X + 1.0), 0.5 * _GL_W
-
-
-def far_field_offsets(delta: ArrayLike, T: ArrayLike, EI: ArrayLike,
-                      EA: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
-    """Where the rod's far field lies relative to the anchor (the layer's far field).
-
-    The rod leaves the anchor along c and turns to the string tangent t over the layer;
-    its centre line is ``r(sigma) = A + int_0^sigma lambda d3``, with ``d3 = cos(phi) t +
-    sin(phi) n`` (``n`` normal to t in the bending plane, on the side of c) and the
-    stretch ``lambda = 1 + (T/EA) cos(phi)`` of an unshearable rod whose internal force is
-    the constant N = T t (docs/theory.md §3, step 6). Far from the anchor it is the straight line
-    ``A + D + lambda_inf sigma t``, ``lambda_inf = 1 + T/EA``, with the offset
-    ``D = D_t t + D_n n = int_0^inf (lambda d3 - lambda_inf t) dsigma``. Changing the
-    variable to phi with the exact first integral (Eq. 35),
-    ``dphi/dsigma = -(2/ell0) sin(phi/2) sqrt(1 + beta cos^2(phi/2))``, ell0 = sqrt(EI/T),
-    beta = T/EA::
-
-        D_n = ell0 int_0^Delta (1 + beta cos phi) cos(phi/2) / sqrt(1 + beta cos^2(phi/2)) dphi
-        D_t = -ell0 int_0^Delta sin(phi/2) (1 + 2 beta cos^2(phi/2))
-              / sqrt(1 + beta cos^2(phi/2)) dphi
-
-    (beta = 0: D_n = 2 ell0 sin(Delta/2), D_t = -2 ell0 (1 - cos(Delta/2))). Returns
-    ``(D_t, D_n)`` [m], broadcast over the arguments; NaN where T <= 0.
-    """
-    d = np.asarray(delta, float)
-    T = np.asarray(T, float)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        Tp = np.where(T > 0, T, np.nan)
-        beta = Tp / np.asarray(EA, float)
-        ell0 = np.sqrt(np.asarray(EI, float) / Tp)
-        phi = d[..., None] * _GL_X
-        ch = np.cos(phi / 2)
-        root = np.sqrt(1 + beta[..., None] * ch**2)
-        i_n = (1 + beta[..., None] * np.cos(phi)) * ch / root
-        i_t = np.sin(phi / 2) * (1 + 2 * beta[..., None] * ch**2) / root
-        D_n = ell0 * d * (i_n @ _GL_W)
-        D_t = -ell0 * d * (i_t @ _GL_W)
-    return D_t, D_n
-
-
-def virtual_hinge(delta: ArrayLike, T: ArrayLike, EI: ArrayLike,
-                  EA: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
-    """The virtual hinge of the first-order outer problem at a clamped anchor.
-
-    Away from the clamp the rod is a string that starts at the hinge ``H = A + h c`` on
-    the clamp line, with ``sigma_h`` of stress-free length less: H is the point where the
-    far-field line ``A + D + lambda_inf sigma t`` (:func:`far_field_offsets`) crosses the
-    clamp line, ``h c = D + lambda_inf sigma_h t``, i.e.::
-
-        h = D_n / sin(Delta),   sigma_h = (h cos(Delta) - D_t) / lambda_inf
-
-    Small Delta: h -> lambda_inf ell and sigma_h -> ell (ell = ell0/sqrt(1 + beta), the
-    layer length): the hinge is one layer length into the cable, and the rod's stretch in
-    the layer is kept. At finite Delta the hinge moves out (h = ell0/cos(Delta/2) for an
-    inextensible rod) and less length is removed (sigma_h = ell0 (2 cos(Delta/2) - 1) /
-    cos(Delta/2)). At small Delta, H moves only at second order in a change of Delta, so
-    that the string turns about it as the rod's far field does; at a finite angle it moves
-    at first order (:mod:`cablefem.hinge`: the normal offset). Returns ``(h, sigma_h)``
-    [m]; NaN where T <= 0 or Delta >= pi.
-    """
-    d = np.asarray(delta, float)
-    D_t, D_n = far_field_offsets(d, T, EI, EA)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        T = np.asarray(T, float)
-        beta = np.where(T > 0, T, np.nan) / np.asarray(EA, float)
-        ell0 = np.sqrt(np.asarray(EI, float) / np.where(T > 0, T, np.nan))
-        small = np.abs(d) < 1e-6  # D_n / sin(Delta) -> its limit, to O(Delta^2)
-        h = np.where(small, ell0 * np.sqrt(1 + beta),
-                     D_n / np.where(small, 1.0, np.sin(d)))
-        h = np.where(d < np.pi, h, np.nan)
-        sigma_h = (h * np.cos(d) - D_t) / (1 + beta)
-    return h, sigma_h
-
-
-def gradient_integrals(delta: ArrayLike) -> dict[str, np.ndarray]:
-    """Closed forms of the layer's second-order integrals (docs/theory.md §6.2).
-
-    In units of ell0 = sqrt(EI/T0), with the inextensible elastica of the layer
-    ``phi(s) = 4 atan(a exp(-s))``, ``a = tan(Delta/4)`` (the angle from the far-field
-    tangent t towards the clamp direction, decaying from Delta), and ``phi1`` its response
-    to a tension that grows linearly along the layer, ``T = T0 (1 + tau s)``, at first order
-    in tau: ``phi1'' - cos(phi) phi1 = s sin(phi)``, ``phi1(0) = phi1(inf) = 0``, whose
-    solution is ``phi1 = phi' (s^2 + s + (a^2 - a^2 exp(-2 s))/2)/4``. Returns::
-
-        I_t = int s (cos phi - 1) ds = 4 ln cos(Delta/4)
-        I_n = int s sin phi ds      = Delta
-        J_t = -int sin(phi) phi1 ds = -4 ln cos(Delta/4)
-        J_n = int cos(phi) phi1 ds  = tan(Delta/4) - Delta
-        m1  = phi1'(0) / phi'(0)    = 1 / (4 cos^2(Delta/4))
-
-    I_* are the first moments of the layer's departure from its far-field line (what a
-    rotation of the far field along the layer does to it), J_* what the tension gradient
-    does to the line, m1 what it does to the clamp's curvature (the moment). Checked
-    against a finite-difference solution of the boundary value problem in the tests.
-    """
-    d = np.asarray(delta, float)
-    c4 = np.cos(d / 4)
-    return {"I_t": 4 * np.log(c4), "I_n": d, "J_t": -4 * np.log(c4),
-            "J_n": np.tan(d / 4) - d, "m1": 1.0 / (4 * c4 * c4)}
-
-
-def far_field_second_order(N: ArrayLike, c: ArrayLike, q: ArrayLike, EI: float,
-                           sigma_h: float) -> np.ndarray:
-    """The O(ell^2) shift of the rod's far field from the virtual hinge's string (a vector,
-    m; docs/theory.md §6.2).
-
-    :func:`virtual_hinge` takes the far field of a layer under a constant force. Along the
-    layer the force changes by the distributed load: the outer string curves
-    (``dt/ds = q_perp/T``) and its tension grows (``dT/ds = q.t``), with ``q = m a - f``
-    per stress-free length (``-f`` in statics: minus the weight and the distributed loads).
-    At first order in both, the rod at a far station lies off the string that starts at the
-    hinge by::
-
-        E = ell0^2 [ (sh^2/2) kappa + Omega x (I_t t + I_n n) + (T'/T0) (J_t t + J_n n) ]
-
-    with ``kappa = dt/ds``, ``Omega = t x kappa`` (the far field's rotation rate), ``n`` the
-    unit normal to t towards c, ``sh = sigma_h/ell0`` (the string's first ``sigma_h`` of
-    length is curved too) and the integrals of :func:`gradient_integrals`. ``N``: (3,) force
-    at the anchor into the span, N; ``c``: clamp direction; ``q``: (3,) N/m. Zero for a
-    straight, uniformly tensioned far field; ``I_n n`` and ``J_n n`` are written with
-    ``c - (c.t) t`` and their limits at Delta = 0 (1 and -3/4 of it over sin Delta).
-    """
-    N, c, q = (np.asarray(v, float) for v in (N, c, q))
-    T0 = float(np.linalg.norm(N))
-    t = N / T0
-    c = c / np.linalg.norm(c)
-    nvec = c - float(c @ t) * t  # |nvec| = sin(Delta), towards c
-    sin_d = float(np.linalg.norm(nvec))
-    d = float(np.arctan2(sin_d, float(c @ t)))
-    g = gradient_integrals(d)
-    if sin_d > 1e-8:
-        r_i, r_j = float(g["I_n"]) / sin_d, float(g["J_n"]) / sin_d
-    else:
-        r_i, r_j = 1.0, -0.75
-    kappa = (q - float(q @ t) * t) / T0
-    Tp = float(q @ t)
-    ell2 = EI / T0
-    sh = sigma_h / np.sqrt(ell2)
-    omega = np.cross(t, kappa)
-    return ell2 * (0.5 * sh * sh * kappa
-                   + np.cross(omega, float(g["I_t"]) * t + r_i * nvec)
-                   + (Tp / T0) * (float(g["J_t"]) * t + r_j * nvec))
-
-
-def gradient_moment_factor(delta: ArrayLike, tension: ArrayLike, tangent: ArrayLike,
-                           q: ArrayLike, EI: float) -> np.ndarray:
-    """``1 + m1 ell0 T'/T0``: the layer's moment at the clamp under a tension that grows
-    along the layer by ``T' = q.t`` per stress-free length (docs/theory.md §6.2; ``m1`` of
-    :func:`gradient_integrals`; 1/4 at small Delta, where M ~ sqrt(T): the moment of the
-    tension half a layer into the span). ``tangent`` (..., 3) into the span, ``q`` (..., 3)
-    = m a - f, N/m; NaN where T <= 0."""
-    T = np.asarray(tension, float)
-    t = np.asarray(tangent, float)
-    Tp = np.sum(t * np.asarray(q, float), axis=-1) / np.linalg.norm(t, axis=-1)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        Tpos = np.where(T > 0, T, np.nan)
-        return 1.0 + gradient_integrals(delta)["m1"] * np.sqrt(EI / Tpos) * Tp / Tpos
 
 
 def _geometric_steps(n: int, total: float, h0: float) -> np.ndarray:
@@ -524,6 +410,20 @@ def graded_stations(length: float, anchor_s: ArrayLike, ells: ArrayLike, *,
     wider than h (the span, and a grading coarser than h when ell ~ length) is then split
     into equal parts <= h. Sorted, strictly increasing, both ends included, no spacing
     above h. Works for ell << h as well as ell ~ length.
+
+    Args:
+        length: The cable's stress-free length [m], > 0.
+        anchor_s: Stations of the anchors [m], in [0, length].
+        ells: Their layer lengths [m], > 0 (NaN: no grading there).
+        n_layer: Stations in each layer, >= 2.
+        layer_factor: The graded zone's length in layer lengths.
+        n_span: The span's spacing is ``length/n_span``.
+
+    Returns:
+        The stations [m].
+
+    Raises:
+        ValueError: Arguments out of range.
     """
     if not (np.isfinite(length) and length > 0):
         raise ValueError(f"length must be positive and finite, got {length}")

@@ -93,9 +93,13 @@ def _out(r: np.ndarray):
 class Catenary2D:
     """Solved elastic catenary in its vertical plane (SI units: m, N, N/m).
 
-    Attributes: ``span, rise`` [m] of q relative to p, stress-free ``length`` [m], weight
-    ``w`` [N/m of stress-free length], axial stiffness ``EA`` [N], horizontal tension ``H``
-    [N] and vertical tension component at q ``V_q`` [N] (up positive, V_F of docs/theory.md §8).
+    Attributes:
+        span, rise: Horizontal and vertical position [m] of q relative to p.
+        length: Stress-free length [m].
+        w: Weight [N/m of stress-free length].
+        EA: Axial stiffness [N].
+        H: Horizontal tension [N].
+        V_q: Vertical tension component at q [N] (up positive, V_F of docs/theory.md §8).
     """
 
     span: float
@@ -178,11 +182,21 @@ def solve_catenary(span: float, rise: float, length: float, w: float, EA: float,
     closed form (straight, uniform tension). ``tol`` bounds the residual of ``x(l), z(l)``
     relative to ``chord + length (1 + w length/EA)`` (the size of the terms summed).
 
-    Parameters: ``span`` [m] > 0, ``rise`` [m], stress-free ``length`` [m] > 0, weight ``w``
-    [N/m] >= 0, ``EA`` [N] > 0 (``inf`` for an inextensible cable).
+    Args:
+        span: Horizontal distance [m] from p to q, > 0.
+        rise: Height [m] of q above p.
+        length: Stress-free length [m], > 0.
+        w: Weight [N/m of stress-free length], >= 0.
+        EA: Axial stiffness [N], > 0 (``inf`` for an inextensible cable).
+        tol: Bound on the relative residual (above).
 
-    Raises ValueError for bad inputs or when no taut equilibrium exists, RuntimeError if
-    the iteration fails (not seen in 20 000 random cases, near-vertical hairpins included).
+    Returns:
+        The solved :class:`Catenary2D`.
+
+    Raises:
+        ValueError: Bad inputs, or no taut equilibrium exists.
+        RuntimeError: The iteration fails (not seen in 20 000 random cases, near-vertical
+            hairpins included).
     """
     L, h, w, EA, c = _plane(span, rise, w, EA)
     l, tol = _check("length", length, 0.0), _check("tol", tol, 0.0)
@@ -304,6 +318,15 @@ def length_for_horizontal_tension(span: float, rise: float, H: float, w: float,
     logarithmically for an inextensible cable); the ValueError for an unreachable ``H`` (or
     ``H <= 0``) gives the range reached within the bracket of ``_solve_length``. For ``w = 0``
     the closed form of a straight cable is used.
+
+    Args:
+        span, rise: Horizontal and vertical position [m] of the second end from the first.
+        H: The horizontal tension [N], > 0.
+        w: Weight [N/m], >= 0.
+        EA: Axial stiffness [N] (``inf``: inextensible).
+
+    Raises:
+        ValueError: ``H`` out of the reachable range (which the message gives).
     """
     L, h, w, EA, c = _plane(span, rise, w, EA)
     H = float(H)
@@ -325,6 +348,15 @@ def length_for_sag_ratio(span: float, rise: float, sag_ratio: float, w: float,
     sag. The ValueError for an unreachable target gives the range reached. The result is
     ill-conditioned for tiny ratios: relative error ~ eps |rise|/sag from the definition of
     the sag, and ~ eps l/(l - chord) for inextensible cables.
+
+    Args:
+        span, rise: Horizontal and vertical position [m] of the second end from the first.
+        sag_ratio: Mid-span sag over chord length [-], > 0.
+        w: Weight [N/m], > 0.
+        EA: Axial stiffness [N] (``inf``: inextensible).
+
+    Raises:
+        ValueError: ``sag_ratio`` out of the reachable range (which the message gives).
     """
     L, h, w, EA, c = _plane(span, rise, w, EA)
     r = float(sag_ratio)
@@ -345,6 +377,14 @@ class Catenary3D:
     ``cat`` is the solution in the vertical plane through the chord (``x`` along
     ``e_h``, ``z`` along ``up = -gravity_dir``), or None for a straight cable (vertical
     chord or ``w = 0``), then ``T(s) = T(0) + w (e . up) s`` along ``e = (q - p)/|q - p|``.
+
+    Attributes:
+        p, q: The ends [m], read-only (3,) arrays.
+        gravity_dir: Unit direction of gravity.
+        cat: The plane solution, or None (straight cable).
+        length: Stress-free length [m].
+        w: Weight [N/m].
+        EA: Axial stiffness [N].
     """
 
     p: np.ndarray
@@ -415,6 +455,20 @@ def catenary_between(p: ArrayLike, q: ArrayLike, length: float, w: float, EA: fl
 
     A chord within ``1e-12`` (relative) of the vertical, or ``w = 0``, gives a straight
     cable (``cat = None``); it needs a finite ``EA`` and no compression anywhere.
+
+    Args:
+        p, q: The ends [m], (3,).
+        length: Stress-free length [m], > 0.
+        w: Weight [N/m of stress-free length], >= 0.
+        EA: Axial stiffness [N], > 0 (``inf``: inextensible, not for a straight cable).
+        gravity_dir: Direction of gravity (normalised here).
+
+    Returns:
+        The :class:`Catenary3D`.
+
+    Raises:
+        ValueError: Bad inputs, or no taut equilibrium (a straight cable that would be
+            compressed at its lower end).
     """
     p = np.array(p, dtype=float).reshape(3)
     q = np.array(q, dtype=float).reshape(3)
@@ -452,8 +506,16 @@ def catenary_between(p: ArrayLike, q: ArrayLike, length: float, w: float, EA: fl
 
 def irvine_lambda2(span: float, H: float, m: float, g: float, EA: float, sag: float) -> float:
     """Irvine's parameter ``lambda^2 = (m g L/H)^2 L / (H L_e/EA)`` [-] with
-    ``L_e = L (1 + 8 (d/L)^2)``; span ``L`` [m], ``H`` [N], mass ``m`` [kg/m], ``g``
-    [m/s^2], ``EA`` [N], mid-span sag ``d`` [m] (docs/theory.md §8)."""
+    ``L_e = L (1 + 8 (d/L)^2)`` (docs/theory.md §8).
+
+    Args:
+        span: Span ``L`` [m], > 0.
+        H: Horizontal tension [N], > 0.
+        m: Mass [kg/m], > 0.
+        g: Gravitational acceleration [m/s^2], > 0.
+        EA: Axial stiffness [N] (``inf``: inextensible).
+        sag: Mid-span sag ``d`` [m], >= 0.
+    """
     L, H = _check("span", span, 0.0), _check("H", H, 0.0)
     m, g = _check("m", m, 0.0), _check("g", g, 0.0)
     EA, d = _check("EA", EA, 0.0, allow_inf=True), _check("sag", sag, 0.0, strict=False)
@@ -469,6 +531,10 @@ def irvine_symmetric_frequency(lambda2: float, n: int = 1) -> float:
     per branch ``((2n-1) pi/2, (2n+1) pi/2)``; it is bracketed exactly by the pole-free
     ``G = sin x - (x - 4 x^3/lambda2) cos x``, which equals ``+-1`` at the branch ends.
     ``lambda2 = inf`` (inextensible limit) gives ``tan x = x``: 2.8606 pi for n = 1.
+
+    Args:
+        lambda2: Irvine's parameter (:func:`irvine_lambda2`), > 0 or ``inf``.
+        n: Number of the symmetric mode, >= 1.
     """
     lam2 = _check("lambda2", lambda2, 0.0, allow_inf=True)
     if int(n) != n or n < 1:

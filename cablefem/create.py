@@ -14,7 +14,7 @@ from typing import Any
 from mpi4py import MPI
 
 from cablefem.anchor import Anchor
-from cablefem.describe import describe_cable, describe_network
+from cablefem.arguments import describe_cable, describe_network
 from cablefem.description import (
     BEAM_BOUNDS,
     BeamSpec,
@@ -41,58 +41,40 @@ def create_cable(comm: MPI.Comm, anchors: list[Anchor], section: Section, *,
     """The extensible string of one cable between two anchors
     (:class:`cablefem.cable.CableModel`), ready for :func:`cablefem.statics.solve_static`.
 
-    Parameters
-    ----------
-    comm
-        MPI communicator; the mesh is partitioned over it (collective).
-    anchors
-        The two :class:`cablefem.anchor.Anchor` (first at ``s = 0``).
-    section
-        The cross-section (:class:`cablefem.properties.Section`).
-    length, horizontal_tension, sag_ratio, polyline
-        Exactly one: the stress-free length l (m); the horizontal tension H (N) or the sag
-        ratio (sag / span, -) of the elastic catenary through the anchors (needs gravity);
-        or the stress-free points (n, 3) (m), whose ends are the anchors' default positions.
-    elements, grading
-        Number of elements, and the mid-span / end element length ratio (>= 1).
-    gravity
-        :class:`cablefem.description.Gravity`; default 9.81 m/s^2 along -z.
-    loads, point_masses, point_loads
-        :class:`~cablefem.description.DistributedLoad` (N/m),
-        :class:`~cablefem.description.PointMass` (kg at s m),
-        :class:`~cablefem.description.PointLoad` (N at s m).
-    damping
-        :class:`cablefem.description.Damping` (default none).
-    dampers
-        :class:`cablefem.description.Damper` (external dashpots with springs, from the
-        ground to the cable; they act on the motion from the static state,
-        ``docs/dampers.md``).
-    fluid
-        :class:`cablefem.description.Fluid`: water or air around the cable (Morison drag,
-        added mass, buoyancy; ``docs/fluid.md``).
-    tension_only
-        No compression (``T = EA max(strain, 0)``).
-    outer_correction
-        'hinge' (default: the first-order outer correction, :mod:`cablefem.hinge`) or
-        'none' (the paper's leading order, for comparison).
-    span_bending
-        The span's own bending stiffness EI in the string (``docs/theory.md`` §6.1; the
-        clamps' rotation stays with the boundary layer). ``"auto"`` is resolved by
-        :func:`cablefem.run_case` (on where it would move a computed frequency by more than
-        0.5 %, :mod:`cablefem.span_bending`); a model built here takes it as off.
-    petsc_options, petsc_options_prefix
-        Options of the model's solvers (without the prefix) and the prefix.
-    units
-        'SI' or 'dimensionless': labels of the outputs only.
-    name
-        Name of the cable in error messages.
+    Args:
+        comm: MPI communicator; the mesh is partitioned over it (collective).
+        anchors: The two :class:`cablefem.anchor.Anchor` (first at ``s = 0``).
+        section: The cross-section (:class:`cablefem.properties.Section`).
+        length, horizontal_tension, sag_ratio, polyline: Exactly one: the stress-free length l (m);
+            the horizontal tension H (N) or the sag ratio (sag / span, -) of the elastic catenary
+            through the anchors (needs gravity); or the stress-free points (n, 3) (m), whose ends
+            are the anchors' default positions.
+        elements, grading: Number of elements, and the mid-span / end element length ratio (>= 1).
+        gravity: :class:`cablefem.description.Gravity`; default 9.81 m/s^2 along -z.
+        loads, point_masses, point_loads: :class:`~cablefem.description.DistributedLoad` (N/m),
+            :class:`~cablefem.description.PointMass` (kg at s m),
+            :class:`~cablefem.description.PointLoad` (N at s m).
+        damping: :class:`cablefem.description.Damping` (default none).
+        dampers: :class:`cablefem.description.Damper` (external dashpots with springs, from the
+            ground to the cable; they act on the motion from the static state, ``docs/dampers.md``).
+        fluid: :class:`cablefem.description.Fluid`: water or air around the cable (Morison drag,
+            added mass, buoyancy; ``docs/fluid.md``).
+        tension_only: No compression (``T = EA max(strain, 0)``).
+        outer_correction: 'hinge' (default: the first-order outer correction, :mod:`cablefem.hinge`)
+            or 'none' (the paper's leading order, for comparison).
+        span_bending: The span's own bending stiffness EI in the string (``docs/theory.md`` §6.1;
+            the clamps' rotation stays with the boundary layer). ``"auto"`` is resolved by
+            :func:`cablefem.run_case` (on where it would move a computed frequency by more than 0.5
+            %, :mod:`cablefem.span_bending`); a model built here takes it as off.
+        petsc_options, petsc_options_prefix: Options of the model's solvers (without the prefix) and
+            the prefix.
+        units: 'SI' or 'dimensionless': labels of the outputs only.
+        name: Name of the cable in error messages.
 
-    Raises
-    ------
-    CaseError
-        Every problem of the arguments, each under the argument's name, e.g.
-        ``("sag_ratio", "must be > 0 and <= 10, got -0.1")``; a static catenary that does
-        not exist (``("horizontal_tension", ...)``).
+    Raises:
+        CaseError: Every problem of the arguments, each under the argument's name, e.g.
+            ``("sag_ratio", "must be > 0 and <= 10, got -0.1")``; a static catenary that does not
+            exist (``("horizontal_tension", ...)``).
     """
     from cablefem.cable import CableModel
 
@@ -110,11 +92,24 @@ def create_rod(comm: MPI.Comm, anchors: list[Anchor], section: Section, *,
                layer_elements: float = 8.0, growth: float = 1.1, span_elements: int = 100,
                shear_stiffness: float | None = None, refine: float = 1.0, **options):
     """The reference rod (:class:`cablefem.rod.BeamModel`, geometrically exact, bending
-    stiffness everywhere) of the same cable as :func:`create_cable` (same arguments, but
-    not a polyline; ``elements``, ``grading``, ``tension_only``, ``outer_correction`` and
-    ``span_bending`` do not apply). Its mesh: ``layer_elements`` per layer length at a
-    clamp, ``growth`` ratio of neighbouring elements, at most l / ``span_elements`` long,
-    all scaled by ``refine``; ``shear_stiffness`` GA (N), default 1e5 times the largest tension."""
+    stiffness everywhere) of the same cable as :func:`create_cable`.
+
+    Args:
+        comm: MPI communicator (collective).
+        anchors: The two :class:`cablefem.anchor.Anchor` (first at ``s = 0``).
+        section: The cross-section (:class:`cablefem.properties.Section`).
+        layer_elements: Elements per layer length at a clamp.
+        growth: Ratio of the lengths of neighbouring elements.
+        span_elements: Elements are at most l / ``span_elements`` long.
+        shear_stiffness: GA (N); default 1e5 times the largest tension.
+        refine: Scales the mesh density (> 0).
+        **options: The keyword arguments of :func:`create_cable`, but not ``polyline``;
+            ``elements``, ``grading``, ``tension_only``, ``outer_correction`` and
+            ``span_bending`` do not apply.
+
+    Raises:
+        CaseError: Every problem of the arguments, each under the argument's name.
+    """
     from cablefem.rod import BeamModel
 
     prefix = options.pop("petsc_options_prefix", "cable_")
@@ -146,28 +141,30 @@ def create_network(comm: MPI.Comm, mesh_file: str | os.PathLike, sections: dict[
     """A cable network from a tagged gmsh file (:class:`cablefem.network.NetworkModel`; tag
     convention in ``meshes/README.md``).
 
-    Parameters
-    ----------
-    comm
-        MPI communicator (collective).
-    mesh_file
-        The gmsh ``.msh`` file: the *pretensioned* geometry (m).
-    sections
-        Section name -> :class:`cablefem.properties.Section`.
-    anchors
-        :class:`cablefem.anchor.Anchor` whose names are 0D groups of the mesh (no position:
-        every node of the group is anchored there).
-    cables
-        :class:`cablefem.description.CableSpec` (1D group of the mesh, section name,
-        pretension N) for every cable group of the mesh.
-    gravity, loads, point_masses, point_loads, damping, tension_only, outer_correction,
-    span_bending, petsc_options, petsc_options_prefix, units, name
-        As for :func:`create_cable`; point masses and point loads name 0D groups in ``s``.
-        ``outer_correction = "hinge"`` (default): a virtual hinge at every clamped anchor
-        (a clamp a cable runs through: one per side, :func:`cablefem.network.split_clamps`).
-        ``span_bending``: the bending energy at every node of two cable elements that holds
-        no anchor or point term, the span's moment handed over at the others
-        (:meth:`cablefem.network.NetworkModel.add_span_bending`).
+    Args:
+        comm: MPI communicator (collective).
+        mesh_file: The gmsh ``.msh`` file: the *pretensioned* geometry (m).
+        sections: Section name -> :class:`cablefem.properties.Section`.
+        anchors: :class:`cablefem.anchor.Anchor` whose names are 0D groups of the mesh (no position:
+            every node of the group is anchored there).
+        cables: :class:`cablefem.description.CableSpec` (1D group of the mesh, section name,
+            pretension N) for every cable group of the mesh.
+        gravity, loads, point_masses, point_loads, damping: As for :func:`create_cable`;
+            point masses and point loads name 0D groups in ``s``.
+        tension_only, petsc_options, petsc_options_prefix, units, name: As for
+            :func:`create_cable`.
+        outer_correction: ``"hinge"`` (default): a virtual hinge at every clamped anchor (a
+            clamp a cable runs through: one per side, :func:`cablefem.network.split_clamps`);
+            ``"none"``: the paper's leading order.
+        span_bending: The bending energy at every node of two cable elements that holds no
+            anchor or point term, the span's moment handed over at the others
+            (:meth:`cablefem.network.NetworkModel.add_span_bending`).
+
+    Returns:
+        The :class:`cablefem.network.NetworkModel`, its mesh read from ``mesh_file``.
+
+    Raises:
+        CaseError: Every problem of the arguments, each under the argument's name.
     """
     from cablefem.network import NetworkModel
 

@@ -4,7 +4,7 @@ geometry, mesh, loads, point masses, damping and solver switches, gathered in
 
 The case schema (:mod:`cablefem.case`) reuses these classes: a :class:`cablefem.case.Case` is
 a :class:`CableDescription` plus the run settings (dynamics, modal, fatigue, title).
-:func:`cablefem.describe.describe_cable` and :func:`~cablefem.describe.describe_network`
+:func:`cablefem.arguments.describe_cable` and :func:`~cablefem.arguments.describe_network`
 check a description built from Python objects; :func:`cablefem.create_cable` and
 :func:`cablefem.create_network` build the model from it.
 Pure Python/NumPy: no dolfinx import.
@@ -47,7 +47,12 @@ NAME = re.compile(r"[A-Za-z0-9_-]+")  #: anchor names
 
 @dataclass
 class Gravity:
-    """Gravitational acceleration ``g`` (m/s^2) along the unit vector ``direction``."""
+    """Gravitational acceleration ``g`` (m/s^2) along the unit vector ``direction``.
+
+    Args:
+        g: Gravitational acceleration (m/s^2), >= 0.
+        direction: (3,) unit vector along which it acts.
+    """
 
     g: float = 9.81
     direction: np.ndarray = field(default_factory=lambda: np.array([0.0, 0.0, -1.0]))
@@ -62,7 +67,13 @@ class Gravity:
 class Geometry:
     """How the stress-free length is given: ``kind`` is 'length' | 'horizontal_tension' |
     'sag_ratio' | 'polyline'; ``value`` is l (m), H (N) or the sag ratio (-), and for a
-    polyline its length l (m); ``polyline`` (n, 3) the stress-free points (m)."""
+    polyline its length l (m); ``polyline`` (n, 3) the stress-free points (m).
+
+    Args:
+        kind: 'length', 'horizontal_tension', 'sag_ratio' or 'polyline'.
+        value: l (m), H (N), the sag ratio (-) or the polyline's length (m).
+        polyline: (n, 3) stress-free points (m), for 'polyline'.
+    """
 
     kind: str
     value: float | None
@@ -76,7 +87,12 @@ class Geometry:
 
 @dataclass
 class MeshSpec:
-    """Number of string elements and the mid-span / end element length ratio."""
+    """Number of string elements and the mid-span / end element length ratio.
+
+    Args:
+        elements: Number of string elements, >= 1.
+        grading: Mid-span / end element length ratio, >= 1.
+    """
 
     elements: int = 30
     grading: float = 1.0
@@ -84,7 +100,12 @@ class MeshSpec:
 
 @dataclass
 class DistributedLoad:
-    """Load per unit stress-free length ``value`` (N/m) times ``time.value(t)``."""
+    """Load per unit stress-free length ``value`` (N/m) times ``time.value(t)``.
+
+    Args:
+        value: (3,) load per unit stress-free length (N/m).
+        time: Its time factor (default constant 1).
+    """
 
     value: np.ndarray
     time: TimeFunction = field(default_factory=TimeFunction.constant)
@@ -93,7 +114,12 @@ class DistributedLoad:
 @dataclass
 class PointMass:
     """Lumped ``mass`` (kg) at stress-free arc length ``s`` (m) from the first anchor (a
-    network: ``s`` is the name of a 0D group of the mesh)."""
+    network: ``s`` is the name of a 0D group of the mesh).
+
+    Args:
+        s: Stress-free arc length (m) from the first anchor, or a network's 0D group.
+        mass: The mass (kg), > 0.
+    """
 
     s: float
     mass: float
@@ -102,7 +128,13 @@ class PointMass:
 @dataclass
 class PointLoad:
     """Force ``value`` (N) times ``time.value(t)`` at stress-free arc length ``s`` (m) (a
-    network: ``s`` is the name of a 0D group of the mesh)."""
+    network: ``s`` is the name of a 0D group of the mesh).
+
+    Args:
+        s: Stress-free arc length (m) from the first anchor, or a network's 0D group.
+        value: (3,) force (N).
+        time: Its time factor (default constant 1).
+    """
 
     s: float
     value: np.ndarray
@@ -116,7 +148,15 @@ class Damper:
     cable point at stress-free ``distance`` (m) from anchor ``anchor``. It acts along the
     unit ``direction`` or, when that is None, in the plane normal to the cable at the point.
     Installed on the cable at rest: it acts in dynamics (and the modal analysis) on the
-    motion from the static state, and does not change the statics."""
+    motion from the static state, and does not change the statics.
+
+    Args:
+        anchor: Name of the anchor the distance is measured from.
+        distance: Stress-free distance (m) from that anchor, inside the cable.
+        coefficient: Dashpot coefficient c (N s/m), >= 0.
+        stiffness: Spring stiffness k (N/m), >= 0.
+        direction: (3,) unit direction, or None (the plane normal to the cable).
+    """
 
     anchor: str
     distance: float
@@ -131,7 +171,14 @@ class DamperLink:
     ``group`` is a dashpot of ``coefficient`` c (N s/m), with a spring of ``stiffness`` k
     (N/m) in parallel, between its two nodes (cable nodes, or a cable node and an anchor),
     acting along the line between them, or along a fixed unit ``direction`` on the nodes'
-    relative motion. Installed at rest, like :class:`Damper`."""
+    relative motion. Installed at rest, like :class:`Damper`.
+
+    Args:
+        group: The mesh's 1D group of the damper's cells.
+        coefficient: Dashpot coefficient c (N s/m), >= 0.
+        stiffness: Spring stiffness k (N/m), >= 0.
+        direction: (3,) unit direction, or None (along each cell).
+    """
 
     group: str
     coefficient: float
@@ -150,7 +197,24 @@ class Fluid:
     (False in air). The fluid's motion (:mod:`cablefem.flow`): the ``profile`` factor of
     the current with elevation (None: uniform), Airy ``waves`` on water of ``depth`` (m below
     the surface; None: deep water) built up over ``wave_ramp`` (s; None: 3 periods of the
-    longest wave), and a uniform ``velocity`` history (dynamics only)."""
+    longest wave), and a uniform ``velocity`` history (dynamics only).
+
+    Args:
+        density: Fluid density (kg/m^3).
+        diameter: Hydrodynamic diameter (m), or None (each cable's section's, a network).
+        current: (3,) current velocity (m/s).
+        surface: Elevation of the free surface against gravity (m), or None.
+        cd_normal, cd_tangential: Morison drag coefficients.
+        ca_normal: Normal added-mass coefficient.
+        buoyancy: Whether buoyancy acts (False in air).
+        time: The current's time factor.
+        profile: The current's factor with elevation, or None (uniform).
+        waves: Airy wave components (:class:`cablefem.flow.AiryWave`).
+        depth: Water depth below the surface (m), or None (deep water).
+        wave_ramp: The waves' build-up time (s), or None (3 periods of the longest wave).
+        velocity: A uniform velocity history (:class:`cablefem.flow.VelocitySeries`), or None.
+        ca_tangential: Tangential added-mass coefficient.
+    """
 
     density: float
     diameter: float | None  #: None: each cable's section's (a network's)
@@ -185,7 +249,15 @@ class Fluid:
 class Seabed:
     """A flat seabed (``docs/seabed.md``) at elevation ``z`` (m, along −gravity): contact
     ``stiffness`` (N/m per m of cable), vertical ``damping`` (N s/m per m) and Coulomb
-    ``friction`` (coefficient) regularised over ``friction_velocity`` (m/s)."""
+    ``friction`` (coefficient) regularised over ``friction_velocity`` (m/s).
+
+    Args:
+        z: Elevation along −gravity (m).
+        stiffness: Contact stiffness (N/m per m of cable), > 0.
+        damping: Vertical damping (N s/m per m), >= 0.
+        friction: Coulomb friction coefficient, >= 0.
+        friction_velocity: Regularisation velocity (m/s), > 0.
+    """
 
     z: float
     stiffness: float
@@ -198,7 +270,14 @@ class Seabed:
 class Damping:
     """Damping model 'none' | 'rayleigh' (current tangent) | 'rayleigh_k0' (static tangent)
     | 'axial', with resolved ``alpha`` (1/s), ``beta`` (s); ``ratios`` and ``frequencies``
-    (rad/s) when given that way (:meth:`from_ratios`)."""
+    (rad/s) when given that way (:meth:`from_ratios`).
+
+    Args:
+        model: 'none', 'rayleigh', 'rayleigh_k0' or 'axial'.
+        alpha: Mass-proportional coefficient (1/s), >= 0.
+        beta: Stiffness-proportional coefficient (s), >= 0.
+        ratios, frequencies: The ratios (-) and frequencies (rad/s) they came from, or None.
+    """
 
     model: str = "none"
     alpha: float = 0.0
@@ -222,7 +301,15 @@ class Damping:
 class SolverSpec:
     """The model's switches: the tension-only law, the first-order outer correction
     ('none' | 'hinge'), the span's own bending (string only) and PETSc options of its
-    solvers (without the options prefix)."""
+    solvers (without the options prefix).
+
+    Args:
+        tension_only: No compression (``T = EA max(strain, 0)``).
+        petsc_options: Options of the model's solvers, without the prefix.
+        outer_correction: 'hinge' or 'none'.
+        span_bending: True, False or "auto".
+        model: "string", "beam" or "auto".
+    """
 
     tension_only: bool = True
     petsc_options: dict = field(default_factory=dict)
@@ -238,7 +325,14 @@ class SolverSpec:
 
 @dataclass
 class BeamSpec:
-    """Mesh grading and shear stiffness of the reference rod (:mod:`cablefem.rod`)."""
+    """Mesh grading and shear stiffness of the reference rod (:mod:`cablefem.rod`).
+
+    Args:
+        layer_elements: Elements per layer length at a clamp.
+        growth: Ratio of the lengths of neighbouring elements.
+        span_elements: Elements are at most l / ``span_elements`` long.
+        shear_stiffness: GA (N), or None (1e5 times the largest tension).
+    """
 
     layer_elements: float = 8.0
     growth: float = 1.1
@@ -248,7 +342,13 @@ class BeamSpec:
 
 @dataclass
 class CableSpec:
-    """A family of cables: a 1D group of the mesh, its section and pretension."""
+    """A family of cables: a 1D group of the mesh, its section and pretension.
+
+    Args:
+        group: The mesh's 1D group of the cables.
+        section: Name of their section.
+        pretension: Their pretension (N), >= 0.
+    """
 
     group: str
     section: str
@@ -257,7 +357,14 @@ class CableSpec:
 
 @dataclass
 class NetworkSpec:
-    """A cable network: the mesh file, the named sections and the cable families."""
+    """A cable network: the mesh file, the named sections and the cable families.
+
+    Args:
+        mesh: The gmsh file.
+        sections: Section name -> :class:`cablefem.properties.Section`.
+        cables: The cable families.
+        kinks: The interior kinks reported: "all", "loaded" or "none".
+    """
 
     mesh: Path
     sections: dict[str, Section]
@@ -276,6 +383,23 @@ class CableDescription:
     ``network`` (mesh, sections, cable families), anchors naming 0D groups of its mesh and
     ``section`` its first cable family's. ``source`` names it in error messages; ``units``
     ('SI' or 'dimensionless') only labels the outputs (:mod:`cablefem.units`).
+
+    Args:
+        section: The cross-section (a network: its first cable family's).
+        anchors: The anchors.
+        geometry: The stress-free geometry (single cables), or None.
+        gravity: Gravity.
+        mesh: The string's mesh.
+        loads, point_masses, point_loads: The loads and masses.
+        dampers: External dampers (a network: :class:`DamperLink`).
+        fluid: The fluid around the cable, or None.
+        seabed: The seabed, or None.
+        damping: Structural damping.
+        solver: The model's switches and PETSc options.
+        beam: The reference rod's mesh.
+        network: The network (mesh, sections, cable families), or None.
+        source: Name in error messages.
+        units: 'SI' or 'dimensionless' (labels only).
     """
 
     section: Section | None
@@ -302,6 +426,13 @@ def rayleigh_coefficients(ratios: tuple[float, float],
     """Rayleigh ``alpha`` (1/s), ``beta`` (s) giving damping ratios ``z1, z2`` at circular
     frequencies ``w1 != w2`` (rad/s), from ``z(w) = alpha/(2 w) + beta w/2``:
     ``alpha = 2 w1 w2 (z1 w2 - z2 w1)/(w2^2 - w1^2)``, ``beta = 2 (z2 w2 - z1 w1)/(w2^2 - w1^2)``.
+
+    Args:
+        ratios: ``(z1, z2)`` (-).
+        frequencies: ``(w1, w2)`` (rad/s), distinct.
+
+    Returns:
+        ``(alpha, beta)``.
     """
     (z1, z2), (w1, w2) = ratios, frequencies
     d = w2**2 - w1**2

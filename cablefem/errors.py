@@ -32,14 +32,13 @@ class CableFemError(Exception):
 class InputError(CableFemError, ValueError):
     """One or more problems in what the user gave.
 
-    Attributes
-    ----------
-    problems : list of (str, str)
-        ``(key path, message)``, e.g. ``("anchors[1].motion.omega", "must be > 0 (rad/s)")``.
-    source : str
-        The case file (or ``'<dict>'``, or the CSV or mesh file concerned).
-
     ``str()`` gives one line per problem: ``"<source>: <key>: <message>"``.
+
+    Args:
+        problems: ``(key path, message)`` pairs, e.g. ``("anchors[1].motion.omega", "must be >
+            0 (rad/s)")``; kept as the attribute ``problems``.
+        source: The case file (or ``'<dict>'``, or the CSV or mesh file concerned); kept as the
+            attribute ``source``.
     """
 
     def __init__(self, problems: list[tuple[str, str]], source: str = "<dict>") -> None:

@@ -12,17 +12,14 @@ underestimates the damage. Pass the vector ``(Mx, My, Mz)``: the stress is then 
 moment vectors) and the continuous worst direction (:mod:`cablefem.fibres`) is reported.
 Invalid samples (``valid = 0``, empty/NaN moment: slack) are NaN, never zero stress; the
 fatigue functions refuse them unless dropped (``invalid="drop"``: the remaining samples are
-joined across the gaps into one history).
+joined across the gaps into one history). The reports' files are written by
+:func:`cablefem.io.fatiguereport.write_report`.
 """
 
 from __future__ import annotations
 
-import json
 import math
-import os
 from dataclasses import asdict, dataclass
-from pathlib import Path
-from typing import BinaryIO, Callable
 
 import numpy as np
 import rainflow
@@ -32,8 +29,7 @@ from cablefem.fibres import fibre_plane, scan_angles, scan_bound, worst_angle
 
 __all__ = ["StressSection", "SNCurve", "axial_stress", "bending_stress", "fibre_directions",
            "anchor_stress", "rainflow_cycles", "miner_damage", "equivalent_stress_range",
-           "damage_equivalent_range", "time_to_failure", "YEAR_SECONDS", "fatigue_report",
-           "write_report"]
+           "damage_equivalent_range", "time_to_failure", "YEAR_SECONDS", "fatigue_report"]
 
 
 #: the year of ``damage_per_year``: 365.25 days of 86400 s [s]
@@ -63,7 +59,15 @@ def _finite(name: str, a: np.ndarray) -> None:
 @dataclass(frozen=True)
 class StressSection:
     """Section for ``sigma = T/A + M/W``: ``area`` A [m^2] and (effective) elastic section
-    modulus ``modulus`` W = I/c_o [m^3], both finite and > 0."""
+    modulus ``modulus`` W = I/c_o [m^3], both finite and > 0.
+
+    Args:
+        area: Area A [m^2].
+        modulus: Elastic section modulus W [m^3].
+
+    Raises:
+        ValueError: A value not finite or not > 0.
+    """
 
     area: float
     modulus: float
@@ -103,6 +107,15 @@ class SNCurve:
 
     Fields: ``detail_category`` ds_C [stress unit] > 0; slopes ``m1, m2`` >= 1; ``knee``
     bool; cycles ``N_C, N_knee, N_cutoff`` > 0 with ``N_knee < N_cutoff``.
+
+    Args:
+        detail_category: ds_C [stress unit], > 0.
+        m1, m2: Slopes, >= 1.
+        knee: Whether the curve has a knee and a cut-off.
+        N_C, N_knee, N_cutoff: Cycles, > 0, ``N_knee < N_cutoff``.
+
+    Raises:
+        ValueError: A field out of its range.
     """
 
     detail_category: float
@@ -167,12 +180,22 @@ class SNCurve:
 
 
 def axial_stress(T: ArrayLike, section: StressSection) -> np.ndarray:
-    """Axial stress ``T/A`` [Pa] from the tension ``T`` [N]."""
+    """Axial stress ``T/A`` [Pa] from the tension ``T`` [N].
+
+    Args:
+        T: Tension [N].
+        section: The stress section.
+    """
     return np.asarray(T, float) / section.area
 
 
 def bending_stress(M: ArrayLike, section: StressSection) -> np.ndarray:
-    """Bending stress ``M/W`` [Pa] at the outer fibre from a signed moment ``M`` [N m]."""
+    """Bending stress ``M/W`` [Pa] at the outer fibre from a signed moment ``M`` [N m].
+
+    Args:
+        M: Signed moment [N m].
+        section: The stress section.
+    """
     return np.asarray(M, float) / section.modulus
 
 
@@ -182,7 +205,16 @@ def fibre_directions(M: ArrayLike, valid: ArrayLike | None = None, fibres: int =
     :func:`cablefem.fibres.scan_angles` (``2 pi k/fibres`` and the opposites: ``fibres`` rows
     for an even count, ``2 fibres`` for an odd one), in the plane ``e1, e2`` of the moment
     vectors ``M`` (n, 3) over the valid samples (:func:`cablefem.fibres.fibre_plane`). The
-    bending stress at direction ``w`` is ``M . w / W``."""
+    bending stress at direction ``w`` is ``M . w / W``.
+
+    Args:
+        M: (n, 3) moment vectors [N m].
+        valid: (n,) 0/1, or None (all finite rows).
+        fibres: Number of scanned directions, >= 1.
+
+    Returns:
+        The unit directions, one per row.
+    """
     M = np.asarray(M, float).reshape(-1, 3)
     ok = np.all(np.isfinite(M), axis=1)
     if valid is not None:
@@ -196,11 +228,17 @@ def anchor_stress(T: ArrayLike, M: ArrayLike, valid: ArrayLike | None, section: 
                   *, fibres: int = 36) -> tuple[np.ndarray, np.ndarray]:
     """Stress ``T/A + M/W`` [Pa] at a clamped anchor and the mask of the valid samples.
 
-    ``T`` (n,) tension [N]; ``M`` (n,) signed moment or (n, 3) moment vector [N m];
-    ``valid`` (n,) 0/1 or None. Returns ``sigma``: (n,), or (n, k) at the k scanned
-    directions of :func:`fibre_directions` for a moment vector, NaN (never zero) at invalid
-    samples; and
-    ``ok`` (n,) bool: ``T`` and ``M`` finite and ``valid`` nonzero.
+    Args:
+        T: (n,) tension [N].
+        M: (n,) signed moment or (n, 3) moment vector [N m].
+        valid: (n,) 0/1, or None.
+        section: The stress section.
+        fibres: Number of scanned directions (moment vectors).
+
+    Returns:
+        ``(sigma, ok)``: ``sigma`` (n,), or (n, k) at the k scanned directions of
+        :func:`fibre_directions` for a moment vector, NaN (never zero) at invalid samples;
+        ``ok`` (n,) bool: ``T`` and ``M`` finite and ``valid`` nonzero.
     """
     T, M = np.asarray(T, float), np.asarray(M, float)
     ok = np.isfinite(T) & (np.all(np.isfinite(M), axis=1) if M.ndim == 2 else np.isfinite(M))
@@ -217,7 +255,14 @@ def rainflow_cycles(series: ArrayLike) -> tuple[np.ndarray, np.ndarray, np.ndarr
     """Rainflow cycles (ASTM E1049-85 5.4.4, ``rainflow.extract_cycles``): ``ranges``,
     ``means`` [stress unit], ``counts`` (1.0 full cycle, 0.5 half cycle: the residue's ranges
     are kept as half cycles). Zero ranges (constant series) are left out; a 2-sample series
-    (for which rainflow 3.2.0 counts nothing) is one half cycle. NaN raises ValueError."""
+    (for which rainflow 3.2.0 counts nothing) is one half cycle. NaN raises ValueError.
+
+    Args:
+        series: 1-D stress history.
+
+    Returns:
+        ``(ranges, means, counts)``.
+    """
     x = np.asarray(series, float)
     if x.ndim != 1:
         raise ValueError(f"series must be 1-D (got shape {x.shape})")
@@ -242,7 +287,16 @@ def _cycles(ranges: ArrayLike, counts: ArrayLike) -> tuple[np.ndarray, np.ndarra
 
 
 def miner_damage(ranges: ArrayLike, counts: ArrayLike, curve: SNCurve) -> float:
-    """Miner's sum ``D = sum n_i / N(ds_i)`` (ranges below the cut-off do no damage)."""
+    """Miner's sum ``D = sum n_i / N(ds_i)`` (ranges below the cut-off do no damage).
+
+    Args:
+        ranges: Stress ranges [stress unit], >= 0.
+        counts: Their cycle counts, >= 0.
+        curve: The S-N curve.
+
+    Returns:
+        The damage D [-].
+    """
     r, n = _cycles(ranges, counts)
     return float(np.sum(n / curve.cycles_to_failure(r)))
 
@@ -254,7 +308,14 @@ def equivalent_stress_range(ranges: ArrayLike, counts: ArrayLike, m: float,
     (``N_C``): the range to compare with the detail category (single slope: ``D =
     (ds_E/ds_C)^m``). The moment of a single slope ``m``: all ranges count, even below a
     cut-off, so with a knee it does not give the curve's damage (the reports use
-    :func:`damage_equivalent_range` and ``ds_C D^(1/m1)``). 0 without cycles."""
+    :func:`damage_equivalent_range` and ``ds_C D^(1/m1)``). 0 without cycles.
+
+    Args:
+        ranges: Stress ranges, >= 0.
+        counts: Their cycle counts, >= 0.
+        m: The slope.
+        n_ref: Reference number of cycles (None: the total).
+    """
     r, n = _cycles(ranges, counts)
     m, total = _number("m", m), float(np.sum(n))
     nref = total if n_ref is None else _number("n_ref", n_ref)
@@ -267,7 +328,13 @@ def damage_equivalent_range(ranges: ArrayLike, counts: ArrayLike, curve: SNCurve
     at or above the cut-off, and nonzero), ``ds_eq`` the constant range of which ``n_d``
     cycles give the spectrum's damage ``D`` under ``curve``: ``N(ds_eq) = n_d / D``, on the
     slope ``m2`` if ``n_d / D > N_knee``. None if D = 0. (``n_d / D <= N_cutoff`` since every
-    damaging cycle has ``N <= N_cutoff``: the inverse exists; the clip is for rounding.)"""
+    damaging cycle has ``N <= N_cutoff``: the inverse exists; the clip is for rounding.)
+
+    Args:
+        ranges: Stress ranges, >= 0.
+        counts: Their cycle counts, >= 0.
+        curve: The S-N curve.
+    """
     r, n = _cycles(ranges, counts)
     N = np.atleast_1d(curve.cycles_to_failure(r))
     hit = np.isfinite(N)
@@ -279,7 +346,12 @@ def damage_equivalent_range(ranges: ArrayLike, counts: ArrayLike, curve: SNCurve
 
 
 def time_to_failure(D: float, duration: float) -> float:
-    """``duration / D``: the simulated loading repeated until ``D = 1`` (inf if D = 0)."""
+    """``duration / D``: the simulated loading repeated until ``D = 1`` (inf if D = 0).
+
+    Args:
+        D: Damage over the loading, >= 0.
+        duration: The loading's duration [time unit], > 0.
+    """
     D, duration = _number("D", D, 0.0, inclusive=True), _number("duration", duration)
     return math.inf if D == 0 else duration / D
 
@@ -353,15 +425,30 @@ def fatigue_report(times: ArrayLike, T: ArrayLike, M: ArrayLike, valid: ArrayLik
                    bins: int = 20, anchor: str = "anchor", year: float | None = None) -> dict:
     """Fatigue of one anchor: stresses, rainflow, Miner's damage, time to failure.
 
-    ``times`` (n,) strictly increasing [time unit]; ``T`` (n,) [N]; ``M`` (n,) signed or
-    (n, 3) vector [N m] (prefer the vector, see the module docstring: the damage is that of
-    the continuous worst direction, :mod:`cablefem.fibres`, scanned first at ``fibres``
-    directions and their opposites); ``valid`` (n,) 0/1 or None; ``invalid``: "raise" or
-    "drop" (the valid samples are then joined across the gaps into one history);
-    ``window``: None (all), "steady" (``t >= t_end - (t_end - t_0)/3``) or (t0, t1)
-    (``t0 <= t <= t1``); ``bins``: of the range histogram; ``anchor``: name for the
-    messages; ``year``: a year's length in the time unit (None: no ``damage_per_year``).
-    Returns a JSON-ready dict whose fields ``docs/fatigue.md`` defines.
+    Args:
+        times: (n,) strictly increasing [time unit].
+        T: (n,) tension [N].
+        M: (n,) signed moment or (n, 3) moment vector [N m] (prefer the vector, see the module
+            docstring: the damage is that of the continuous worst direction,
+            :mod:`cablefem.fibres`, scanned first at ``fibres`` directions and their opposites).
+        valid: (n,) 0/1, or None (all valid).
+        section: The stress section.
+        curve: The S-N curve.
+        invalid: "raise" or "drop" (the valid samples are then joined across the gaps into
+            one history).
+        window: None (all), "steady" (``t >= t_end - (t_end - t_0)/3``) or (t0, t1)
+            (``t0 <= t <= t1``).
+        fibres: Number of scanned directions.
+        bins: Bins of the range histogram.
+        anchor: Name for the messages.
+        year: A year's length in the time unit (None: no ``damage_per_year``).
+
+    Returns:
+        A JSON-ready dict whose fields ``docs/fatigue.md`` defines.
+
+    Raises:
+        ValueError: Inconsistent shapes, times not increasing, an invalid sample with
+            ``invalid="raise"``, or no valid sample in the window.
     """
     t, T, M = (np.asarray(a, float) for a in (times, T, M))
     n = t.size
@@ -406,101 +493,3 @@ def fatigue_report(times: ArrayLike, T: ArrayLike, M: ArrayLike, valid: ArrayLik
             "time_to_failure_infinite": math.isinf(ttf), "year": year,
             "damage_per_year": None if year is None else D * year / duration,
             "histogram": {"edges": edges.tolist(), "counts": hist.tolist()}, "fibre": fib}
-
-
-def _atomic(path: Path, write: Callable[[BinaryIO], object]) -> None:
-    """Write through ``write(binary file)`` to a temporary name beside ``path``, then rename."""
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    try:
-        with open(tmp, "wb") as fh:
-            write(fh)
-        os.replace(tmp, path)
-    finally:
-        tmp.unlink(missing_ok=True)
-
-
-def _g(*xs: float | None) -> str:
-    return " / ".join("-" if x is None else f"{x:.4g}" for x in xs)  # None: not defined
-
-
-def _sn_text(curve: SNCurve, u: str) -> str:
-    knee = (f"knee ds_D = {curve.delta_sigma_D:.4g} {u} at {curve.N_knee:.3g}, m2 = "
-            f"{curve.m2:g}, cut-off ds_L = {curve.delta_sigma_L:.4g} {u} at "
-            f"{curve.N_cutoff:.3g}" if curve.knee else "single slope, no cut-off")
-    return (f"S-N curve: ds_C = {curve.detail_category:.4g} {u} at N_C = {curve.N_C:.3g}, "
-            f"m1 = {curve.m1:g}, {knee}.")
-
-
-def _years(x: float | None) -> str:
-    return "" if x is None else f" ({x / YEAR_SECONDS:.3g} years of 365.25 d)"
-
-
-def write_report(outdir: str | Path, reports: dict[str, dict], curve: SNCurve,
-                 section: StressSection | None = None, units: str = "Pa",
-                 time_unit: str = "s") -> list[str]:
-    """Write ``fatigue.json``, ``fatigue.md`` and ``fatigue_histogram.png`` into ``outdir``
-    (atomically); ``reports``: anchor name -> :func:`fatigue_report` (each with its own
-    ``section``). The top-level ``section`` is the reports' common one, None where they
-    differ (``section``: for reports without one). Returns the file names."""
-    out = Path(outdir)
-    out.mkdir(parents=True, exist_ok=True)
-    given = None if section is None else {"area": section.area, "modulus": section.modulus}
-    secs = [r.get("section", given) for r in reports.values()]
-    common = secs[0] if secs and all(x == secs[0] for x in secs) else None
-    data = {"units": {"stress": units, "time": time_unit}, "section": common,
-            "sn_curve": curve.as_dict(), "anchors": reports}
-    text = json.dumps(data, indent=2, allow_nan=False) + "\n"
-    _atomic(out / "fatigue.json", lambda fh: fh.write(text.encode()))
-    lines = ["# Fatigue at the clamped anchors", "", _sn_text(curve, units),
-             f"Stresses in {units}, times in {time_unit}; rainflow + Miner over the window "
-             "(fields: docs/fatigue.md).", ""]
-    for name, r in reports.items():
-        f = r.get("fibre")
-        fib = (f" (worst direction {f['angle_deg']:.6g} deg from e1; best of the "
-               f"{f['scanned']} scanned: {f['damage_scan']:.4g})") if f else ""
-        sec = r.get("section", given) or {"area": None, "modulus": None}
-        s_yr = "" if time_unit != "s" else _years(r["time_to_failure"])
-        rows = [("window t0 / t1", _g(*r["window"])), ("damage D", _g(r["damage"]) + fib),
-                ("damage per year", _g(r.get("damage_per_year"))),
-                ("time to failure", "inf (no damaging cycle)" if r["time_to_failure_infinite"]
-                 else _g(r["time_to_failure"]) + s_yr),
-                ("cycles (all / damaging)", _g(r["cycles"], r.get("damaging_cycles"))),
-                ("max range / equivalent range / at N_C",
-                 _g(r["max_range"], r["equivalent_range"], r["equivalent_range_N_C"])),
-                ("stress min / max", _g(r["stress"]["min"], r["stress"]["max"])),
-                ("range axial / bending",
-                 _g(r["axial_stress"]["range"], r["bending_stress"]["range"])),
-                ("D axial only / bending only",
-                 _g(r["damage_axial_only"], r["damage_bending_only"])),
-                ("section A / W", _g(sec["area"], sec["modulus"])),
-                ("dropped invalid samples", _g(r["dropped_invalid_samples"]))]
-        lines += [f"## Anchor {name}", "", "| quantity | value |", "|---|---|"]
-        lines += [f"| {k} | {x} |" for k, x in rows] + [""]
-    _atomic(out / "fatigue.md", lambda fh: fh.write("\n".join(lines).encode()))
-    _histogram_png(out / "fatigue_histogram.png", reports, curve, units)
-    return ["fatigue.json", "fatigue.md", "fatigue_histogram.png"]
-
-
-def _histogram_png(path: Path, reports: dict[str, dict], curve: SNCurve, units: str) -> None:
-    from matplotlib.figure import Figure  # no pyplot: savefig(format="png") uses Agg
-
-    fig = Figure(figsize=(8, 2.8 * max(len(reports), 1)))
-    axes = fig.subplots(max(len(reports), 1), 1, squeeze=False)[:, 0]
-    marks = [("ds_C", curve.detail_category, "k")] + ([
-        ("knee ds_D", curve.delta_sigma_D, "tab:orange"),
-        ("cut-off ds_L", curve.delta_sigma_L, "tab:red")] if curve.knee else [])
-    for ax, (name, rep) in zip(axes, reports.items()):
-        e, h = np.array(rep["histogram"]["edges"]), np.array(rep["histogram"]["counts"])
-        ax.bar(e[:-1], h, width=np.diff(e), align="edge", color="tab:blue", label="cycles")
-        ax.set_yscale("log" if np.any(h > 0) else "linear")
-        for label, x, col in marks:
-            on = bool(x <= 1.5 * e[-1])  # marks far beyond the ranges: in the legend only
-            ax.plot([x, x] * on, [0, 1] * on, ls="--", color=col,
-                    transform=ax.get_xaxis_transform(),
-                    label=f"{label} = {x:.3g}" + ("" if on else " (off axis)"))
-        ax.set(ylabel="cycles", title=f"anchor {name}: D = {rep['damage']:.3g}")
-        ax.grid(True, lw=0.3)
-        ax.legend(fontsize=7)
-    axes[-1].set_xlabel(f"stress range [{units}]")
-    fig.tight_layout()
-    _atomic(path, lambda fh: fig.savefig(fh, format="png", dpi=110))

@@ -33,7 +33,15 @@ def fibre_plane(M: np.ndarray, ok: np.ndarray | None = None) -> tuple[np.ndarray
     """``e1, e2``: the eigenvectors of the two largest eigenvalues of ``S = sum M M^T`` over
     the rows ``ok`` of ``M`` (n, 3) (not centred: a constant moment's direction stays in the
     plane), each signed so that its largest-magnitude component is positive. For a moment in
-    one plane, ``e1`` is its direction (``e2`` then any unit vector normal to it)."""
+    one plane, ``e1`` is its direction (``e2`` then any unit vector normal to it).
+
+    Args:
+        M: (n, 3) moment vectors.
+        ok: (n,) bool mask of the rows to use, or None (all).
+
+    Returns:
+        ``(e1, e2)``, unit (3,) vectors.
+    """
     M = np.asarray(M, float).reshape(-1, 3)
     if ok is not None:
         M = M[np.asarray(ok, bool)]
@@ -45,7 +53,11 @@ def scan_angles(fibres: int) -> np.ndarray:
     """The scanned angles from ``e1`` [rad]: ``2 pi k/fibres`` (k = 0..fibres-1) and their
     opposites ``+ pi``: for an even count the same ``fibres`` angles, for an odd one the
     ``2 fibres`` angles ``pi j/fibres``. The set is its own mirror image about ``e1``
-    (``a -> -a``) and about ``e2`` (``a -> pi - a``): the sign of neither eigenvector moves it."""
+    (``a -> -a``) and about ``e2`` (``a -> pi - a``): the sign of neither eigenvector moves it.
+
+    Args:
+        fibres: Number of directions, an integer >= 1.
+    """
     if isinstance(fibres, bool) or int(fibres) != fibres or fibres < 1:
         raise ValueError(f"fibres must be an integer >= 1 (got {fibres!r})")
     n = int(fibres) * (1 if fibres % 2 == 0 else 2)
@@ -58,7 +70,12 @@ def scan_bound(fibres: int, m: float) -> float:
     ``delta = pi/n`` of a scanned one (n = :func:`scan_angles` count), where every stress
     range is ``cos(delta)`` times the worst's; the damage per cycle falls at most as
     ``range^m`` (m: the curve's steepest slope), so ``D_scan >= cos(delta)^m D_worst`` while no
-    range falls below a cut-off."""
+    range falls below a cut-off.
+
+    Args:
+        fibres: Number of scanned directions.
+        m: The S-N curve's steepest slope.
+    """
     n = scan_angles(fibres).size
     return math.cos(math.pi / n) ** m if n > 1 else 0.0
 
@@ -67,7 +84,15 @@ def scan_bound(fibres: int, m: float) -> float:
 class WorstFibre:
     """The search's result: ``angle`` [rad, in [0, 2 pi)] and ``damage`` of the continuous
     worst direction; the best scanned angle, its damage, the smallest scanned damage, and
-    the number of damage evaluations."""
+    the number of damage evaluations.
+
+    Attributes:
+        angle: Worst direction [rad from e1, in [0, 2 pi)].
+        damage: Its damage.
+        scan_angle, scan_damage: The best scanned angle [rad] and its damage.
+        scan_min: The smallest scanned damage.
+        evaluations: Number of damage evaluations.
+    """
 
     angle: float
     damage: float
@@ -82,7 +107,13 @@ def worst_angle(damage: Callable[[float], float], fibres: int,
     """Maximise ``damage(a)`` over the angle: the :func:`scan_angles`, then a golden-section
     search on ``[a_k - h, a_k + h]`` around the best scanned ``a_k`` (h: the scan spacing)
     down to a bracket of ``tol`` rad. The result is the largest damage evaluated (never below
-    the scan's). Without damage at any scanned angle there is nothing to refine."""
+    the scan's). Without damage at any scanned angle there is nothing to refine.
+
+    Args:
+        damage: The damage at an angle [rad] from e1.
+        fibres: Number of scanned directions.
+        tol: Final bracket [rad].
+    """
     angles = scan_angles(fibres)
     d = np.array([damage(float(a)) for a in angles])
     k = int(np.argmax(d))

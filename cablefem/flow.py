@@ -30,7 +30,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from cablefem.motion import _check_table, _read_csv, _Spline, ramp_factors
+from cablefem.motion import ramp_factors
+from cablefem.timetables import Spline, check_table, read_csv
 
 __all__ = ["Profile", "AiryWave", "VelocitySeries", "wave_number", "wave_kinematics",
            "read_velocity_csv", "flow_problems", "POWER_FLOOR", "jonswap", "jonswap_waves"]
@@ -47,6 +48,16 @@ class Profile:
     ``kind`` "table": piecewise linear through ``(elevations, factors)`` (>= 2 rows,
     elevations strictly increasing), held at the end values beyond the table. ``kind``
     "power": ``(max(z − ground, POWER_FLOOR reference)/reference)^exponent``.
+
+    Args:
+        kind: "table" or "power".
+        elevations, factors: The table's rows (m, -), for "table".
+        reference: Reference height (m), > 0, for "power".
+        exponent: The power law's exponent, >= 0.
+        ground: The ground's elevation (m), for "power".
+
+    Raises:
+        ValueError: Naming the argument out of range.
     """
 
     kind: str
@@ -58,7 +69,7 @@ class Profile:
 
     def __post_init__(self) -> None:
         if self.kind == "table":
-            z, f = _check_table(self.elevations, self.factors, None)
+            z, f = check_table(self.elevations, self.factors, None)
             object.__setattr__(self, "elevations", z)
             object.__setattr__(self, "factors", f)
         elif self.kind == "power":
@@ -94,7 +105,16 @@ class Profile:
 
 def wave_number(omega: float, g: float, depth: float | None) -> float:
     """The root ``k`` of the dispersion relation ``ω² = g k tanh(k h)`` (``h = depth``;
-    None: deep water, ``k = ω²/g``), by Newton from the deep-water value."""
+    None: deep water, ``k = ω²/g``), by Newton from the deep-water value.
+
+    Args:
+        omega: Circular frequency (rad/s).
+        g: Gravitational acceleration (m/s²).
+        depth: Water depth (m), or None.
+
+    Returns:
+        The wave number (1/m).
+    """
     k = omega**2 / g
     if depth is None:
         return k
@@ -114,7 +134,15 @@ def wave_number(omega: float, g: float, depth: float | None) -> float:
 class AiryWave:
     """A linear wave component: ``height`` (m, crest to trough), ``period`` (s), unit
     horizontal ``direction`` of travel, ``phase`` φ (rad): the surface elevation is
-    ``½ H cos(k d·x − ω t + φ)``."""
+    ``½ H cos(k d·x − ω t + φ)``.
+
+    Args:
+        height: Wave height (m).
+        period: Period (s).
+        direction: (3,) unit horizontal direction of travel.
+        phase: Phase (rad).
+        key: The case key it comes from when not its own ``[[fluid.waves]]`` entry.
+    """
 
     height: float
     period: float
@@ -140,7 +168,17 @@ def jonswap(omega, hs: float, tp: float, gamma: float = 3.3) -> np.ndarray:
         S(ω) = A_γ (5/16) Hs² ωp⁴ ω⁻⁵ exp(−(5/4)(ωp/ω)⁴) γ^exp(−(ω−ωp)²/(2σ²ωp²))
 
     ``σ`` = 0.07 below the peak and 0.09 above, ``A_γ = 1 − 0.287 ln γ`` the normalisation
-    that keeps ``∫ S dω`` at ``Hs²/16`` (to about 1 % for γ from 1 to 7)."""
+    that keeps ``∫ S dω`` at ``Hs²/16`` (to about 1 % for γ from 1 to 7).
+
+    Args:
+        omega: Circular frequencies (rad/s).
+        hs: Significant wave height (m).
+        tp: Peak period (s).
+        gamma: Peak enhancement factor.
+
+    Returns:
+        S(ω) at ``omega`` (0 at ω <= 0).
+    """
     w = np.asarray(omega, float)
     wp = 2.0 * math.pi / tp
     sigma = np.where(w <= wp, 0.07, 0.09)
@@ -158,7 +196,20 @@ def jonswap_waves(hs: float, tp: float, direction, gamma: float = 3.3,
     times the peak frequency in equal bins, one component per bin at a frequency drawn
     uniformly in it (the sea then does not repeat after 2π/Δω), of amplitude
     ``sqrt(2 S(ω_i) Δω)`` (its variance ``S Δω``) and a random phase, from a generator
-    seeded with ``seed`` (the same sea on every rank and in every run)."""
+    seeded with ``seed`` (the same sea on every rank and in every run).
+
+    Args:
+        hs: Significant wave height (m).
+        tp: Peak period (s).
+        direction: (3,) unit horizontal direction of travel.
+        gamma: Peak enhancement factor.
+        components: Number of components.
+        seed: Seed of the random frequencies and phases.
+        low, high: The band, in multiples of the peak frequency.
+
+    Returns:
+        The components of nonzero amplitude.
+    """
     rng = np.random.default_rng(seed)
     wp = 2.0 * math.pi / tp
     edges = np.linspace(low * wp, high * wp, components + 1)
@@ -189,7 +240,21 @@ def wave_kinematics(waves, points: np.ndarray, t: float, up: np.ndarray, surface
     """Velocity and acceleration (each (n, 3)) of the sum of ``waves`` at ``points`` (n, 3)
     at time ``t``; ``up`` is the unit vector against gravity, ``surface`` the mean surface's
     elevation along it. ``ramp`` > 0 (s) builds the waves up smoothly from rest
-    (:func:`cablefem.motion.ramp_factors`: ``r u`` and ``r u̇ + ṙ u``)."""
+    (:func:`cablefem.motion.ramp_factors`: ``r u`` and ``r u̇ + ṙ u``).
+
+    Args:
+        waves: The :class:`AiryWave` components.
+        points: (n, 3) positions (m).
+        t: Time (s).
+        up: (3,) unit vector against gravity.
+        surface: Elevation of the mean free surface along ``up`` (m).
+        depth: Water depth (m), or None (deep water).
+        g: Gravitational acceleration (m/s²).
+        ramp: Build-up time (s), >= 0.
+
+    Returns:
+        ``(velocity, acceleration)``, each (n, 3).
+    """
     points = np.asarray(points, dtype=float).reshape(-1, 3)
     up = np.asarray(up, dtype=float)
     vel = np.zeros_like(points)
@@ -215,19 +280,26 @@ def wave_kinematics(waves, points: np.ndarray, t: float, up: np.ndarray, surface
 @dataclass(frozen=True, eq=False)
 class VelocitySeries:
     """A uniform fluid velocity history (m/s): C2 cubic spline (not-a-knot ends) through
-    ``(times, values)``, held outside the table (acceleration zero there)."""
+    ``(times, values)``, held outside the table (acceleration zero there).
+
+    Args:
+        times: (n,) strictly increasing times (s), n >= 2.
+        values: (n, 3) velocities (m/s).
+        source: The file the table came from, or None.
+        hold: The case accepts that the table ends before ``dynamics.t_end``.
+    """
 
     times: np.ndarray
     values: np.ndarray
     source: str | None = None
     hold: bool = False
-    _spline: _Spline = field(init=False, repr=False)
+    _spline: Spline = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
-        times, values = _check_table(self.times, self.values, 3)
+        times, values = check_table(self.times, self.values, 3)
         object.__setattr__(self, "times", times)
         object.__setattr__(self, "values", values)
-        object.__setattr__(self, "_spline", _Spline(times, values))
+        object.__setattr__(self, "_spline", Spline(times, values))
 
     def velocity(self, t: float) -> np.ndarray:
         return self._spline(t)
@@ -245,14 +317,24 @@ class VelocitySeries:
 
 def read_velocity_csv(path, key: str = "file") -> VelocitySeries:
     """A velocity history from a CSV file with the header ``time,vx,vy,vz`` (s, m/s); the
-    rules and errors of :func:`cablefem.motion.read_motion_csv`."""
-    times, values = _read_csv(path, ("time", "vx", "vy", "vz"), key)
+    rules and errors of :func:`cablefem.motion.read_motion_csv`.
+
+    Args:
+        path: The CSV file.
+        key: Key path reported in errors.
+    """
+    times, values = read_csv(path, ("time", "vx", "vy", "vz"), key)
     return VelocitySeries(times, values, source=str(path))
 
 
 def flow_problems(fluid, gravity) -> list[tuple[str, str]]:
     """``(key, message)`` of a fluid's motion that does not fit the case: waves without a
-    free surface or without gravity, or not travelling horizontally."""
+    free surface or without gravity, or not travelling horizontally.
+
+    Args:
+        fluid: The :class:`cablefem.description.Fluid`.
+        gravity: The :class:`cablefem.description.Gravity`, or None.
+    """
     out: list[tuple[str, str]] = []
     if not fluid.waves:
         return out

@@ -19,7 +19,9 @@ with not-a-knot end conditions (the first two and the last two segments are one 
 own first and second derivatives, continuous everywhere inside the table. Outside their time
 range tables are held at their first and last values (velocity and acceleration zero); a case
 refuses a table that ends before ``dynamics.t_end`` unless it says ``hold = true``
-(:mod:`cablefem.case`). :func:`table_resolution` says what a time step cannot resolve.
+(:mod:`cablefem.case`). The tables' checks, splines and CSV reading are in
+:mod:`cablefem.timetables` (:func:`~cablefem.timetables.table_resolution` says what a time step
+cannot resolve).
 """
 
 from __future__ import annotations
@@ -27,33 +29,30 @@ from __future__ import annotations
 import math
 import os
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 
-from cablefem.errors import CaseError
+from cablefem.timetables import Spline, check_table, read_csv
 
 __all__ = [
     "Motion", "HarmonicMotion", "EllipseMotion", "TableMotion", "TimeFunction",
-    "read_motion_csv", "read_factor_csv", "ramp_factors", "default_ramp", "table_resolution",
-    "DEFAULT_RAMP_PERIODS", "ACCELERATION_STEP_FRACTION",
+    "read_motion_csv", "read_factor_csv", "ramp_factors", "default_ramp",
+    "DEFAULT_RAMP_PERIODS",
 ]
 
 #: default ramp of harmonic and elliptic anchor motions in a case file: this many periods of
 #: the motion's lowest circular frequency (``2 pi / omega`` each)
 DEFAULT_RAMP_PERIODS = 3.0
 
-#: a table's acceleration may change by at most this fraction of its range within one time
-#: step; above it the case warns. For ``A sin(omega t)`` the range is ``2 A omega^2`` and the
-#: largest change in a step ``A omega^3 dt``: the limit is ``omega dt <= 0.2``, about 31
-#: steps per period
-ACCELERATION_STEP_FRACTION = 0.1
-
 
 @runtime_checkable
 class Motion(Protocol):
-    """A prescribed anchor displacement ``u(t)`` from the static position (m)."""
+    """A prescribed anchor displacement ``u(t)`` from the static position (m).
+
+    Implementations: :class:`HarmonicMotion`, :class:`EllipseMotion`, :class:`TableMotion`,
+    or a user's class with these four methods, each taking the time ``t`` (s).
+    """
 
     def displacement(self, t: float) -> np.ndarray:
         """Displacement (m), shape (3,)."""
@@ -80,30 +79,19 @@ def _frozen_array(value: Any, shape: tuple[int, ...], name: str) -> np.ndarray:
     return array
 
 
-def _check_table(times: Any, values: Any, columns: int | None) -> tuple[np.ndarray, np.ndarray]:
-    """Validate a table: >= 2 strictly increasing finite times, matching finite values."""
-    times = np.array(times, dtype=float)
-    values = np.array(values, dtype=float)
-    if times.ndim != 1 or times.size < 2:
-        raise ValueError(f"times: expected a 1D array of >= 2 entries, got shape {times.shape}")
-    expected = (times.size,) if columns is None else (times.size, columns)
-    if values.shape != expected:
-        raise ValueError(f"values: expected shape {expected}, got {values.shape}")
-    if not (np.all(np.isfinite(times)) and np.all(np.isfinite(values))):
-        raise ValueError("times and values must be finite")
-    if np.any(np.diff(times) <= 0):
-        raise ValueError("times must be strictly increasing")
-    times.flags.writeable = False
-    values.flags.writeable = False
-    return times, values
-
-
 def ramp_factors(t: float, ramp: float) -> tuple[float, float, float]:
     """The ramp ``r(t)`` and its first two time derivatives, for a ramp of ``ramp`` s.
 
     ``r = 10 x^3 - 15 x^4 + 6 x^5`` with ``x = t/ramp`` on ``0 <= t <= ramp``, 0 before and
     1 after: ``r(0) = 0``, ``r(ramp) = 1``, and ``r'``, ``r''`` vanish at both ends, so ``r``
     is C2 everywhere. ``ramp = 0``: 1 at all times (no ramp).
+
+    Args:
+        t: Time (s).
+        ramp: The ramp's duration (s), >= 0.
+
+    Returns:
+        ``(r, dr/dt, d2r/dt2)``.
     """
     if ramp <= 0.0 or t >= ramp:
         return 1.0, 0.0, 0.0
@@ -118,7 +106,15 @@ def ramp_factors(t: float, ramp: float) -> tuple[float, float, float]:
 
 def default_ramp(omega: Any, amplitude: Any = None) -> float:
     """:data:`DEFAULT_RAMP_PERIODS` periods of the lowest circular frequency (rad/s) among the
-    components of non-zero ``amplitude`` (all components without one, or if all are zero)."""
+    components of non-zero ``amplitude`` (all components without one, or if all are zero).
+
+    Args:
+        omega: Circular frequency (rad/s), a scalar or per component (3,).
+        amplitude: Amplitudes per component (3,), or None.
+
+    Returns:
+        The ramp (s); inf for a frequency so small that its periods overflow.
+    """
     w = np.broadcast_to(np.asarray(omega, dtype=float), (3,))
     if amplitude is not None:
         moving = np.asarray(amplitude, dtype=float) != 0
@@ -144,65 +140,6 @@ def _ramped(kind: str, ramp: float, t: float, u0, v0, a0) -> np.ndarray:
     if kind == "velocity":
         return dr * u0() + r * v0() if dr else r * v0()
     return ddr * u0() + 2.0 * dr * v0() + r * a0() if (dr or ddr) else r * a0()
-
-
-class _Spline:
-    """C2 cubic spline (not-a-knot ends) through a table, held constant outside it."""
-
-    def __init__(self, times: np.ndarray, values: np.ndarray) -> None:
-        from scipy.interpolate import CubicSpline
-
-        self.t0, self.t1 = float(times[0]), float(times[-1])
-        self.first, self.last = values[0].copy(), values[-1].copy()
-        self.spline = CubicSpline(times, values, axis=0, bc_type="not-a-knot")
-
-    def __call__(self, t: float, nu: int = 0) -> np.ndarray:
-        if t < self.t0 or t > self.t1:
-            edge = self.first if t < self.t0 else self.last
-            return edge.copy() if nu == 0 else np.zeros_like(edge)
-        return np.asarray(self.spline(t, nu))
-
-
-def table_resolution(times: np.ndarray, values: np.ndarray, dt: float) -> list[str]:
-    """What a time step ``dt`` (s) cannot resolve of a table's spline: rows closer than
-    ``dt`` (what happens between two steps is lost), and an acceleration (second derivative,
-    piecewise linear in the spline) that changes within one step by more than
-    :data:`ACCELERATION_STEP_FRACTION` of its range over the table. Messages, [] if none."""
-    times = np.asarray(times, float)
-    values = np.asarray(values, float).reshape(times.size, -1)
-    out = []
-    h = np.diff(times)
-    if np.min(h) < dt * (1 - 1e-9):
-        i = int(np.argmin(h))
-        n_close = int(np.count_nonzero(h < dt * (1 - 1e-9)))
-        out.append(f"{n_close} of its {h.size} row intervals are shorter than dynamics.dt = "
-                   f"{dt:g} s (the shortest {h[i]:g} s, after t = {times[i]:g} s): what the "
-                   "table does between two time steps is lost; resample it at >= dt or "
-                   "reduce dt")
-    if times.size >= 3:
-        spline = _Spline(times, values).spline
-        acc = spline(times, 2).reshape(times.size, -1)  # the second derivative at the rows
-        span = np.ptp(acc, axis=0)
-        # on a segment the acceleration is linear: its change over one step is at most the
-        # largest slope (jerk) times dt (exact when the step lies in one segment), and at
-        # most its range
-        change = np.minimum(np.abs(np.diff(acc, axis=0)) / h[:, None] * dt, span)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            frac = np.where(span > 0, change / span, 0.0)
-        worst = float(np.max(frac))
-        if worst > ACCELERATION_STEP_FRACTION:
-            i, k = np.unravel_index(int(np.argmax(frac)), frac.shape)
-            jerk = np.max(np.abs(np.diff(acc, axis=0)) / h[:, None], axis=0)
-            with np.errstate(divide="ignore", invalid="ignore"):
-                dt_ok = float(np.min(np.where(jerk > 0, ACCELERATION_STEP_FRACTION * span
-                                              / jerk, np.inf)))
-            col = f" (column {k + 1})" if values.shape[1] > 1 else ""
-            out.append(f"its spline's acceleration{col} changes by {100 * worst:.3g} % of its "
-                       f"range within one time step (dt = {dt:g} s, between t = "
-                       f"{times[i]:g} and {times[i + 1]:g} s; limit "
-                       f"{100 * ACCELERATION_STEP_FRACTION:g} %): the integrator cannot "
-                       f"follow it; use dt <= {dt_ok:.3g} s or a smoother table")
-    return out
 
 
 class _RampedMotion:
@@ -234,16 +171,12 @@ class HarmonicMotion(_RampedMotion):
     default of this class; a case file's default is :func:`default_ramp`) the motion is not
     zero at ``t = 0`` unless every ``A_k sin(phi_k)`` is, and its velocity jumps there.
 
-    Parameters
-    ----------
-    amplitude : array_like, shape (3,)
-        Amplitudes ``A`` (m).
-    omega : float or array_like, shape (3,)
-        Circular frequencies (rad/s); a scalar applies to all components.
-    phase : float or array_like, shape (3,)
-        Phases ``phi`` (rad), default 0.
-    ramp : float
-        Duration (s) of the smooth start, >= 0; 0: none.
+    Args:
+        amplitude (array_like, shape (3,)): Amplitudes ``A`` (m).
+        omega (float or array_like, shape (3,)): Circular frequencies (rad/s); a scalar applies to
+            all components.
+        phase (float or array_like, shape (3,)): Phases ``phi`` (rad), default 0.
+        ramp (float): Duration (s) of the smooth start, >= 0; 0: none.
     """
 
     amplitude: np.ndarray
@@ -281,14 +214,11 @@ class EllipseMotion(_RampedMotion):
     ``docs/theory.md`` §9 is ``axis_sin = (0, 0, 1e-3)``, ``axis_cos = (0, 5e-4, 0)``,
     ``ramp = 0``.
 
-    Parameters
-    ----------
-    omega : float
-        Circular frequency ``w`` (rad/s).
-    axis_sin, axis_cos : array_like, shape (3,)
-        Semi-axes (m) multiplying ``sin(w t)`` and ``cos(w t) - 1``.
-    ramp : float
-        Duration (s) of the smooth start, >= 0; 0: none.
+    Args:
+        omega (float): Circular frequency ``w`` (rad/s).
+        axis_sin, axis_cos (array_like, shape (3,)): Semi-axes (m) multiplying ``sin(w t)`` and
+            ``cos(w t) - 1``.
+        ramp (float): Duration (s) of the smooth start, >= 0; 0: none.
     """
 
     omega: float
@@ -330,17 +260,12 @@ class TableMotion:
 
     The velocity and acceleration are the spline's first and second derivatives.
 
-    Parameters
-    ----------
-    times : array_like, shape (n,)
-        Strictly increasing times (s), n >= 2.
-    values : array_like, shape (n, 3)
-        Displacements (m) at those times.
-    source : str or None
-        The file the table came from, for :meth:`describe`.
-    hold : bool
-        The case accepts that the table ends before ``dynamics.t_end`` (held at its last
-        row); evaluation holds the end values either way.
+    Args:
+        times (array_like, shape (n,)): Strictly increasing times (s), n >= 2.
+        values (array_like, shape (n, 3)): Displacements (m) at those times.
+        source (str or None): The file the table came from, for :meth:`describe`.
+        hold (bool): The case accepts that the table ends before ``dynamics.t_end`` (held at its
+            last row); evaluation holds the end values either way.
     """
 
     times: np.ndarray
@@ -349,11 +274,11 @@ class TableMotion:
     hold: bool = False
 
     def __post_init__(self) -> None:
-        times, values = _check_table(self.times, self.values, 3)
+        times, values = check_table(self.times, self.values, 3)
         object.__setattr__(self, "times", times)
         object.__setattr__(self, "values", values)
         object.__setattr__(self, "hold", bool(self.hold))
-        object.__setattr__(self, "_spline", _Spline(times, values))
+        object.__setattr__(self, "_spline", Spline(times, values))
 
     def displacement(self, t: float) -> np.ndarray:
         """Displacement (m), shape (3,): the spline, or the first/last row outside."""
@@ -383,19 +308,14 @@ class TimeFunction:
 
     Build with :meth:`constant`, :meth:`harmonic` or :meth:`table`.
 
-    Parameters
-    ----------
-    kind : {"constant", "harmonic", "table"}
-    omega : float
-        Circular frequency (rad/s), > 0 for ``harmonic``.
-    phase : float
-        Phase (rad) for ``harmonic``.
-    times, factors : ndarray or None
-        Table (s, -) for ``table``: C2 cubic spline (not-a-knot ends), constant outside.
-    source : str or None
-        The file a table came from.
-    hold : bool
-        ``table``: the case accepts that it ends before ``dynamics.t_end`` (held).
+    Args:
+        kind (str): ``"constant"``, ``"harmonic"`` or ``"table"``.
+        omega (float): Circular frequency (rad/s), > 0 for ``harmonic``.
+        phase (float): Phase (rad) for ``harmonic``.
+        times, factors (ndarray or None): Table (s, -) for ``table``: C2 cubic spline (not-a-knot
+            ends), constant outside.
+        source (str or None): The file a table came from.
+        hold (bool): ``table``: the case accepts that it ends before ``dynamics.t_end`` (held).
     """
 
     kind: str = "constant"
@@ -414,10 +334,10 @@ class TimeFunction:
         if not math.isfinite(self.phase):
             raise ValueError("phase must be finite")
         if self.kind == "table":
-            times, factors = _check_table(self.times, self.factors, None)
+            times, factors = check_table(self.times, self.factors, None)
             object.__setattr__(self, "times", times)
             object.__setattr__(self, "factors", factors)
-            object.__setattr__(self, "_spline", _Spline(times, factors))
+            object.__setattr__(self, "_spline", Spline(times, factors))
         object.__setattr__(self, "hold", bool(self.hold))
 
     @classmethod
@@ -457,90 +377,21 @@ class TimeFunction:
         return {"type": "constant"}
 
 
-_MAX_REPORTED = 10  # problems reported per CSV file; the rest are counted
-
-
-def _read_csv(path: str | os.PathLike, columns: tuple[str, ...],
-              key: str) -> tuple[np.ndarray, np.ndarray]:
-    """Read a numeric CSV with the header ``columns``; return (first column, other columns).
-
-    Blank lines and lines starting with ``#`` are skipped. Every problem names its line.
-    """
-
-
-    path = Path(path)
-    problems: list[tuple[str, str]] = []
-
-    def fail(message: str) -> CaseError:
-        return CaseError([(key, message)], source=str(path))
-
-    try:
-        text = path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise fail(f"cannot read the file: {getattr(exc, 'strerror', None) or exc}") from None
-    lines = [(n, line.strip()) for n, line in enumerate(text.splitlines(), start=1)]
-    lines = [(n, line) for n, line in lines if line and not line.startswith("#")]
-    header = ",".join(columns)
-    if not lines:
-        raise fail(f"the file is empty; expected the header line '{header}'")
-    n0, first = lines[0]
-    if [c.strip().lower() for c in first.split(",")] != list(columns):
-        raise fail(f"line {n0}: expected the header '{header}', got '{first}'")
-    rows, row_lines = [], []
-    for n, line in lines[1:]:
-        cells = [c.strip() for c in line.split(",")]
-        if len(cells) != len(columns):
-            problems.append((key, f"line {n}: expected {len(columns)} columns, got {len(cells)}"))
-            continue
-        row = []
-        for name, cell in zip(columns, cells):
-            try:
-                value = float(cell)
-            except ValueError:
-                problems.append((key, f"line {n}: column '{name}': expected a number, "
-                                      f"got '{cell}'"))
-                break
-            if not math.isfinite(value):
-                problems.append((key, f"line {n}: column '{name}': must be finite, got '{cell}'"))
-                break
-            row.append(value)
-        else:
-            if rows and row[0] <= rows[-1][0]:
-                problems.append((key, f"line {n}: times must be strictly increasing "
-                                      f"({row[0]!r} after {rows[-1][0]!r} on line "
-                                      f"{row_lines[-1]})"))
-            rows.append(row)
-            row_lines.append(n)
-    if not problems and len(rows) < 2:
-        problems.append((key, f"expected at least 2 data rows after the header, got {len(rows)}"))
-    if problems:
-        extra = len(problems) - _MAX_REPORTED
-        problems = problems[:_MAX_REPORTED]
-        if extra > 0:
-            problems.append((key, f"... and {extra} more problems in this file"))
-        raise CaseError(problems, source=str(path))
-    data = np.array(rows)
-    return data[:, 0], data[:, 1:]
-
-
 def read_motion_csv(path: str | os.PathLike, key: str = "file") -> TableMotion:
     """Read an anchor motion table from a CSV file with the header ``time,ux,uy,uz``.
 
-    Parameters
-    ----------
-    path : path-like
-        CSV file: times (s) and displacements (m), one row per time, >= 2 rows, times
-        strictly increasing; whitespace around cells is ignored; blank lines and lines
-        starting with ``#`` are skipped.
-    key : str
-        Key path reported in errors (the case reader passes e.g. ``anchors[1].motion.file``).
+    Args:
+        path (path-like): CSV file: times (s) and displacements (m), one row per time, >= 2 rows,
+            times strictly increasing; whitespace around cells is ignored; blank lines and lines
+            starting with ``#`` are skipped.
+        key (str): Key path reported in errors (the case reader passes e.g.
+            ``anchors[1].motion.file``).
 
-    Raises
-    ------
-    cablefem.case.CaseError
-        Naming the file (its ``source``), the key and the line of every problem.
+    Raises:
+        cablefem.case.CaseError: Naming the file (its ``source``), the key and the line of every
+            problem.
     """
-    times, values = _read_csv(path, ("time", "ux", "uy", "uz"), key)
+    times, values = read_csv(path, ("time", "ux", "uy", "uz"), key)
     return TableMotion(times, values, source=str(path))
 
 
@@ -548,6 +399,16 @@ def read_factor_csv(path: str | os.PathLike, key: str = "file") -> TimeFunction:
     """Read a load-factor table from a CSV file with the header ``time,factor``.
 
     Same rules and errors as :func:`read_motion_csv`; times in s, factors dimensionless.
+
+    Args:
+        path: The CSV file.
+        key: Key path reported in errors.
+
+    Returns:
+        A table :class:`TimeFunction`.
+
+    Raises:
+        cablefem.case.CaseError: Naming the file, the key and the line of every problem.
     """
-    times, factors = _read_csv(path, ("time", "factor"), key)
+    times, factors = read_csv(path, ("time", "factor"), key)
     return TimeFunction.table(times, factors[:, 0], source=str(path))

@@ -17,25 +17,17 @@ __all__ = ["Section", "dimensionless_groups"]
 class Section:
     """Stiffness and mass of a cable cross-section.
 
-    Parameters
-    ----------
-    EA : float
-        Axial stiffness (N), > 0.
-    EI : float
-        Bending stiffness (N m^2), >= 0; 0 (a chain): the string alone, no moments
-        (single cables only, :mod:`cablefem.chain`).
-    GJ : float
-        Torsional stiffness (N m^2), >= 0. It does not enter the string or the inner solution
-        (torsion decouples from bending, paper section 2); it is reported as ``gamma``.
-    mass : float
-        Mass per unit stress-free length (kg/m), > 0.
-    diameter : float or None
-        Outer diameter (m), > 0 if given; used for stresses.
+    Args:
+        EA (float): Axial stiffness (N), > 0.
+        EI (float): Bending stiffness (N m^2), >= 0; 0 (a chain): the string alone, no moments
+            (single cables only, :mod:`cablefem.chain`).
+        GJ (float): Torsional stiffness (N m^2), >= 0. It does not enter the string or the inner
+            solution (torsion decouples from bending, paper section 2); it is reported as ``gamma``.
+        mass (float): Mass per unit stress-free length (kg/m), > 0.
+        diameter (float or None): Outer diameter (m), > 0 if given; used for stresses.
 
-    Raises
-    ------
-    ValueError
-        If a value is not finite or out of range.
+    Raises:
+        ValueError: If a value is not finite or out of range.
     """
 
     EA: float
@@ -65,26 +57,18 @@ class Section:
 def dimensionless_groups(section: Section, length: float, g: float) -> dict[str, float | None]:
     """The paper's dimensionless groups of one cable (``docs/theory.md`` §1).
 
-    Parameters
-    ----------
-    section : Section
-        The cable's section.
-    length : float
-        Stress-free length ``l`` (m), > 0.
-    g : float
-        Gravitational acceleration (m/s^2), >= 0.
+    Args:
+        section (Section): The cable's section.
+        length (float): Stress-free length ``l`` (m), > 0.
+        g (float): Gravitational acceleration (m/s^2), >= 0.
 
-    Returns
-    -------
-    dict
-        ``eps = sqrt(EI/(w l^3))`` (-), ``eps_b = w l/EA`` (-), ``gamma = GJ/EI`` (-),
-        ``time_unit = sqrt(l/g)`` (s), ``force_unit = w l`` (N), ``moment_unit = w l^2`` (N m).
-        With ``g == 0`` every group that needs the weight is ``None`` (only ``gamma`` remains).
+    Returns:
+        dict: ``eps = sqrt(EI/(w l^3))`` (-), ``eps_b = w l/EA`` (-), ``gamma = GJ/EI`` (-),
+            ``time_unit = sqrt(l/g)`` (s), ``force_unit = w l`` (N), ``moment_unit = w l^2`` (N m).
+            With ``g == 0`` every group that needs the weight is ``None`` (only ``gamma`` remains).
 
-    Raises
-    ------
-    ValueError
-        If ``length <= 0`` or ``g < 0`` (or either is not finite).
+    Raises:
+        ValueError: If ``length <= 0`` or ``g < 0`` (or either is not finite).
     """
     if not (math.isfinite(length) and length > 0):
         raise ValueError(f"length must be > 0 (m), got {length!r}")

@@ -11,6 +11,7 @@ from scipy.optimize import brentq
 from scipy.spatial.transform import Rotation
 
 from cablefem import asymptotics as asy
+from cablefem import farfield
 
 pytestmark = pytest.mark.single_rank  # pure NumPy: nothing distributed
 
@@ -459,7 +460,7 @@ def test_gradient_integrals_closed_forms(delta):
     num = {"I_t": np.trapz(s * (np.cos(ph) - 1), s), "I_n": np.trapz(s * np.sin(ph), s),
            "J_t": -np.trapz(np.sin(ph) * p1, s), "J_n": np.trapz(np.cos(ph) * p1, s),
            "m1": (-3 * p1[0] + 4 * p1[1] - p1[2]) / (2 * h) / (-2 * np.sin(delta / 2))}
-    got = asy.gradient_integrals(delta)
+    got = farfield.gradient_integrals(delta)
     for key, value in num.items():
         tol = 1e-4 if key == "m1" else 1e-4 * delta
         assert got[key] == pytest.approx(value, abs=tol), key
@@ -523,8 +524,8 @@ def test_far_field_second_order_against_the_heavy_layer(psi0):
         rod = sol.sol(S1)[2:4]
         F0 = np.array([np.cos(psi0), np.sin(psi0), 0.0])
         c = np.array([1.0, 0.0, 0.0])
-        h, sig = (float(v) for v in asy.virtual_hinge(-psi0, 1.0, EI, np.inf))
-        E = asy.far_field_second_order(F0, c, [0.0, w, 0.0], EI, sig)
+        h, sig = (float(v) for v in farfield.virtual_hinge(-psi0, 1.0, EI, np.inf))
+        E = farfield.far_field_second_order(F0, c, [0.0, w, 0.0], EI, sig)
 
         def slow(s, k):
             fx, fy = force(s)
@@ -537,7 +538,7 @@ def test_far_field_second_order_against_the_heavy_layer(psi0):
         errs0.append(np.linalg.norm(h * c[:2] + line - rod))
         M_rod = EI * sol.sol(0.0)[1]
         lay = asy.layer(F0, c, EI, np.inf)
-        grad = asy.gradient_moment_factor(lay.delta, 1.0, F0, [0.0, w, 0.0], EI)
+        grad = farfield.gradient_moment_factor(lay.delta, 1.0, F0, [0.0, w, 0.0], EI)
         kap = w * np.cos(psi0)  # the string's curvature dpsi/ds at the anchor (T0 = 1)
         # signed about +z: the layer turns the rod from the clamp (0) down to psi0 < 0,
         # the span curves back up

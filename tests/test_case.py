@@ -25,7 +25,6 @@ from cablefem.case import (
     startup_time,
 )
 from cablefem.motion import (
-    ACCELERATION_STEP_FRACTION,
     DEFAULT_RAMP_PERIODS,
     EllipseMotion,
     HarmonicMotion,
@@ -37,6 +36,7 @@ from cablefem.motion import (
     read_motion_csv,
 )
 from cablefem.properties import Section, dimensionless_groups
+from cablefem.timetables import ACCELERATION_STEP_FRACTION
 
 pytestmark = pytest.mark.single_rank  # parsing, no dolfinx: nothing distributed
 

@@ -222,9 +222,10 @@ def test_bad_rod_arguments_name_the_argument():
 
 
 # --------------------------------------------------------------------------- imports
-_CORE = ["anchor", "description", "describe", "validation", "properties", "motion", "catenary",
-         "asymptotics", "moments", "cable", "network", "rod", "create", "statics", "modal",
-         "dynamics", "reactions", "hinge", "fatigue", "forms", "geometry", "verify"]
+_CORE = ["anchor", "description", "arguments", "validation", "properties", "motion",
+         "timetables", "catenary", "asymptotics", "farfield", "moments", "cable", "network",
+         "rod", "create", "statics", "modal", "dynamics", "reactions", "hinge", "fatigue",
+         "forms", "geometry", "verify"]
 
 
 @pytest.mark.serial
@@ -232,7 +233,7 @@ def test_imports_layering():
     """In a fresh interpreter: ``import cablefem.case`` (and the description objects) loads
     no dolfinx; importing every core module loads neither cablefem.case nor cablefem.app."""
     code = ("import sys, json, importlib\n"
-            "import cablefem.case, cablefem.describe, cablefem.anchor\n"
+            "import cablefem.case, cablefem.arguments, cablefem.anchor\n"
             "light = 'dolfinx' in sys.modules\n"
             "for m in sys.argv[1:]: importlib.import_module('cablefem.' + m)\n"
             "print(json.dumps([light, sorted(k for k in sys.modules if k.startswith("

@@ -19,6 +19,7 @@ from hypothesis import strategies as st
 
 from cablefem import fatigue as fat
 from cablefem.io.anchorcsv import ANCHOR_COLUMNS, MOMENT_COLUMNS, read_moments
+from cablefem.io.fatiguereport import write_report
 
 DS_C = 100.0
 DS_D = DS_C * 0.4 ** (1 / 3)  # (2e6/5e6)^(1/3) ds_C
@@ -351,7 +352,7 @@ def test_write_report_files(tmp_path):
     M = cos_history(0.3, 5)
     reports = {"p": fat.fatigue_report(t, 1000 + 0 * t, M, None, s, c, anchor="p"),
                "q": fat.fatigue_report(t, 1000 + 0 * t, 1e-6 * M, None, s, c, anchor="q")}
-    names = fat.write_report(tmp_path, reports, c, s, units="Pa")
+    names = write_report(tmp_path, reports, c, s, units="Pa")
     data = json.loads((tmp_path / "fatigue.json").read_text())
     assert data["anchors"]["p"]["damage"] == pytest.approx(reports["p"]["damage"], rel=1e-15)
     assert data["anchors"]["q"]["time_to_failure"] is None  # inf -> null, flagged
@@ -365,7 +366,7 @@ def test_write_report_files(tmp_path):
     # locations of different sections (a network): no top-level section, each its own
     other = fat.StressSection.solid_circle(0.03)
     reports["r"] = fat.fatigue_report(t, 1000 + 0 * t, M, None, other, c, anchor="r")
-    fat.write_report(tmp_path, reports, c, units="Pa")
+    write_report(tmp_path, reports, c, units="Pa")
     data = json.loads((tmp_path / "fatigue.json").read_text())
     assert data["section"] is None and data["anchors"]["r"]["section"]["area"] == other.area
 

@@ -18,9 +18,9 @@ from mpi4py import MPI
 from petsc4py import PETSc
 from scipy.integrate import solve_ivp
 
-from cablefem.asymptotics import far_field_offsets, virtual_hinge
 from cablefem.cable import CableModel
 from cablefem.case import CaseError, load_case, parse_case
+from cablefem.farfield import far_field_offsets, virtual_hinge
 from cablefem.modal import solve_modes
 from cablefem.moments import anchor_moments
 from cablefem.rod import BeamModel

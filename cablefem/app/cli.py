@@ -35,33 +35,25 @@ class _Parser(argparse.ArgumentParser):
         raise SystemExit(EXIT_INPUT)
 
 
-def _parser() -> argparse.ArgumentParser:
-    from cablefem.case import format_case_reference
+def _common(sp: argparse.ArgumentParser, restartable: bool = False) -> None:
+    """The case, output folder, ``--quiet`` and ``--strict`` of ``run`` and ``modes``."""
+    if restartable:
+        sp.add_argument("case", type=Path, nargs="?", help="case file (TOML); not "
+                        "needed with --restart")
+        sp.add_argument("--output", "-o", type=Path, help="output folder")
+        sp.add_argument("--restart", type=Path, metavar="DIR",
+                        help="continue the run in DIR from its last checkpoint (after "
+                             "Ctrl-C, SIGTERM, a kill or a crash)")
+    else:
+        sp.add_argument("case", type=Path, help="case file (TOML)")
+        sp.add_argument("--output", "-o", type=Path, required=True, help="output folder")
+    sp.add_argument("--quiet", "-q", action="store_true", help="warnings and errors only")
+    sp.add_argument("--strict", action="store_true",
+                    help="exit 3 when the run warns (input out of the method's range, "
+                         "implausible values, ...): the warnings are in summary.json")
 
-    keys = format_case_reference()
-    p = _Parser(prog="cablefem", formatter_class=argparse.RawDescriptionHelpFormatter,
-                description="Bending moments at the anchors of vibrating cables: FEniCSx "
-                            "extensible string + matched asymptotics.",
-                epilog="Run 'cablefem keys' for every case-file key.")
-    p.add_argument("--version", action="store_true", help="print the version and exit")
-    sub = p.add_subparsers(dest="command", parser_class=_Parser)
 
-    def common(sp, restartable=False):
-        if restartable:
-            sp.add_argument("case", type=Path, nargs="?", help="case file (TOML); not "
-                            "needed with --restart")
-            sp.add_argument("--output", "-o", type=Path, help="output folder")
-            sp.add_argument("--restart", type=Path, metavar="DIR",
-                            help="continue the run in DIR from its last checkpoint (after "
-                                 "Ctrl-C, SIGTERM, a kill or a crash)")
-        else:
-            sp.add_argument("case", type=Path, help="case file (TOML)")
-            sp.add_argument("--output", "-o", type=Path, required=True, help="output folder")
-        sp.add_argument("--quiet", "-q", action="store_true", help="warnings and errors only")
-        sp.add_argument("--strict", action="store_true",
-                        help="exit 3 when the run warns (input out of the method's range, "
-                             "implausible values, ...): the warnings are in summary.json")
-
+def _add_run(sub, keys: str) -> None:
     run = sub.add_parser("run", formatter_class=argparse.RawDescriptionHelpFormatter,
                          help="statics, modes and dynamics of a case",
                          description="Static equilibrium, modal analysis and (with a "
@@ -69,7 +61,7 @@ def _parser() -> argparse.ArgumentParser:
                          "Writes summary.json, anchors.csv, string.xdmf, modes.xdmf, "
                          "moments.xdmf, figures.",
                          epilog="Case file keys:\n\n" + keys)
-    common(run, restartable=True)
+    _common(run, restartable=True)
     run.add_argument("--t-end", type=float, help="override dynamics.t_end (s)")
     run.add_argument("--model", choices=["string", "beam", "auto"], default=None,
                      help="'string' (default): the string + asymptotics; 'beam': the "
@@ -89,16 +81,20 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--no-figures", action="store_true", help="skip the PNG figures")
     run.add_argument("--static-only", action="store_true", help="skip the dynamics")
 
+
+def _add_modes(sub, keys: str) -> None:
     modes = sub.add_parser("modes", formatter_class=argparse.RawDescriptionHelpFormatter,
                            help="static equilibrium and natural modes",
                            description="Static equilibrium and the lowest natural modes "
                            "(SLEPc); writes summary.json, modes.xdmf.",
                            epilog="Case file keys:\n\n" + keys)
-    common(modes)
+    _common(modes)
     modes.add_argument("--n", type=int, help="number of modes (default: modal.modes)")
     modes.add_argument("--outer-correction", choices=["none", "hinge"], default=None,
                        help="override solver.outer_correction")
 
+
+def _add_post(sub) -> None:
     post = sub.add_parser("post", help="anchor moments from another solver's anchor forces",
                           formatter_class=argparse.RawDescriptionHelpFormatter,
                           description="Apply the inner (boundary-layer) solution to "
@@ -124,6 +120,8 @@ def _parser() -> argparse.ArgumentParser:
     post.add_argument("--moment-form", choices=["exact", "explicit"], default="exact")
     post.add_argument("--quiet", "-q", action="store_true")
 
+
+def _add_fatigue(sub) -> None:
     fat = sub.add_parser("fatigue", help="fatigue damage at the clamped anchors and kinks "
                          "of a run",
                          description="Axial + bending stress at the clamped anchors from DIR/"
@@ -149,6 +147,8 @@ def _parser() -> argparse.ArgumentParser:
                           "history)")
     fat.add_argument("--quiet", "-q", action="store_true")
 
+
+def _add_compare(sub) -> None:
     cmp_ = sub.add_parser("compare", help="compare two runs of a case (e.g. string and beam)",
                           description="Compare two finished run folders, typically 'cablefem "
                           "run CASE -o A' and 'cablefem run CASE --model beam -o B': static "
@@ -165,9 +165,29 @@ def _parser() -> argparse.ArgumentParser:
     cmp_.add_argument("--quiet", "-q", action="store_true",
                       help="no table on stdout; warnings and errors only")
 
+
+def _add_keys(sub) -> None:
     keys_ = sub.add_parser("keys", help="print every case-file key with its unit and range")
     keys_.add_argument("--network", action="store_true",
                        help="the keys of a network case ([network], [[cables]], ...)")
+
+
+def _parser() -> argparse.ArgumentParser:
+    from cablefem.case import format_case_reference
+
+    keys = format_case_reference()
+    p = _Parser(prog="cablefem", formatter_class=argparse.RawDescriptionHelpFormatter,
+                description="Bending moments at the anchors of vibrating cables: FEniCSx "
+                            "extensible string + matched asymptotics.",
+                epilog="Run 'cablefem keys' for every case-file key.")
+    p.add_argument("--version", action="store_true", help="print the version and exit")
+    sub = p.add_subparsers(dest="command", parser_class=_Parser)
+    _add_run(sub, keys)
+    _add_modes(sub, keys)
+    _add_post(sub)
+    _add_fatigue(sub)
+    _add_compare(sub)
+    _add_keys(sub)
     return p
 
 
@@ -224,7 +244,14 @@ def _compare(args) -> int:
 
 def main(argv: list[str] | None = None) -> int:
     """Entry point; an unexpected exception becomes one line (``CABLEFEM_DEBUG=1``: the
-    traceback) and exit code 1."""
+    traceback) and exit code 1.
+
+    Args:
+        argv: The arguments (default ``sys.argv[1:]``).
+
+    Returns:
+        The exit code (see the module docstring).
+    """
     try:
         return _main(argv)
     except KeyboardInterrupt:  # outside a run's own handling (e.g. while reading input)
@@ -270,46 +297,81 @@ def _main(argv: list[str] | None = None) -> int:
     if args.command == "compare":
         return _compare(args)
 
-    from cablefem.case import CaseError, load_case
-
     ck: dict = {}  # a restart's checkpoint
     if args.command == "run":
-        if args.restart is not None:
-            from cablefem.io.checkpoint import read_checkpoint
+        ck, code = _run_args(args)
+        if code is not None:
+            return code
+    case, code = _load(args, ck)
+    if case is None:
+        return code
 
-            try:
-                ck = read_checkpoint(args.restart)
-            except ValueError as err:
-                return _input_error(str(err))
-            if args.output is not None and args.output.resolve() != args.restart.resolve():
-                return _input_error("--output must be the --restart folder (or omitted)")
-            from cablefem.io.checkpoint import run_status
+    from cablefem.app.log import setup_logging
 
-            done = run_status(args.restart)
-            if done.get("status") == "completed":
-                return _input_error(
-                    f"{args.restart}: the run is complete (t_end = {done.get('t_end')} s): "
-                    "nothing to restart; for a longer run, start a new one with a larger "
-                    "--t-end")
-            args.output = args.restart
-            args.case = args.case or Path(str(ck["case"]))
-            for key, default in (("model", "string"), ("refine", 1.0),
-                                 ("outer_correction", "")):
-                stored = type(default)(ck[key]) if key in ck else default
-                given = getattr(args, key)
-                if given is not None and given != stored and not (
-                        key == "model" and given == "auto"):  # auto ran one of them
-                    return _input_error(f"--{key} {given} differs from the checkpoint's "
+    setup_logging(logging.WARNING if args.quiet else logging.INFO)
+    if args.command == "fatigue":
+        return _fatigue(args, case)
+    if args.command == "post":
+        return _post(args, case)
+    _petsc_options(extra)
+    return _solve(args, case)
+
+
+def _run_args(args) -> tuple[dict, int | None]:
+    """``cablefem run``'s folders and, with ``--restart``, the options the checkpoint holds.
+
+    Returns:
+        The checkpoint (empty without ``--restart``) and an exit code if the arguments are
+        refused, else None.
+    """
+    ck: dict = {}
+    if args.restart is not None:
+        from cablefem.io.checkpoint import read_checkpoint
+
+        try:
+            ck = read_checkpoint(args.restart)
+        except ValueError as err:
+            return ck, _input_error(str(err))
+        if args.output is not None and args.output.resolve() != args.restart.resolve():
+            return ck, _input_error("--output must be the --restart folder (or omitted)")
+        from cablefem.io.checkpoint import run_status
+
+        done = run_status(args.restart)
+        if done.get("status") == "completed":
+            return ck, _input_error(
+                f"{args.restart}: the run is complete (t_end = {done.get('t_end')} s): "
+                "nothing to restart; for a longer run, start a new one with a larger "
+                "--t-end")
+        args.output = args.restart
+        args.case = args.case or Path(str(ck["case"]))
+        for key, default in (("model", "string"), ("refine", 1.0),
+                             ("outer_correction", "")):
+            stored = type(default)(ck[key]) if key in ck else default
+            given = getattr(args, key)
+            if given is not None and given != stored and not (
+                    key == "model" and given == "auto"):  # auto ran one of them
+                return ck, _input_error(f"--{key} {given} differs from the checkpoint's "
                                         f"({stored}): restart with the same model")
-                setattr(args, key, stored)
-            if args.model != "beam":
-                args.refine = None
-            args.outer_correction = args.outer_correction or None
-        if args.case is None or args.output is None:
-            return _input_error("give a case file and --output DIR, or --restart DIR")
+            setattr(args, key, stored)
+        if args.model != "beam":
+            args.refine = None
+        args.outer_correction = args.outer_correction or None
+    if args.case is None or args.output is None:
+        return ck, _input_error("give a case file and --output DIR, or --restart DIR")
+    return ck, None
+
+
+def _load(args, ck: dict):
+    """Read the case file and check the options that depend on it.
+
+    Returns:
+        The case and None, or None and the exit code (the problem written to stderr).
+    """
+    from cablefem.case import CaseError, load_case
+
     case_path = args.case
     if getattr(args, "t_end", None) is not None and not args.t_end > 0:
-        return _input_error(f"--t-end must be > 0 (s), got {args.t_end}")
+        return None, _input_error(f"--t-end must be > 0 (s), got {args.t_end}")
     # the tables must reach the end of the run's dynamics, when it has any: --t-end, or
     # the checkpoint's end on a restart, else dynamics.t_end
     t_end = getattr(args, "t_end", None)
@@ -320,55 +382,64 @@ def _main(argv: list[str] | None = None) -> int:
                          and not args.static_only)
     except CaseError as err:
         sys.stderr.write(str(err) + "\n")
-        return EXIT_INPUT
+        return None, EXIT_INPUT
     if getattr(args, "outer_correction", None) is not None:
         case.solver.outer_correction = args.outer_correction
     if getattr(args, "refine", None) is not None and not args.refine > 0:
-        return _input_error(f"--refine must be > 0, got {args.refine}")
+        return None, _input_error(f"--refine must be > 0, got {args.refine}")
     if args.command == "run" and args.model is None:
         args.model = case.solver.model  # the case's route unless --model overrides it
     if getattr(args, "refine", None) is not None and getattr(args, "model", None) not in (
             "beam", "auto"):
-        return _input_error("--refine applies to --model beam (or auto) only")
+        return None, _input_error("--refine applies to --model beam (or auto) only")
     if getattr(args, "n", None) is not None and args.n < 1:
-        return _input_error(f"--n must be >= 1, got {args.n}")
+        return None, _input_error(f"--n must be >= 1, got {args.n}")
+    return case, None
 
-    from cablefem.app.log import setup_logging
-    from cablefem.io.outdir import OutdirError, output_lock
 
-    setup_logging(logging.WARNING if args.quiet else logging.INFO)
-    if args.command == "fatigue":
-        from cablefem.app.fatigue import run_fatigue
+def _fatigue(args, case) -> int:
+    """``cablefem fatigue`` on a loaded case."""
+    from cablefem.app.fatigue import run_fatigue
+    from cablefem.case import CaseError
+    from cablefem.io.outdir import output_lock
 
-        if not (args.rundir / "anchors.csv").is_file():
-            return _input_error(f"{args.rundir}: no anchors.csv there (not a run folder)")
-        if case.fatigue is None:  # before the output folder is touched
-            sys.stderr.write(f"{case.source}: fatigue: the case has no [fatigue] table "
-                             "(detail_category, ...): see 'cablefem keys'\n")
-            return EXIT_INPUT
-        try:
-            with output_lock(args.output or args.rundir):
-                run_fatigue(case, args.rundir, args.output, window=args.window,
-                            invalid=args.invalid)
-        except CaseError as err:
-            sys.stderr.write(str(err) + "\n")
-            return EXIT_INPUT
-        except ValueError as err:  # OutdirError included
-            return _input_error(str(err))
-        return EXIT_OK
-    if args.command == "post":
-        from cablefem.app.post import run_post
+    if not (args.rundir / "anchors.csv").is_file():
+        return _input_error(f"{args.rundir}: no anchors.csv there (not a run folder)")
+    if case.fatigue is None:  # before the output folder is touched
+        sys.stderr.write(f"{case.source}: fatigue: the case has no [fatigue] table "
+                         "(detail_category, ...): see 'cablefem keys'\n")
+        return EXIT_INPUT
+    try:
+        with output_lock(args.output or args.rundir):
+            run_fatigue(case, args.rundir, args.output, window=args.window,
+                        invalid=args.invalid)
+    except CaseError as err:
+        sys.stderr.write(str(err) + "\n")
+        return EXIT_INPUT
+    except ValueError as err:  # OutdirError included
+        return _input_error(str(err))
+    return EXIT_OK
 
-        try:
-            with output_lock(args.output):
-                run_post(case, args.forces, args.output, form=args.moment_form,
-                         sign=args.sign)
-        except ValueError as err:  # OutdirError included
-            return _input_error(str(err))
-        return EXIT_OK
 
-    _petsc_options(extra)
+def _post(args, case) -> int:
+    """``cablefem post`` on a loaded case."""
+    from cablefem.app.post import run_post
+    from cablefem.io.outdir import output_lock
+
+    try:
+        with output_lock(args.output):
+            run_post(case, args.forces, args.output, form=args.moment_form,
+                     sign=args.sign)
+    except ValueError as err:  # OutdirError included
+        return _input_error(str(err))
+    return EXIT_OK
+
+
+def _solve(args, case) -> int:
+    """``cablefem run`` and ``cablefem modes`` on a loaded case."""
     from cablefem.app.run import RunError, RunInterrupted, run_case
+    from cablefem.case import CaseError
+    from cablefem.io.outdir import OutdirError
     from cablefem.statics import StaticError
 
     try:

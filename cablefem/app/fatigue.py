@@ -19,8 +19,9 @@ import numpy as np
 from mpi4py import MPI
 
 from cablefem.case import Case, CaseError, startup_time
-from cablefem.fatigue import YEAR_SECONDS, SNCurve, StressSection, fatigue_report, write_report
+from cablefem.fatigue import YEAR_SECONDS, SNCurve, StressSection, fatigue_report
 from cablefem.io.anchorcsv import read_moments
+from cablefem.io.fatiguereport import write_report
 from cablefem.units import unit
 
 __all__ = ["run_fatigue"]

@@ -17,8 +17,8 @@ from cablefem.motion import (
     TableMotion,
     TimeFunction,
     default_ramp,
-    table_resolution,
 )
+from cablefem.timetables import table_resolution
 
 # ---------------------------------------------------------------------------------------------
 # Parsing, table by table.
@@ -43,7 +43,12 @@ def _tables(case: Case) -> list[tuple[str, Any]]:
 
 def check_table_ends(case: Case, t_end: float) -> list[tuple[str, str]]:
     """Problems ``(key, message)`` of the tables (anchor motions, load factors) that end
-    before ``t_end`` (s) without ``hold = true``: they would be held silently."""
+    before ``t_end`` (s) without ``hold = true``: they would be held silently.
+
+    Args:
+        case: The case.
+        t_end: The run's end (s).
+    """
     problems = []
     for key, table in _tables(case):
         last = float(table.times[-1])
@@ -59,10 +64,19 @@ def check_table_ends(case: Case, t_end: float) -> list[tuple[str, str]]:
 _START_FRACTION = 1e-3
 
 
-def _table_warnings(case: Case, dt: float, t_end: float) -> list[tuple[str, str]]:
+def table_warnings(case: Case, dt: float, t_end: float) -> list[tuple[str, str]]:
     """Valid but suspicious tables: what the time step cannot resolve
-    (:func:`cablefem.motion.table_resolution`), a motion table that does not start at the
-    static position and at rest, and a held end where the velocity jumps to 0."""
+    (:func:`cablefem.timetables.table_resolution`), a motion table that does not start at the
+    static position and at rest, and a held end where the velocity jumps to 0.
+
+    Args:
+        case: The case.
+        dt: The time step (s).
+        t_end: The run's end (s).
+
+    Returns:
+        ``(key, message)`` of every warning.
+    """
     out = []
     for key, table in _tables(case):
         motion = isinstance(table, TableMotion)
@@ -97,7 +111,14 @@ def startup_time(case: Case) -> tuple[float, str]:
     """End of the start-up of the anchor motions and waves (s) and why: the longest ramp of a
     harmonic or elliptic motion; a motion with ``ramp = 0`` that jumps at ``t = 0``
     (displacement or velocity not zero) counts :data:`DEFAULT_RAMP_PERIODS` of its
-    periods, as long as its default ramp. 0 without such motions (tables start as given)."""
+    periods, as long as its default ramp. 0 without such motions (tables start as given).
+
+    Args:
+        case: The case.
+
+    Returns:
+        ``(time, reason)``.
+    """
     best, why = 0.0, "no anchor motion with a ramp or a jump at t = 0"
     for i, a in enumerate(case.anchors):
         m = a.motion

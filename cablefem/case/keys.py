@@ -24,7 +24,14 @@ REQUIRED = _Required()
 
 
 class KeyDoc(NamedTuple):
-    """A value key: ``type``, ``default`` (``REQUIRED``, ``None`` = optional), unit, help."""
+    """A value key: ``type``, ``default`` (``REQUIRED``, ``None`` = optional), unit, help.
+
+    Attributes:
+        type: The value's type ("number", "string", "boolean", ...).
+        default: The default, ``REQUIRED``, or None (optional, no default).
+        unit: The unit ("" for none).
+        help: What the key means.
+    """
 
     type: str
     default: Any
@@ -33,7 +40,15 @@ class KeyDoc(NamedTuple):
 
 
 class TableDoc(NamedTuple):
-    """A table (``type`` "table") or array of tables: as :class:`KeyDoc` plus its ``keys``."""
+    """A table (``type`` "table") or array of tables: as :class:`KeyDoc` plus its ``keys``.
+
+    Attributes:
+        type: "table" or "array of tables".
+        default: ``REQUIRED`` or None.
+        unit: "".
+        help: What the table holds.
+        keys: Its keys' :class:`KeyDoc` and :class:`TableDoc`.
+    """
 
     type: str
     default: Any
@@ -53,7 +68,7 @@ _TIME_DOC = TableDoc("table", None, "", "Time factor of the load; default consta
     "hold": KeyDoc("boolean", False, "", "table: hold the last row's factor after the table "
                    "ends (false: a table ending before dynamics.t_end is an error)."),
 })
-_MOTION_KEYS = {
+MOTION_KEYS = {
     "harmonic": ("amplitude", "omega", "phase", "ramp"),
     "ellipse": ("omega", "axis_sin", "axis_cos", "ramp"),
     "table": ("file", "hold"),
@@ -447,7 +462,12 @@ NETWORK_KEYS: dict[str, KeyDoc | TableDoc] = _network_keys()
 
 def format_case_reference(markdown: bool = False, network: bool = False) -> str:
     """Render :data:`CASE_KEYS` (or, with ``network``, :data:`NETWORK_KEYS`) as plain text
-    (for ``--help``) or as a Markdown table."""
+    (for ``--help``) or as a Markdown table.
+
+    Args:
+        markdown: A Markdown table instead of plain text.
+        network: The keys of a network case.
+    """
     lines = (["| key | type | default | unit | meaning |", "|---|---|---|---|---|"]
              if markdown else [])
 

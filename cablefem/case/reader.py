@@ -12,17 +12,24 @@ import numpy as np
 
 from cablefem.case.keys import REQUIRED
 from cablefem.errors import CaseError
-from cablefem.validation import bounds_text, is_number, is_sequence, number_problem, show
+from cablefem.validation import bounds_text, is_sequence, number_problem, show
 
 # ---------------------------------------------------------------------------------------------
 # Reading: typed getters that collect problems under key paths.
 
-_show, _is_number, _is_sequence, _bounds_text = show, is_number, is_sequence, bounds_text
 _UNSET = object()
 
 
-class _Reader:
-    """One table of the case: unknown keys are reported on creation, getters type-check."""
+class Reader:
+    """One table of the case: unknown keys are reported on creation, getters type-check.
+
+    Args:
+        data: The table's keys and values.
+        path: Its key path (``""`` for the top level).
+        doc: Its keys' :class:`~cablefem.case.keys.KeyDoc` and
+            :class:`~cablefem.case.keys.TableDoc`.
+        problems: The list every problem is appended to, as ``(key path, message)``.
+    """
 
     def __init__(self, data: dict, path: str, doc: dict, problems: list) -> None:
         self.data, self.path, self.doc, self.problems = data, path, doc, problems
@@ -73,10 +80,10 @@ class _Reader:
         if not given:
             return value
         if not isinstance(value, numbers.Integral) or isinstance(value, (bool, np.bool_)):
-            self.add(name, f"expected an integer, got {_show(value)}")
+            self.add(name, f"expected an integer, got {show(value)}")
             return None
         if value < ge or (le is not None and value > le):
-            self.add(name, f"must be {_bounds_text(ge=ge, le=le)}, got {value}")
+            self.add(name, f"must be {bounds_text(ge=ge, le=le)}, got {value}")
             return None
         return int(value)
 
@@ -89,7 +96,7 @@ class _Reader:
         if path and isinstance(value, os.PathLike):
             value = os.fspath(value)
         if not isinstance(value, str):
-            self.add(name, f"expected a string, got {_show(value)}")
+            self.add(name, f"expected a string, got {show(value)}")
             return None
         if choices is not None and value not in choices:
             close = difflib.get_close_matches(value, choices, n=1)
@@ -102,7 +109,7 @@ class _Reader:
     def boolean(self, name: str) -> bool | None:
         value, given = self.raw(name)
         if given and not isinstance(value, (bool, np.bool_)):
-            self.add(name, f"expected a boolean (true or false), got {_show(value)}")
+            self.add(name, f"expected a boolean (true or false), got {show(value)}")
             return None
         return None if value is None else bool(value)
 
@@ -112,7 +119,7 @@ class _Reader:
         if given and value == word:
             return word
         if given and not isinstance(value, (bool, np.bool_)):
-            self.add(name, f"expected true, false or {word!r}, got {_show(value)}")
+            self.add(name, f"expected true, false or {word!r}, got {show(value)}")
             return None
         return value if value == word else (None if value is None else bool(value))
 
@@ -125,8 +132,8 @@ class _Reader:
         if not given:
             return None if value is None else np.array(value, dtype=float)
         key = key or self.key(name)
-        if not _is_sequence(value) or len(value) != count:
-            self.problems.append((key, f"expected {count} numbers, got {_show(value)}"))
+        if not is_sequence(value) or len(value) != count:
+            self.problems.append((key, f"expected {count} numbers, got {show(value)}"))
             return None
         items = [self._number(v, f"{key}[{i}]", self.doc[name].unit, **bounds)
                  for i, v in enumerate(value)]
@@ -143,9 +150,9 @@ class _Reader:
         value, given = self.raw(name)
         if not given:
             return None if value is None else np.array(value, dtype=float)
-        if not _is_sequence(value) or len(value) < min_count:
+        if not is_sequence(value) or len(value) < min_count:
             self.add(name, f"expected a list of at least {min_count} numbers, got "
-                           f"{_show(value)}")
+                           f"{show(value)}")
             return None
         return self.numbers(name, len(value), value=value, **bounds)
 
@@ -156,27 +163,27 @@ class _Reader:
 
     def number_or_vector(self, name: str, **bounds) -> float | np.ndarray | None:
         value, given = self.raw(name)
-        if given and _is_sequence(value):
+        if given and is_sequence(value):
             return self.numbers(name, 3, value=value, **bounds)
         return self.number(name, **bounds)
 
-    def table(self, name: str) -> _Reader | None:
+    def table(self, name: str) -> Reader | None:
         value, given = self.raw(name)
         if not given:
             return None
         if not isinstance(value, dict):
-            self.add(name, f"expected a table, got {_show(value)}")
+            self.add(name, f"expected a table, got {show(value)}")
             return None
-        return _Reader(value, self.key(name), self.doc[name].keys, self.problems)
+        return Reader(value, self.key(name), self.doc[name].keys, self.problems)
 
-    def tables(self, name: str) -> list[_Reader]:
+    def tables(self, name: str) -> list[Reader]:
         value, given = self.raw(name)
         if not given:
             return []
-        if not _is_sequence(value) or not all(isinstance(v, dict) for v in value):
-            self.add(name, f"expected an array of tables ([[{name}]]), got {_show(value)}")
+        if not is_sequence(value) or not all(isinstance(v, dict) for v in value):
+            self.add(name, f"expected an array of tables ([[{name}]]), got {show(value)}")
             return []
-        return [_Reader(v, f"{self.key(name)}[{i}]", self.doc[name].keys, self.problems)
+        return [Reader(v, f"{self.key(name)}[{i}]", self.doc[name].keys, self.problems)
                 for i, v in enumerate(value)]
 
     def csv(self, name: str, reader: Any, base_dir: Path) -> Any:

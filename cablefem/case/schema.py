@@ -29,7 +29,18 @@ from cablefem.description import (
 
 @dataclass
 class DynamicsSpec:
-    """Time integration: end time and step (s), spectral radius, output stride."""
+    """Time integration: end time and step (s), spectral radius, output stride.
+
+    Attributes:
+        t_end: End time (s).
+        dt: Time step (s).
+        rho_inf: Spectral radius at infinite frequency of the integrator, in [0, 1].
+        output_every: Steps between rows of the time series.
+        fields_every: Steps between frames of the fields.
+        checkpoint_every: Steps between checkpoints (0: none).
+        initial: The velocity at t = 0: "quasi-static" or "rest".
+        statistics_start: Start of the statistics window (s), or None.
+    """
 
     t_end: float
     dt: float
@@ -45,7 +56,16 @@ class DynamicsSpec:
 
 @dataclass
 class FatigueSpec:
-    """S-N curve, section for stresses and window of the fatigue assessment."""
+    """S-N curve, section for stresses and window of the fatigue assessment.
+
+    Attributes:
+        detail_category, m1, m2, knee, N_C, N_knee, N_cutoff: The S-N curve
+            (:class:`cablefem.fatigue.SNCurve`).
+        area, modulus: Effective section [m^2, m^3], or None (the section's solid circle).
+        window: "after_startup", "all" or "steady".
+        fibres: Number of scanned directions.
+        units: Name of the stress unit.
+    """
 
     detail_category: float
     m1: float
@@ -63,7 +83,11 @@ class FatigueSpec:
 
 @dataclass
 class ModalSpec:
-    """Number of modes of the modal analysis."""
+    """Number of modes of the modal analysis.
+
+    Attributes:
+        modes: Number of modes, >= 0.
+    """
 
     modes: int
 
@@ -72,7 +96,15 @@ class ModalSpec:
 class Case(CableDescription):
     """A validated case (see :data:`CASE_KEYS` for every field's meaning): the description
     of the cable or network (:class:`cablefem.description.CableDescription`, what a model is
-    built from) plus the run settings."""
+    built from) plus the run settings.
+
+    Attributes:
+        title: Free text echoed in the outputs.
+        dynamics: The time integration, or None (statics and modes only).
+        modal: The modal analysis.
+        fatigue: The fatigue assessment, or None.
+        warnings: ``(key, message)`` pairs for input that is valid but suspicious.
+    """
 
     title: str = ""
     dynamics: DynamicsSpec | None = None

@@ -48,7 +48,11 @@ _TEXT = ("anchor", "kink", "line")  # the text columns (anchors.csv, kinks.csv, 
 
 def columns(clamped: bool) -> list[str]:
     """The columns of a run's ``anchors.csv``: the moment columns only with a clamped
-    anchor."""
+    anchor.
+
+    Args:
+        clamped: Whether the model has a clamped anchor.
+    """
     return ANCHOR_COLUMNS + (MOMENT_COLUMNS if clamped else [])
 
 
@@ -58,7 +62,14 @@ class AnchorCSV:
 
     ``append=True`` continues an existing file (a resumed run, after :func:`truncate`) in
     the columns of its header (a file of an older version without the optional columns
-    stays without them); otherwise the file is replaced and starts with the header."""
+    stays without them); otherwise the file is replaced and starts with the header.
+
+    Args:
+        path: The file.
+        columns: The schema's columns, in order.
+        comm: MPI communicator (None: serial).
+        append: Continue an existing file.
+    """
 
     def __init__(self, path: Path, columns: Sequence[str], comm=None, append: bool = False):
         self.columns = list(columns)
@@ -101,7 +112,15 @@ class AnchorCSV:
 def format_rows(cols: Sequence[str], table: Mapping[str, Sequence]) -> str:
     """The CSV lines (each ending in a newline) of the rows given column-wise in
     ``table``, in the order ``cols``: floats as ``repr`` (round trip to the last bit),
-    integer columns as integers, non-finite numbers and absent columns as empty cells."""
+    integer columns as integers, non-finite numbers and absent columns as empty cells.
+
+    Args:
+        cols: The columns, in order.
+        table: Column name -> values (every column the same length).
+
+    Raises:
+        ValueError: Columns of different lengths.
+    """
     lengths = {len(v) for v in table.values()}
     if len(lengths) > 1:
         raise ValueError(f"columns of different lengths: {sorted(lengths)}")
@@ -147,7 +166,15 @@ def read(path: str | Path, cols: Sequence[str], optional: Sequence[str] = (),
 
     Raises ``ValueError`` naming the file, line and column of malformed input (see the
     module's docstring; a file without rows too, unless ``empty_ok``); blank lines are
-    skipped."""
+    skipped.
+
+    Args:
+        path: The CSV file.
+        cols: Required columns (beside ``time`` and ``anchor``).
+        optional: Columns read when the header has them.
+        finite: Columns whose cells must be finite numbers.
+        empty_ok: Accept a file without data rows.
+    """
     path = Path(path)
     if not path.is_file():
         raise ValueError(f"{path}: no such file")
@@ -222,7 +249,12 @@ def _read(path: Path, fh, cols: list[str], optional: list[str], finite: set[str]
 
 @dataclass
 class AnchorHistory:
-    """Anchor-force histories read from a CSV: ``forces[name]`` is (n, 3), ``times`` (n,)."""
+    """Anchor-force histories read from a CSV: ``forces[name]`` is (n, 3), ``times`` (n,).
+
+    Attributes:
+        times: (n,) times.
+        forces: Anchor name -> (n, 3) force [N].
+    """
 
     times: np.ndarray
     forces: dict[str, np.ndarray]
@@ -232,7 +264,11 @@ def read_forces(path: str | Path) -> AnchorHistory:
     """Anchor forces from a long-format CSV with columns ``time, anchor, Nx, Ny, Nz``
     (others ignored), one row per time and anchor, as cablefem writes and as other tools
     can export: every force finite, every anchor at the same times. ValueError names the
-    file, line and column of malformed input."""
+    file, line and column of malformed input.
+
+    Args:
+        path: The CSV file.
+    """
     data = read(path, FORCE_COLUMNS, finite=FORCE_COLUMNS)
     (first, d0), *others = data.items()
     times = d0["time"]
@@ -256,7 +292,11 @@ def read_moments(path: str | Path) -> dict[str, dict[str, np.ndarray]]:
     a missing one -> 1 where the moment is finite; ``error_estimate`` NaN in files of
     older versions without it) and, when the columns exist, ``moment_vector``
     (n, 3) from ``Mx, My, Mz``. ValueError names the file, line and column of malformed
-    input."""
+    input.
+
+    Args:
+        path: The run's ``anchors.csv``.
+    """
     data = read(path, ["tension", "moment"],
                 optional=["valid", "Mx", "My", "Mz", *OPTIONAL_MOMENT_COLUMNS])
     out = {}
@@ -275,7 +315,12 @@ def read_moments(path: str | Path) -> dict[str, dict[str, np.ndarray]]:
 # ---------------------------------------------------------------------------- truncation
 def read_rows(comm, path: str | Path) -> list[dict]:
     """The rows of a CSV file as dicts of strings, on every rank (rank 0 reads; small
-    files: a restart's ``kinks.csv``, ``touchdown.csv``); none without the file."""
+    files: a restart's ``kinks.csv``, ``touchdown.csv``); none without the file.
+
+    Args:
+        comm: MPI communicator (None: serial).
+        path: The CSV file.
+    """
     data = None
     if _rank(comm) == 0 and Path(path).is_file():
         with open(path, newline="") as fh:
@@ -288,7 +333,15 @@ def open_series(comm, path: str | Path, columns: Sequence[str], resume_after: fl
     """A time-series CSV for a run: a new file with ``columns``, or, resuming after the
     checkpoint time ``resume_after``, the existing one cut to its rows up to it
     (:func:`truncate`), read back by ``load(path)`` (the history the summary needs) and
-    continued."""
+    continued.
+
+    Args:
+        comm: MPI communicator (None: serial).
+        path: The CSV file.
+        columns: Its columns, for a new file.
+        resume_after: The checkpoint's time, or None for a new run.
+        load: Called with the cut file before it is continued, or None.
+    """
     path = Path(path)
     if resume_after is not None:
         truncate(comm, path, resume_after)
@@ -301,7 +354,13 @@ def truncate(comm, path: str | Path, t_max: float) -> None:
     """Keep the header and the complete rows with ``time <= t_max`` (collective; rank 0
     rewrites the file atomically: a temporary file, then a rename). A row is complete when
     its line ends in a newline: a partial last line (a kill in the middle of a write) is
-    dropped. The times are compared exactly: the writer's numbers round-trip."""
+    dropped. The times are compared exactly: the writer's numbers round-trip.
+
+    Args:
+        comm: MPI communicator (None: serial).
+        path: The CSV file (nothing happens without it).
+        t_max: The last time kept.
+    """
     path = Path(path)
     if _rank(comm) == 0 and path.is_file():
         text = path.read_text()

@@ -20,6 +20,11 @@ _SPEC = os.environ.get("CABLEFEM_KILL_AT", "")
 
 
 def kill_point(name: str) -> None:
+    """SIGKILL this process if ``CABLEFEM_KILL_AT`` names this point and its count.
+
+    Args:
+        name: The point reached (one of the module docstring's).
+    """
     if not _SPEC:
         return
     where, _, n = _SPEC.partition(":")

@@ -94,7 +94,13 @@ def _release(outdir: Path) -> None:
 def output_lock(outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD):
     """Check ``outdir`` and hold its lock for the ``with`` block (collective).
 
-    Raises :class:`OutdirError` on every rank when rank 0 finds a problem."""
+    Args:
+        outdir: The output folder (created if needed).
+        comm: MPI communicator.
+
+    Raises:
+        OutdirError: On every rank, when rank 0 finds a problem.
+    """
     outdir = Path(outdir)
     problem = _take(outdir) if comm.rank == 0 else None
     problem = comm.bcast(problem, root=0)

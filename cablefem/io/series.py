@@ -56,6 +56,15 @@ class Series:
     a new part. All methods are collective; only rank 0 holds data. A frame costs its
     arrays only: no barrier, no XML file written (each grid's XML is serialised once, with
     its frame, and a checkpoint joins these pieces).
+
+    Args:
+        outdir: The output folder.
+        name: The series' name (``<name>.xdmf``).
+        points: (n, 3) node positions (rank 0; None on the others).
+        cells: (m, 2) line cells (rank 0; None on the others).
+        comm: MPI communicator.
+        resume_after: Resume after this time (s), or None for a new series.
+        expected_frames: The frames the XDMF file must hold up to ``resume_after``.
     """
 
     def __init__(self, outdir: Path, name: str, points: np.ndarray | None,
@@ -238,7 +247,14 @@ class StringWriter(_SeriesWriter):
     """``string.xdmf``: the string's fields over time (collective; see :class:`Series`).
 
     The fields are gathered to rank 0 in the order of the reference geometry's nodes and
-    cells (the mesh's input order), whatever the partition."""
+    cells (the mesh's input order), whatever the partition.
+
+    Args:
+        model: The cable model whose fields are written.
+        outdir: The output folder.
+        resume_after: Resume after this time (s), or None.
+        expected_frames: The frames expected up to ``resume_after``.
+    """
 
     def __init__(self, model, outdir: Path, resume_after: float | None = None,
                  expected_frames: int | None = None) -> None:
@@ -313,7 +329,16 @@ class StringWriter(_SeriesWriter):
 class MomentsWriter(_SeriesWriter):
     """``moments.xdmf``: composite curvature and moment on a line mesh of its own (data on
     rank 0; collective, see :class:`Series`). The mesh's points are the static deformed
-    positions; ``dynamic_displacement`` moves them to the current ones."""
+    positions; ``dynamic_displacement`` moves them to the current ones.
+
+    Args:
+        outdir: The output folder.
+        points: (n, 3) static deformed positions of the stations.
+        comm: MPI communicator.
+        resume_after: Resume after this time (s), or None.
+        expected_frames: The frames expected up to ``resume_after``.
+        cells: (m, 2) line cells; None: one polyline through all points.
+    """
 
     def __init__(self, outdir: Path, points: np.ndarray, comm: MPI.Comm = MPI.COMM_WORLD,
                  resume_after: float | None = None, expected_frames: int | None = None,
@@ -358,7 +383,12 @@ _TEMPORARIES = ("summary.json.tmp", "anchors.csv.tmp", "kinks.csv.tmp",
 
 
 def remove_temporaries(outdir: Path, comm: MPI.Comm = MPI.COMM_WORLD) -> None:
-    """Remove the temporary files a killed run left (rank 0; collective)."""
+    """Remove the temporary files a killed run left (rank 0; collective).
+
+    Args:
+        outdir: The output folder.
+        comm: MPI communicator.
+    """
     if comm.rank == 0:
         for name in _TEMPORARIES:
             (Path(outdir) / name).unlink(missing_ok=True)
@@ -367,7 +397,12 @@ def remove_temporaries(outdir: Path, comm: MPI.Comm = MPI.COMM_WORLD) -> None:
 
 def clean_outputs(outdir: Path, comm: MPI.Comm = MPI.COMM_WORLD) -> None:
     """Remove the outputs of an earlier run from ``outdir`` (rank 0; collective), so that
-    a new run leaves no stale frame, checkpoint or figure. Other files are left alone."""
+    a new run leaves no stale frame, checkpoint or figure. Other files are left alone.
+
+    Args:
+        outdir: The output folder.
+        comm: MPI communicator.
+    """
     if comm.rank == 0 and Path(outdir).is_dir():
         outdir = Path(outdir)
         shutil.rmtree(outdir / SERIES, ignore_errors=True)
@@ -379,7 +414,13 @@ def clean_outputs(outdir: Path, comm: MPI.Comm = MPI.COMM_WORLD) -> None:
 
 
 def write_modes(model, modal, path: Path) -> None:
-    """Mode shapes to XDMF; mode ``i`` is stored at "time" ``i`` (ParaView's time slider)."""
+    """Mode shapes to XDMF; mode ``i`` is stored at "time" ``i`` (ParaView's time slider).
+
+    Args:
+        model: The cable model.
+        modal: The modal result (its ``shapes``).
+        path: The XDMF file.
+    """
     with XDMFFile(model.comm, str(path), "w") as f:
         f.write_mesh(model.mesh)
         for i, mode in enumerate(modal.shapes):

@@ -13,7 +13,14 @@ from mpi4py import MPI
 
 
 def jsonable(obj):
-    """Convert numpy scalars/arrays and non-finite floats to plain JSON values."""
+    """Convert numpy scalars/arrays and non-finite floats to plain JSON values.
+
+    Args:
+        obj: A value, or dicts and lists of them (converted recursively).
+
+    Returns:
+        The value with NumPy types as Python ones and non-finite floats as None.
+    """
     if isinstance(obj, dict):
         return {str(k): jsonable(v) for k, v in obj.items()}
     if isinstance(obj, (list, tuple)):
@@ -33,7 +40,13 @@ def jsonable(obj):
 
 
 def write_json(path: Path, data: dict, comm: MPI.Comm = MPI.COMM_WORLD) -> None:
-    """Write ``data`` as JSON from rank 0, atomically; collective (all ranks call it)."""
+    """Write ``data`` as JSON from rank 0, atomically; collective (all ranks call it).
+
+    Args:
+        path: The JSON file.
+        data: The values (made JSON-able with :func:`jsonable`).
+        comm: MPI communicator.
+    """
     if comm.rank == 0:
         path = Path(path)
         tmp = path.with_suffix(path.suffix + ".tmp")

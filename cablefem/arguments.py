@@ -54,7 +54,11 @@ _TOL = 1e-9  # relative tolerance for coincident points and parallel directions
 # Checks shared with the case parser.
 
 def zero_segments(points: np.ndarray) -> np.ndarray:
-    """Indices ``i`` of the polyline points that coincide with point ``i - 1``."""
+    """Indices ``i`` of the polyline points that coincide with point ``i - 1``.
+
+    Args:
+        points: (n, 3) polyline points.
+    """
     scale = np.maximum(1.0, np.linalg.norm(points[1:], axis=1))
     return np.flatnonzero(np.linalg.norm(np.diff(points, axis=0), axis=1) <= _TOL * scale) + 1
 
@@ -66,7 +70,19 @@ def anchor_problems(anchors: list[Anchor], geometry: Geometry | None, gravity: G
     what they leave out: a polyline's end as the position, the chord as a clamp's direction.
     ``polyline_given``: a polyline was given (if it is None, it could not be read);
     ``positions_given[i]``: anchor i's position was given (if it is None, it could not be
-    read): both reported already, not reported as missing."""
+    read): both reported already, not reported as missing.
+
+    Args:
+        anchors: The two anchors (completed in place).
+        geometry: The stress-free geometry, or None.
+        gravity: Gravity, or None.
+        polyline_given: See above.
+        positions_given: See above.
+        key: The key path of the anchors in the messages.
+
+    Returns:
+        ``(key, message)`` of every problem.
+    """
     problems: list[tuple[str, str]] = []
     if len(anchors) != 2:
         return problems
@@ -242,10 +258,21 @@ def describe_cable(anchors: list[Anchor], section: Section, *, length: float | N
     """A checked description of a single cable (the arguments of
     :func:`cablefem.create_cable`, which see).
 
-    Raises
-    ------
-    CaseError
-        With every problem, each under its argument's name (``sag_ratio``, ``anchors[1].kind``).
+    Args:
+        anchors, section: As for :func:`cablefem.create_cable`.
+        length, horizontal_tension, sag_ratio, polyline: As for :func:`cablefem.create_cable`.
+        elements, grading, gravity, loads, point_masses, point_loads, damping: Likewise.
+        tension_only, outer_correction, span_bending, petsc_options, units: Likewise.
+        dampers, fluid: Likewise.
+        beam: The reference rod's mesh (:func:`cablefem.create_rod`), or None.
+        source: Name of the cable in the messages.
+
+    Returns:
+        The checked :class:`cablefem.description.CableDescription`.
+
+    Raises:
+        CaseError: With every problem, each under its argument's name (``sag_ratio``,
+            ``anchors[1].kind``).
     """
     problems: list[tuple[str, str]] = []
     if not isinstance(section, Section):
@@ -342,7 +369,25 @@ def describe_network(mesh_file: str | os.PathLike, sections: dict[str, Section],
                      petsc_options: dict | None = None, units: str = "SI",
                      source: str = "<python>") -> CableDescription:
     """A checked description of a cable network (the arguments of
-    :func:`cablefem.create_network`, which see); the mesh itself is read by the model."""
+    :func:`cablefem.create_network`, which see); the mesh itself is read by the model.
+
+    Args:
+        mesh_file: The gmsh ``.msh`` file.
+        sections: Section name -> :class:`cablefem.properties.Section`.
+        anchors: :class:`cablefem.anchor.Anchor` named by 0D groups of the mesh.
+        cables: :class:`cablefem.description.CableSpec` of every cable group.
+        gravity, loads, point_masses, point_loads, damping: As for
+            :func:`cablefem.create_network`.
+        tension_only, outer_correction, span_bending, petsc_options, units: As for
+            :func:`cablefem.create_network`.
+        source: Name of the network in the messages.
+
+    Returns:
+        The checked :class:`cablefem.description.CableDescription`.
+
+    Raises:
+        CaseError: Every problem, each under its argument's name.
+    """
     problems: list[tuple[str, str]] = []
     mesh = Path(mesh_file) if isinstance(mesh_file, (str, os.PathLike)) else None
     if mesh is None:
