@@ -35,8 +35,8 @@ N_EL = 20
 
 
 def _model(n: int = N_EL) -> CableModel:
-    return CableModel(parse_case(level_case(EA=EA, EI=1e-6, mass=M, g=0.0, length=L0,
-                                            chord=CHORD, elements=n)), MPI.COMM_WORLD)
+    return CableModel(MPI.COMM_WORLD, parse_case(level_case(
+        EA=EA, EI=1e-6, mass=M, g=0.0, length=L0, chord=CHORD, elements=n)))
 
 
 def _constant(model, value):
