@@ -40,12 +40,14 @@ DAMPER_OFFSET_WARN = 0.01
 @dataclass
 class Reports:
     """The anchors' and kinks' reports: summary.json's ``anchors``, ``statistics_start``
-    (None: not given or not reached), ``touchdown`` and ``kinks`` (None: none)."""
+    (None: not given or not reached), ``touchdown``, ``kinks`` and ``dampers`` (None:
+    none)."""
 
     anchors: dict
     statistics_start: float | None = None
     touchdown: dict | None = None
     kinks: dict | None = None
+    dampers: dict | None = None
     warnings: Warnings = field(default_factory=Warnings)
 
 
@@ -81,6 +83,8 @@ def report(b: Built, st: Statics, res: Resonance, static_entries: dict, dyn: Dyn
                              "anchor motion (its ramp)")
     if h.kinks.kinks:
         out.kinks = frag["kinks"] = _kinks(b, h, start, out.warnings)
+    if h.dampers is not None:  # a single cable's dampers' force, stroke and velocity
+        out.dampers = h.dampers.summary(case.dampers, start)
     gaps = b.model.kink_gaps
     if gaps:  # network nodes where a cable kinks but has no kink moment
         k, where, why = gaps[0]
