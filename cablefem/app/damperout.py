@@ -28,7 +28,7 @@ class DamperOutput:
 
     FLUSH_ROWS = 256
 
-    def __init__(self, model, outdir: Path, resume_after: float | None = None):
+    def __init__(self, model, outdir: Path | None, resume_after: float | None = None):
         self.model = model
         self.dampers = [] if model.is_network else list(model.case.dampers)
         self.names = [dampercsv.name(i) for i in range(len(self.dampers))]
@@ -40,6 +40,8 @@ class DamperOutput:
         if not self.dampers:
             return
         self._forms, self._f = _compile(model)
+        if outdir is None:  # measure only
+            return
         self.csv = anchorcsv.open_series(model.comm, outdir / "dampers.csv", DAMPER_COLUMNS,
                                          resume_after, self._load)
 
