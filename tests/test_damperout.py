@@ -185,3 +185,42 @@ def test_dampers_csv_survives_a_kill(tmp_path):
     sb = json.loads((ref / "summary.json").read_text())["dampers"]["damper0"]
     for key in ("force_peak", "force_rms", "stroke_peak", "velocity_rms"):
         assert sa[key] == pytest.approx(sb[key], rel=1e-12)
+
+
+def test_network_damper_cell_is_the_single_cables_damper(mpi_tmp_path):
+    """A network's grounded damper cell, slanted at 45 degrees, acting along y
+    (``direction``) is the single cable's damper along y at the same node (test_dampers:
+    the same damping ratios to 1e-7): under a harmonic point load along y, step by step,
+    its force, stroke and velocity are the single cable's with the sign of the cell's
+    orientation (cable node to ground: the stroke is -u_y): measured 6e-12 of the peak,
+    1e-9 allowed (the two models' Newton tolerances); force = c velocity + k stroke at
+    every row (round-off)."""
+    import test_dampers as td
+
+    from cablefem.network import NetworkModel
+
+    n, a, p = 50, 5, 15
+    c, k = np.sqrt(td.T * td.M) / (np.pi * a / n), 2e3
+    time = {"type": "harmonic", "omega": 20.0}
+    net = NetworkModel(comm, td._tie_network(
+        mpi_tmp_path / "slant.msh", True, c, k, n, a, slant=1.0, direction=[0.0, 1.0, 0.0],
+        point_loads=[{"group": "load", "value": [0.0, 2.0, 0.0], "time": time}]))
+    d = td.taut(a / n, 1.0, n, stiffness=k)
+    d["dampers"][0].update(coefficient=c, direction=[0.0, 1.0, 0.0])
+    d["point_loads"] = [{"s": p * td.L / n / td.LAM, "value": [0.0, 2.0, 0.0],
+                         "time": time}]
+    one = CableModel(comm, parse_case(d))
+    runs = []
+    for model in (net, one):
+        solve_static(model)
+        out = DamperOutput(model, None)
+        assert out.names == (["tie"] if model is net else ["damper0"])
+        runs.append(np.array([[out.measure()[q][0] for q in ("force", "stroke", "velocity")]
+                              for _ in integrate(model, 0.3, 2e-3, 0.9, 1)]))
+    got, ref = runs
+    assert np.max(np.abs(ref[:, 1])) > 1e-5  # the node moves
+    for j in range(3):
+        np.testing.assert_allclose(-got[:, j], ref[:, j], rtol=0,
+                                   atol=1e-9 * np.max(np.abs(ref[:, j])))
+    np.testing.assert_allclose(got[:, 0], c * got[:, 2] + k * got[:, 1], rtol=0,
+                               atol=1e-12 * np.max(np.abs(got[:, 0])))

@@ -4,8 +4,8 @@ over the statistics window. A damper is specified by its force and stroke.
 
 The numbers are those the dynamic residual uses (:func:`cablefem.dampers.
 damper_motion_forms`: the same UFL, the kink layer's offset of the rod's node included),
-at the output times' state. A network's dampers (cells between two nodes) are not written
-(docs/outputs.md)."""
+at the output times' state; a network's damper cells' from their nodes in closed form
+(:func:`cablefem.dampers.link_work`'s law, exact for P1 elements)."""
 
 from __future__ import annotations
 
@@ -23,15 +23,21 @@ __all__ = ["DamperOutput", "DamperHistory"]
 
 class DamperOutput:
     """Records the dampers' columns at each output time (collective: :meth:`add`
-    assembles the two motion forms) and writes ``dampers.csv`` in blocks (rank 0). Nothing
-    for a model without a single cable's dampers."""
+    assembles the two motion forms, or gathers a network's nodes) and writes
+    ``dampers.csv`` in blocks (rank 0). Nothing for a model without dampers."""
 
     FLUSH_ROWS = 256
 
     def __init__(self, model, outdir: Path | None, resume_after: float | None = None):
         self.model = model
-        self.dampers = [] if model.is_network else list(model.case.dampers)
-        self.names = [dampercsv.name(i) for i in range(len(self.dampers))]
+        #: a network's damper cells: (its [[dampers]] entry, node a, node b)
+        self.links = _links(model) if model.is_network else []
+        if model.is_network:
+            self.dampers = [model.case.dampers[i] for i, _, _ in self.links]
+            self.names = _link_names(model.case.dampers, self.links)
+        else:
+            self.dampers = list(model.case.dampers)
+            self.names = [dampercsv.name(i) for i in range(len(self.dampers))]
         self.times: list[float] = []
         self.rows: dict[str, dict[str, list]] = {
             n: {c: [] for c in DAMPER_COLUMNS[2:]} for n in self.names}
@@ -39,7 +45,10 @@ class DamperOutput:
         self.csv = None
         if not self.dampers:
             return
-        self._forms, self._f = _compile(model)
+        if model.is_network:  # the static state, gathered once
+            self._us = model.gather_nodal(model.u_static)
+        else:
+            self._forms, self._f = _compile(model)
         if outdir is None:  # measure only
             return
         self.csv = anchorcsv.open_series(model.comm, outdir / "dampers.csv", DAMPER_COLUMNS,
@@ -62,6 +71,11 @@ class DamperOutput:
         from dolfinx import fem, la
 
         model = self.model
+        if model.is_network:
+            u, v = model.gather_nodal(model.u), model.gather_nodal(model.v)
+            cols = (_link_columns(self.dampers, self.links, model.geometry.points, u, v,
+                                  self._us) if model.comm.rank == 0 else None)
+            return model.comm.bcast(cols, root=0)
         both = []
         for form in self._forms:  # the velocity, then the stroke, at the dampers' nodes
             vec = fem.assemble_vector(form)
@@ -102,7 +116,7 @@ class DamperOutput:
 
     def history(self) -> DamperHistory:
         """What was recorded (a resumed run's rows and this run's)."""
-        return DamperHistory(list(self.names), np.array(self.times),
+        return DamperHistory(list(self.names), list(self.dampers), np.array(self.times),
                              {n: {c: np.array(v, float) for c, v in r.items()}
                               for n, r in self.rows.items()})
 
@@ -127,8 +141,59 @@ def _compile(model):
     return compiled, fem.Function(model.V, name="damper_motion")
 
 
-def _columns(dampers, vel: np.ndarray, stroke: np.ndarray) -> dict[str, np.ndarray]:
-    """The columns from the velocity and stroke vectors at the nodes, (n_dampers, 3)."""
+def _links(model) -> list[tuple[int, int, int]]:
+    """A network's damper cells: ([[dampers]] index, first node, second node), in the
+    mesh's order."""
+    geo = model.geometry
+    which = np.asarray(geo.cell_damper)
+    cells = np.asarray(geo.cells)
+    return [(int(which[e]), int(cells[e, 0]), int(cells[e, 1]))
+            for e in np.nonzero(which >= 0)[0]]
+
+
+def _link_names(dampers, links) -> list[str]:
+    """A network damper cell's name: its group's, with ``:j`` (its ``j``-th cell) when
+    the group has several."""
+    count = {}
+    for i, _, _ in links:
+        count[i] = count.get(i, 0) + 1
+    seen: dict[int, int] = {}
+    out = []
+    for i, _, _ in links:
+        j = seen[i] = seen.get(i, -1) + 1
+        out.append(dampers[i].group if count[i] == 1 else f"{dampers[i].group}:{j}")
+    return out
+
+
+def _link_columns(dampers, links, points, u, v, us) -> dict[str, np.ndarray]:
+    """A network's damper cells' columns from the nodes' displacement ``u``, velocity
+    ``v`` and static displacement ``us`` (:func:`cablefem.dampers.link_work`'s force, in
+    closed form for P1: along the cell ``e = (x_b - x_a)/|x_b - x_a|`` the extension from
+    the static state ``|x_b - x_a| - |xs_b - xs_a|`` and its rate ``e·(v_b - v_a)``; along
+    a fixed ``direction`` n, ``n·Δ(u - u_s)`` and ``n·Δv``). The vectors are the force on
+    the cell's second node and the stroke and velocity along the axis."""
+    a = np.array([x[1] for x in links])
+    b = np.array([x[2] for x in links])
+    x, xs = points + u, points + us
+    axes = np.empty((len(links), 3))
+    stroke = np.empty(len(links))
+    for r, d in enumerate(dampers):
+        if d.direction is not None:
+            axes[r] = np.asarray(d.direction, float)
+            stroke[r] = axes[r] @ ((u[b[r]] - us[b[r]]) - (u[a[r]] - us[a[r]]))
+        else:
+            chord = x[b[r]] - x[a[r]]
+            axes[r] = chord / np.linalg.norm(chord)
+            stroke[r] = np.linalg.norm(chord) - np.linalg.norm(xs[b[r]] - xs[a[r]])
+    rate = np.einsum("ij,ij->i", axes, v[b] - v[a])
+    return _columns(dampers, rate[:, None] * axes, stroke[:, None] * axes, axes)
+
+
+def _columns(dampers, vel: np.ndarray, stroke: np.ndarray,
+             axes: np.ndarray | None = None) -> dict[str, np.ndarray]:
+    """The columns from the velocity and stroke vectors at the nodes, (n_dampers, 3);
+    the scalars signed along ``axes`` (per damper), else along a damper's direction, else
+    the magnitudes."""
     c = np.array([d.coefficient for d in dampers])
     k = np.array([d.stiffness for d in dampers])
     F = -(c[:, None] * vel + k[:, None] * stroke)  # the damper's force on the cable
@@ -138,8 +203,8 @@ def _columns(dampers, vel: np.ndarray, stroke: np.ndarray) -> dict[str, np.ndarr
             out[col] = vec[:, j].copy()
         out[q] = np.linalg.norm(vec, axis=1)
     for i, d in enumerate(dampers):
-        if d.direction is not None:  # signed along the damper's axis
-            n = np.asarray(d.direction, float)
+        if axes is not None or d.direction is not None:  # signed along the damper's axis
+            n = axes[i] if axes is not None else np.asarray(d.direction, float)
             out["stroke"][i] = float(n @ stroke[i])
             out["velocity"][i] = float(n @ vel[i])
             out["force"][i] = -float(n @ F[i])
@@ -148,14 +213,15 @@ def _columns(dampers, vel: np.ndarray, stroke: np.ndarray) -> dict[str, np.ndarr
 
 @dataclass
 class DamperHistory:
-    """The dampers' recorded columns: their names, the output times and per damper each
-    column's rows (``DAMPER_COLUMNS[2:]``)."""
+    """The dampers' recorded columns: their names, their case entries, the output times
+    and per damper each column's rows (``DAMPER_COLUMNS[2:]``)."""
 
     names: list[str]
+    dampers: list
     times: np.ndarray
     rows: dict[str, dict[str, np.ndarray]]
 
-    def summary(self, dampers, start: float | None = None,
+    def summary(self, start: float | None = None,
                 fraction: float = FRACTION) -> dict | None:
         """Per damper: where it is and its law, and the peak (of the absolute value) and
         RMS of its force, stroke and velocity over the statistics window (from ``start``,
@@ -167,10 +233,11 @@ class DamperHistory:
         t0 = window_start(t, start, fraction) if t.size > 1 else float(t[0])
         sel = t >= t0
         out = {}
-        for d, name in zip(dampers, self.names):
+        for d, name in zip(self.dampers, self.names):
             rows = self.rows[name]
-            entry = {"anchor": d.anchor, "distance": d.distance,
-                     "coefficient": d.coefficient, "stiffness": d.stiffness,
+            where = ({"group": d.group} if hasattr(d, "group") else
+                     {"anchor": d.anchor, "distance": d.distance})
+            entry = {**where, "coefficient": d.coefficient, "stiffness": d.stiffness,
                      "direction": (None if d.direction is None
                                    else [float(x) for x in d.direction]),
                      "window": [float(t0), float(t[-1])]}

@@ -83,8 +83,8 @@ def report(b: Built, st: Statics, res: Resonance, static_entries: dict, dyn: Dyn
                              "anchor motion (its ramp)")
     if h.kinks.kinks:
         out.kinks = frag["kinks"] = _kinks(b, h, start, out.warnings)
-    if h.dampers is not None:  # a single cable's dampers' force, stroke and velocity
-        out.dampers = h.dampers.summary(case.dampers, start)
+    if h.dampers is not None:  # the dampers' force, stroke and velocity
+        out.dampers = h.dampers.summary(start)
     gaps = b.model.kink_gaps
     if gaps:  # network nodes where a cable kinks but has no kink moment
         k, where, why = gaps[0]
