@@ -27,8 +27,8 @@ from ufl.algorithms import expand_derivatives
 
 from cablefem import forms
 
-__all__ = ["AXIAL_FRACTION", "applied_offset", "axial_dampers", "damper_stations",
-           "damper_work", "kink_offset", "layer_length", "link_work"]
+__all__ = ["AXIAL_FRACTION", "applied_offset", "axial_dampers", "damper_motion_forms",
+           "damper_stations", "damper_work", "kink_offset", "layer_length", "link_work"]
 
 
 def damper_stations(description, length: float) -> list[float]:
@@ -149,27 +149,60 @@ def damper_work(mesh, dampers, tags, u_t, v_t, us_t, du_t, t0, dS, ell=None):
     the string at the corner (the outer solution sees a point force there). Without it
     (the rod, which resolves its layer) ``u_n = u``."""
     work = None
-    r_u = r_s = r_v = None
-    if ell is not None:
-        r_u = kink_offset(u_t, t0, mesh, ell)
-        r_s = kink_offset(us_t, t0, mesh, ell)
-        r_v = expand_derivatives(ufl.derivative(r_u, u_t, v_t))
+    offsets = _offsets(mesh, u_t, v_t, us_t, t0, ell)
     for d, tag in zip(dampers, tags):
-        direction = (None if d.direction is None else
-                     fem.Constant(mesh, np.asarray(d.direction, dtype=PETSc.ScalarType)))
-        P = _projector(direction, u_t, t0)
+        P, Pv, Pdisp = _node_motion(mesh, d, u_t, v_t, us_t, t0, offsets)
         c = fem.Constant(mesh, PETSc.ScalarType(d.coefficient))
-        v_n = v_t("+") if r_v is None else v_t("+") + r_v
-        f = c * ufl.dot(P, v_n)
+        f = c * Pv
         if d.stiffness > 0:
             k = fem.Constant(mesh, PETSc.ScalarType(d.stiffness))
-            disp = u_t("+") - us_t("+")
-            if r_u is not None:
-                disp = disp + r_u - r_s
-            f = f + k * ufl.dot(P, disp)
+            f = f + k * Pdisp
         term = ufl.inner(f, du_t("+")) * dS(tag)
         work = term if work is None else work + term
     return work
+
+
+def _offsets(mesh, u_t, v_t, us_t, t0, ell):
+    """The rod node's offsets ``(r(u), r(u_s), r'(u)[v])`` with a layer ``ell``, else
+    ``(None, None, None)``."""
+    if ell is None:
+        return None, None, None
+    r_u = kink_offset(u_t, t0, mesh, ell)
+    r_s = kink_offset(us_t, t0, mesh, ell)
+    return r_u, r_s, expand_derivatives(ufl.derivative(r_u, u_t, v_t))
+
+
+def _node_motion(mesh, d, u_t, v_t, us_t, t0, offsets):
+    """Damper ``d``'s projector ``P`` and the motion it acts on at its vertex: ``P v_n``
+    and ``P (u_n - u_s,n)`` (UFL on ``dS``'s "+" side; ``offsets``: :func:`_offsets`)."""
+    r_u, r_s, r_v = offsets
+    direction = (None if d.direction is None else
+                 fem.Constant(mesh, np.asarray(d.direction, dtype=PETSc.ScalarType)))
+    P = _projector(direction, u_t, t0)
+    v_n = v_t("+") if r_v is None else v_t("+") + r_v
+    disp = u_t("+") - us_t("+")
+    if r_u is not None:
+        disp = disp + r_u - r_s
+    return P, ufl.dot(P, v_n), ufl.dot(P, disp)
+
+
+def damper_motion_forms(mesh, dampers, tags, u_t, v_t, us_t, du_t, t0, dS, ell=None):
+    """Linear forms (in ``du_t``) whose assembled vectors hold, at each damper's node, the
+    velocity ``P v_n`` and the stroke ``P (u_n - u_s,n)`` the damper acts on
+    (:func:`damper_work`'s, term by term): its force on the cable is
+    ``-(c P v_n + k P (u_n - u_s,n))``. ``(velocity form, stroke form)``, None without
+    dampers."""
+    if not dampers:
+        return None
+    offsets = _offsets(mesh, u_t, v_t, us_t, t0, ell)
+    vel = stroke = None
+    for d, tag in zip(dampers, tags):
+        _, Pv, Pdisp = _node_motion(mesh, d, u_t, v_t, us_t, t0, offsets)
+        tv = ufl.inner(Pv, du_t("+")) * dS(tag)
+        ts = ufl.inner(Pdisp, du_t("+")) * dS(tag)
+        vel = tv if vel is None else vel + tv
+        stroke = ts if stroke is None else stroke + ts
+    return vel, stroke
 
 
 def link_work(mesh, dampers, dx, h, u, v, us, du, t0):

@@ -196,6 +196,7 @@ def test_every_csv_column_has_a_unit():
     kinks.csv and touchdown.csv (the headers carry names only), once, with a unit."""
     from cablefem.app.touchdownout import TOUCHDOWN_COLUMNS
     from cablefem.io.anchorcsv import ANCHOR_COLUMNS, MOMENT_COLUMNS
+    from cablefem.io.dampercsv import DAMPER_COLUMNS
     from cablefem.kinks import KINK_COLUMNS
 
     text = (ROOT / "docs" / "outputs.md").read_text()
@@ -206,6 +207,6 @@ def test_every_csv_column_has_a_unit():
         assert unit and what, line
         documented.setdefault(file, []).extend(re.findall(r"`([^`]+)`", names))
     written = {"anchors.csv": ANCHOR_COLUMNS + MOMENT_COLUMNS, "kinks.csv": KINK_COLUMNS,
-               "touchdown.csv": TOUCHDOWN_COLUMNS}
+               "touchdown.csv": TOUCHDOWN_COLUMNS, "dampers.csv": DAMPER_COLUMNS}
     for file, columns in written.items():
         assert sorted(documented.get(file, [])) == sorted(columns), file

@@ -13,6 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
+from cablefem.app.damperout import DamperHistory, DamperOutput
 from cablefem.app.kinkout import KinkHistory, KinkOutput
 from cablefem.app.touchdownout import TouchdownOutput
 from cablefem.cable import CableModel
@@ -47,6 +48,10 @@ class Histories:
     fallback: dict[str, list[bool]]
     kinks: KinkHistory
     touchdown: dict | None
+    #: the dampers' columns (dampers.csv; none recorded: no names)
+    dampers: DamperHistory | None = None
+    #: the touchdown's rows (touchdown.csv's, (time, line, s, x, y, z, grounded length))
+    touchdown_rows: list | None = None
 
 
 class RunOutput:
@@ -89,6 +94,7 @@ class RunOutput:
         frames = frames or {}
         self.kinkout = KinkOutput(model, outdir, columns.omega, resume_after)  # kinks.csv
         self.touchdown = TouchdownOutput(model, outdir, resume_after)  # touchdown.csv
+        self.dampers = DamperOutput(model, outdir, resume_after)  # dampers.csv
         self.string = StringWriter(model, outdir, resume_after, frames.get("string"))
         self._pending = 0  # rows recorded, not yet written
         self._last: dict = {}  # the moment columns of the last written block, per anchor
@@ -151,6 +157,7 @@ class RunOutput:
                 self.rod[name].append(N[3:6])
         self.kinkout.add(t)
         self.touchdown.add(t)
+        self.dampers.add(t)
         self._pending += 1
         if self._pending >= self.FLUSH_ROWS:
             self.flush()
@@ -160,6 +167,7 @@ class RunOutput:
         write them to anchors.csv as one block."""
         self.kinkout.flush()
         self.touchdown.flush()
+        self.dampers.flush()
         n = self._pending
         if n == 0:
             return
@@ -222,6 +230,7 @@ class RunOutput:
         finally:
             self.kinkout.close()
             self.touchdown.close()
+            self.dampers.close()
             self.string.close()
             self.csv.close()
             if self.moments is not None:
@@ -236,4 +245,5 @@ class RunOutput:
             {name: {k: np.array(v) for k, v in cols.items()}
              for name, cols in self.columns.items()},
             self.reasons, self.fallback, self.kinkout.history(),
-            td.summary() if td.active and td.rows else None)
+            td.summary() if td.active and td.rows else None, self.dampers.history(),
+            list(td.rows) if td.active else None)

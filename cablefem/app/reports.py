@@ -40,12 +40,14 @@ DAMPER_OFFSET_WARN = 0.01
 @dataclass
 class Reports:
     """The anchors' and kinks' reports: summary.json's ``anchors``, ``statistics_start``
-    (None: not given or not reached), ``touchdown`` and ``kinks`` (None: none)."""
+    (None: not given or not reached), ``touchdown``, ``kinks`` and ``dampers`` (None:
+    none)."""
 
     anchors: dict
     statistics_start: float | None = None
     touchdown: dict | None = None
     kinks: dict | None = None
+    dampers: dict | None = None
     warnings: Warnings = field(default_factory=Warnings)
 
 
@@ -81,6 +83,8 @@ def report(b: Built, st: Statics, res: Resonance, static_entries: dict, dyn: Dyn
                              "anchor motion (its ramp)")
     if h.kinks.kinks:
         out.kinks = frag["kinks"] = _kinks(b, h, start, out.warnings)
+    if h.dampers is not None:  # the dampers' force, stroke and velocity
+        out.dampers = h.dampers.summary(start)
     gaps = b.model.kink_gaps
     if gaps:  # network nodes where a cable kinks but has no kink moment
         k, where, why = gaps[0]
@@ -190,18 +194,24 @@ def _damper_offsets(b: Built, entries: dict, kinks, warnings: Warnings) -> None:
                  "damper_offset_estimate in summary.json; docs/dampers.md)")
 
 
-def figures(b: Built, h: Histories, outdir, comm) -> dict | None:
-    """The anchors' figures (None: no moment history to draw)."""
-    if not (len(h.times) > 1 and h.moments):
+def figures(b: Built, h: Histories, outdir, comm) -> list[str] | None:
+    """The run's figures (None: no history to draw): the anchors' moments (clamped
+    anchors) and the histories every kind of case has (:mod:`cablefem.app.historyplots`:
+    tensions, touchdown, kinks, dampers)."""
+    if len(h.times) < 2:
         return None
+    from cablefem.app.historyplots import history_figures
     from cablefem.app.plots import MAX_PANELS, anchor_figures
 
-    out = anchor_figures(outdir, h.times, h.moments, comm, source=b.kind.moment_source,
-                         units=b.case.units)
-    if len(h.moments) > MAX_PANELS:
-        log.info("figures: the %d most loaded of %d clamped anchors (all are in "
-                 "anchors.csv)", MAX_PANELS, len(h.moments))
-    return out
+    out = []
+    if h.moments:
+        out = anchor_figures(outdir, h.times, h.moments, comm, source=b.kind.moment_source,
+                             units=b.case.units)
+        if len(h.moments) > MAX_PANELS:
+            log.info("figures: the %d most loaded of %d clamped anchors (all are in "
+                     "anchors.csv)", MAX_PANELS, len(h.moments))
+    out += history_figures(outdir, h, b.case.units, comm)
+    return out or None
 
 
 @dataclass

@@ -108,3 +108,5 @@ def _reports(s: dict, rep: Reports) -> None:
         s["touchdown"] = rep.touchdown
     if rep.kinks is not None:
         s["kinks"] = rep.kinks
+    if rep.dampers is not None:
+        s["dampers"] = rep.dampers

@@ -43,7 +43,7 @@ OPTIONAL_MOMENT_COLUMNS = ("error_estimate",)
 FORCE_COLUMNS = ["Nx", "Ny", "Nz"]
 #: Columns written as integers (all others but ``anchor`` are floats).
 INTEGER_COLUMNS = ("valid",)
-_TEXT = ("anchor", "kink", "line")  # the text columns (anchors.csv, kinks.csv, touchdown.csv)
+_TEXT = ("anchor", "kink", "line", "damper")  # text columns (anchors, kinks, touchdown, dampers)
 
 
 def columns(clamped: bool) -> list[str]:

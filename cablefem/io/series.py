@@ -368,17 +368,20 @@ class MomentsWriter(_SeriesWriter):
 
 #: what a run writes into its folder, removed before a new (not resumed) run: the current
 #: layout and the one before it (string.pvd, one .pvtu/.vtu per frame, string.h5, ...)
-_RUN_OUTPUTS = ("summary.json", "anchors.csv", "kinks.csv", "touchdown.csv", "string.xdmf",
+_RUN_OUTPUTS = ("summary.json", "anchors.csv", "kinks.csv", "touchdown.csv", "dampers.csv",
+                "string.xdmf",
                 "string.h5", "moments.xdmf", "moments.h5", "modes.xdmf", "modes.h5",
                 "checkpoint.npz",
                 "string.pvd", "string_restart.pvd", "anchor_moments.png", "anchor_polar.png",
-                "fatigue.json", "fatigue.md", "fatigue_histogram.png")
+                "fatigue.json", "fatigue.md", "fatigue_histogram.png",
+                "anchor_tensions.png", "touchdown.png", "kink_moments.png", "dampers.png")
 _RUN_PATTERNS = (re.compile(r"string(_restart)?\d{6}\.pvtu"),
                  re.compile(r"string(_restart)?_p\d+_\d{6}\.vtu"))
 
 
 #: the temporary files of the atomic writes (temporary file, then rename) of a run
-_TEMPORARIES = ("summary.json.tmp", "anchors.csv.tmp", "kinks.csv.tmp",
+_TEMPORARIES = ("summary.json.tmp", "anchors.csv.tmp", "kinks.csv.tmp", "touchdown.csv.tmp",
+                "dampers.csv.tmp",
                 "checkpoint.npz.tmp.npz", "string.xdmf.tmp", "moments.xdmf.tmp")
 
 
