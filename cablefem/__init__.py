@@ -37,6 +37,9 @@ _API = {
     "HarmonicMotion": "cablefem.motion", "EllipseMotion": "cablefem.motion",
     "TableMotion": "cablefem.motion", "TimeFunction": "cablefem.motion",
     "solve_static": "cablefem.statics",
+    # a term of the residual through model.forms.add (docs/extending.md); what solvers read
+    "Term": "cablefem.terms", "LineModel": "cablefem.contract",
+    "LineDiscretisation": "cablefem.line",
 }
 
 __all__ = ["__version__", *_API]
