@@ -40,6 +40,9 @@ _API = {
     # a term of the residual through model.forms.add (docs/extending.md); what solvers read
     "Term": "cablefem.terms", "LineModel": "cablefem.contract",
     "LineDiscretisation": "cablefem.line",
+    # the problems, each owning its PETSc objects under an options prefix
+    "StaticProblem": "cablefem.statics", "ModalProblem": "cablefem.modal",
+    "DynamicProblem": "cablefem.dynamics", "AnchorReactions": "cablefem.reactions",
 }
 
 __all__ = ["__version__", *_API]
