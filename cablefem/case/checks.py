@@ -56,6 +56,10 @@ def check_table_ends(case: Case, t_end: float) -> list[tuple[str, str]]:
             problems.append((f"{key}.file", f"the table ends at t = {last:g} s, before the "
                                             f"end of the run t = {t_end:g} s: extend it, or "
                                             f"set {key}.hold = true to hold its last row"))
+    turbulence = getattr(getattr(case, "fluid", None), "turbulence", None)
+    if turbulence is not None and turbulence.duration < t_end * (1 - 1e-12) - 1e-12:
+        problems.append(("fluid.turbulence.duration", f"the field's period {turbulence.duration:g}"
+                         f" s is shorter than the run t = {t_end:g} s: it would repeat"))
     return problems
 
 

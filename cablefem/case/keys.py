@@ -237,6 +237,28 @@ CASE_KEYS: dict[str, KeyDoc | TableDoc] = {
                            "dynamics.t_end unless hold = true."),
             "hold": KeyDoc("boolean", False, "", "Hold the last row after the table ends."),
         }),
+        "turbulence": TableDoc("table", None, "", "A turbulent wind added in dynamics: "
+                               "the fluctuation along current (mean speed U = |current|) "
+                               "of a spectrum with Davenport's coherence between points of "
+                               "the cable, from a seed (docs/fluid.md).", {
+            "spectrum": KeyDoc("string", "kaimal", "", "'kaimal' | 'von_karman' (one-sided, "
+                               "longitudinal)."),
+            "intensity": KeyDoc("number", REQUIRED, "-", "Turbulence intensity sigma/U, "
+                                "0 < I <= 1."),
+            "length_scale": KeyDoc("number", REQUIRED, "m", "Integral length scale L of "
+                                   "the spectrum, > 0."),
+            "coherence_decay": KeyDoc("number", 10.0, "-", "Davenport's decay constant C: "
+                                      "coherence exp(-C f distance/U), >= 0 (0: fully "
+                                      "correlated)."),
+            "seed": KeyDoc("integer", 1, "-", "Seed of the random phases, >= 0 (the same "
+                           "field for the same seed)."),
+            "spacing": KeyDoc("number", 0.0, "m", "Least distance between the stations the "
+                              "field is generated at, >= 0 (0: every node); nodes between "
+                              "stations are interpolated linearly."),
+            "f_max": KeyDoc("number", 2.0, "Hz", "Highest frequency of the field, > 0."),
+            "duration": KeyDoc("number", 600.0, "s", "Period of the field (frequency step "
+                               "1/duration), > 0, >= dynamics.t_end."),
+        }),
         "surface": KeyDoc("number", None, "m", "Elevation of the free surface along -gravity "
                           "(buoyancy and added mass below it only); default: everywhere "
                           "immersed."),
