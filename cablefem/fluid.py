@@ -158,7 +158,7 @@ class FluidMotion:
             self.wave_a.x.array.reshape(-1, bs)[:, :3] = acc
         if self.turb_v is not None:
             bs = self.model.bs
-            u, du = self.turbulence.at_stations(t)
+            u, du = self.turbulence.at(t)
             w, i = self.turb_w, self.turb_idx
             for f, x in ((self.turb_v, u), (self.turb_a, du)):
                 nodal = (w * x[i]).sum(axis=1)

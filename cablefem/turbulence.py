@@ -28,6 +28,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from cablefem.motion import ramp_factors
+
 __all__ = ["SPECTRA", "Turbulence", "TurbulentField", "spectrum", "davenport",
            "select_stations", "synthesise", "OVERSAMPLE", "VON_KARMAN"]
 
@@ -86,7 +88,7 @@ class Turbulence:
     """The case's turbulence (``[fluid.turbulence]``): ``spectrum``, ``intensity``
     ``I = σ/U`` on the mean speed ``U = |fluid.current|``, ``length_scale`` L (m),
     ``coherence_decay`` C, ``seed``, station ``spacing`` (m; 0: every node a station),
-    ``f_max`` (Hz) and the field's period ``duration`` (s).
+    ``f_max`` (Hz), the field's period ``duration`` (s) and its build-up time ``ramp`` (s).
 
     Args:
         spectrum: One of :data:`SPECTRA`.
@@ -97,6 +99,7 @@ class Turbulence:
         spacing: Least distance between stations (m), >= 0.
         f_max: Highest frequency (Hz), > 0.
         duration: Period of the field (s), > 0.
+        ramp: Build-up time from rest (s), >= 0, or None (3 L/U).
     """
 
     spectrum: str
@@ -107,12 +110,17 @@ class Turbulence:
     spacing: float = 0.0
     f_max: float = 2.0
     duration: float = 600.0
+    ramp: float | None = None
+
+    def ramp_time(self, speed: float) -> float:
+        """The build-up time (s): ``ramp``, or three integral time scales ``3 L/U``."""
+        return 3.0 * self.length_scale / speed if self.ramp is None else float(self.ramp)
 
     def describe(self) -> dict:
         return {"spectrum": self.spectrum, "intensity": self.intensity,
                 "length_scale": self.length_scale, "coherence_decay": self.coherence_decay,
                 "seed": self.seed, "spacing": self.spacing, "f_max": self.f_max,
-                "duration": self.duration}
+                "duration": self.duration, "ramp": self.ramp}
 
 
 def select_stations(points, spacing: float) -> np.ndarray:
@@ -210,3 +218,13 @@ class TurbulentField:
         j = (i + 1) % self.times.size
         i %= self.times.size
         return ((1 - r) * self.u[i] + r * self.u[j], (1 - r) * self.du[i] + r * self.du[j])
+
+    def at(self, t: float) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`at_stations` built up from rest over the ramp
+        (:func:`cablefem.motion.ramp_factors`: ``r u'`` and ``r u̇' + ṙ u'``): the cable
+        starts from its static state in the mean wind, which statics solves."""
+        r, dr, _ = ramp_factors(t, self.spec.ramp_time(self.speed))
+        if r == 0.0 and dr == 0.0:
+            return np.zeros(self.stations.shape[0]), np.zeros(self.stations.shape[0])
+        u, du = self.at_stations(t)
+        return r * u, r * du + dr * u

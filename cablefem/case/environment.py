@@ -84,11 +84,12 @@ def _parse_turbulence(r: Reader | None, current, fluid: Reader) -> Turbulence | 
     kind = r.string("spectrum", SPECTRA)
     values = (r.number("intensity", gt=0, le=1), r.number("length_scale", gt=0),
               r.number("coherence_decay", ge=0), r.integer("seed", ge=0),
-              r.number("spacing", ge=0), r.number("f_max", gt=0), r.number("duration", gt=0))
+              r.number("spacing", ge=0), r.number("f_max", gt=0), r.number("duration", gt=0),
+              r.number("ramp", ge=0))
     if current is not None and not np.linalg.norm(current) > 0:
         fluid.add("current", "turbulence needs the mean wind: a nonzero fluid.current")
         return None
-    if any_missing(kind, *values) or current is None:
+    if any_missing(kind, *values[:-1]) or current is None:
         return None
     if values[5] * values[6] > 1.0e5:
         r.add("f_max", f"f_max x duration = {values[5] * values[6]:.4g} frequencies, above "

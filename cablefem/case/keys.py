@@ -258,6 +258,8 @@ CASE_KEYS: dict[str, KeyDoc | TableDoc] = {
             "f_max": KeyDoc("number", 2.0, "Hz", "Highest frequency of the field, > 0."),
             "duration": KeyDoc("number", 600.0, "s", "Period of the field (frequency step "
                                "1/duration), > 0, >= dynamics.t_end."),
+            "ramp": KeyDoc("number", None, "s", "Build-up of the field from rest, >= 0 (0: "
+                           "none); default 3 length_scale/U."),
         }),
         "surface": KeyDoc("number", None, "m", "Elevation of the free surface along -gravity "
                           "(buoyancy and added mass below it only); default: everywhere "
