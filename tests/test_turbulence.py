@@ -200,6 +200,8 @@ def test_turbulence_needs_a_mean_wind_and_a_long_enough_period():
     with pytest.raises(CaseError, match="fluid.turbulence.duration"):
         parse_case(level_cable({**turb, "duration": 100.0},
                                dynamics={"t_end": 200.0, "dt": 0.1}))
+    case = parse_case(level_cable(turb, dynamics={"t_end": 10.0, "dt": 0.1}))
+    assert [k for k, _ in case.warnings] == ["fluid.turbulence.f_max"]  # 5 steps a period
     case = parse_case(level_cable(turb))
     assert case.fluid.turbulence == Turbulence("kaimal", 0.1, 50.0, 10.0, 1, 0.0, 2.0, 600.0, None)
     assert case.fluid.turbulence.ramp_time(1.0) == 150.0

@@ -108,6 +108,11 @@ def table_warnings(case: Case, dt: float, t_end: float) -> list[tuple[str, str]]
                 out.append((f"{key}.file", f"the table {name} at t = {edge:g} s with a velocity "
                                            f"{np.round(v, 12).tolist()} m/s and is held "
                                            f"constant beyond: the velocity jumps to 0 there"))
+    turbulence = getattr(getattr(case, "fluid", None), "turbulence", None)
+    if turbulence is not None and turbulence.f_max * dt > 0.1:
+        out.append(("fluid.turbulence.f_max", f"the time step {dt:g} s samples the field's "
+                    f"highest frequency {turbulence.f_max:g} Hz with fewer than 10 steps a "
+                    f"period: its drag is filtered by the integrator above {0.1 / dt:.3g} Hz"))
     return out
 
 
