@@ -248,3 +248,32 @@ def test_stiff_cable_feels_the_quasi_static_drag():
     err = np.max(np.abs(measured[after] - expected[after]))
     assert err < 2e-2 * swing, (err, swing)
     assert steady == pytest.approx(0.5 * rho * 1.2 * D * 10.0, rel=1e-3)
+
+
+def test_a_network_takes_the_field_at_its_nodes_in_3d(mpi_tmp_path):
+    """A mooring line meshed as an L-shaped network in a current (tests/test_network_water):
+    its stations are its 41 mesh points in 3D (spacing 0), every rank's the same, and the
+    field changes the anchor forces over 1 s against the same run without it (by more
+    than 1e-4 of the largest: zero if the network ignored the field; sigma = 0.1 m/s on a
+    0.5 m/s current changes the drag on the line by tens of percent locally)."""
+    from test_network_water import mooring_network
+
+    from cablefem.dynamics import integrate
+    from cablefem.network import NetworkModel
+    from cablefem.statics import solve_static
+
+    runs = []
+    for turb in (None, {"intensity": 0.2, "length_scale": 50.0, "seed": 5, "ramp": 0.2}):
+        d = mooring_network(mpi_tmp_path)
+        d["fluid"] = {**d["fluid"], "waves": []}
+        if turb:
+            d["fluid"]["turbulence"] = turb
+        model = NetworkModel(comm, parse_case(d))
+        solve_static(model)
+        runs.append(np.array([f[:, :3] for _, f in integrate(model, 1.0, 0.05)]))
+    X = np.concatenate(comm.allgather(model.V.tabulate_dof_coordinates()))
+    stations = select_stations(X, 0.0)
+    assert stations.shape == (41, 3) and np.ptp(stations[:, 2]) > 75.0
+    assert comm.allgather(float(stations.sum())) == [float(stations.sum())] * comm.size
+    diff = np.max(np.abs(runs[1] - runs[0]))
+    assert diff > 1e-4 * np.max(np.abs(runs[0])), diff
