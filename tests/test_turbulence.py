@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 
-from cablefem.case import CaseError, parse_case
+from cablefem.case import CaseError, parse_case, startup_time
 from cablefem.turbulence import (
     Turbulence,
     TurbulentField,
@@ -205,6 +205,7 @@ def test_turbulence_needs_a_mean_wind_and_a_long_enough_period():
     case = parse_case(level_cable(turb))
     assert case.fluid.turbulence == Turbulence("kaimal", 0.1, 50.0, 10.0, 1, 0.0, 2.0, 600.0, None)
     assert case.fluid.turbulence.ramp_time(1.0) == 150.0
+    assert startup_time(case)[0] == 150.0  # the statistics start after the build-up
 
 
 def test_stiff_cable_feels_the_quasi_static_drag():

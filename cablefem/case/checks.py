@@ -117,10 +117,11 @@ def table_warnings(case: Case, dt: float, t_end: float) -> list[tuple[str, str]]
 
 
 def startup_time(case: Case) -> tuple[float, str]:
-    """End of the start-up of the anchor motions and waves (s) and why: the longest ramp of a
-    harmonic or elliptic motion; a motion with ``ramp = 0`` that jumps at ``t = 0``
-    (displacement or velocity not zero) counts :data:`DEFAULT_RAMP_PERIODS` of its
-    periods, as long as its default ramp. 0 without such motions (tables start as given).
+    """End of the start-up of the anchor motions, waves and turbulence (s) and why: the
+    longest ramp of a harmonic or elliptic motion; a motion with ``ramp = 0`` that jumps at
+    ``t = 0`` (displacement or velocity not zero) counts :data:`DEFAULT_RAMP_PERIODS` of its
+    periods, as long as its default ramp; the waves' and the turbulence's build-up. 0
+    without such motions (tables start as given).
 
     Args:
         case: The case.
@@ -147,4 +148,9 @@ def startup_time(case: Case) -> tuple[float, str]:
     fluid = getattr(case, "fluid", None)
     if fluid is not None and fluid.waves and fluid.ramp() > best:
         best, why = fluid.ramp(), f"the waves' build-up fluid.wave_ramp = {fluid.ramp():g} s"
+    turbulence = getattr(fluid, "turbulence", None)
+    if turbulence is not None:
+        t = turbulence.ramp_time(float(np.linalg.norm(fluid.current)))
+        if t > best:
+            best, why = t, f"the turbulence's build-up fluid.turbulence.ramp = {t:g} s"
     return best, why
