@@ -126,7 +126,8 @@ class FluidMotion:
         points = np.concatenate(model.mesh.comm.allgather(X))
         speed = float(np.linalg.norm(fl.current))
         self.e_wind = np.asarray(fl.current, dtype=float) / speed
-        self.turbulence = TurbulentField(fl.turbulence, points, speed)
+        self.turbulence = TurbulentField(fl.turbulence, points, speed,
+                                         str(getattr(model.case, "source", "<dict>")))
         self.turb_idx, self.turb_w = self.turbulence.weights(X)
         self.turb_v = fem.Function(model.V, name="turbulence_velocity")
         self.turb_a = fem.Function(model.V, name="turbulence_acceleration")

@@ -28,10 +28,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from cablefem.errors import CaseError
 from cablefem.motion import ramp_factors
 
 __all__ = ["SPECTRA", "Turbulence", "TurbulentField", "spectrum", "davenport",
-           "select_stations", "synthesise", "OVERSAMPLE", "VON_KARMAN"]
+           "select_stations", "synthesise", "OVERSAMPLE", "VON_KARMAN", "MAX_STATIONS"]
 
 #: the spectra known: their one-sided S(f) integrates to σ² over 0 < f < ∞
 SPECTRA = ("kaimal", "von_karman")
@@ -41,6 +42,9 @@ SPECTRA = ("kaimal", "von_karman")
 OVERSAMPLE = 8
 #: von Kármán's constant 70.8, exactly: (2 √π Γ(1/3) / Γ(5/6))² = 70.78, for which its
 #: spectrum integrates to σ² (with 70.8: 1.4e-4 less)
+#: most stations: one factorisation of an n x n matrix per frequency costs n^3/3 (1000
+#: stations and 1200 frequencies: minutes); a larger spacing is asked for beyond
+MAX_STATIONS = 1000
 VON_KARMAN = (2.0 * math.sqrt(math.pi) * math.gamma(1 / 3) / math.gamma(5 / 6)) ** 2
 
 
@@ -187,11 +191,20 @@ class TurbulentField:
         spec: The :class:`Turbulence`.
         points: (m, 3) all points of the cable (every rank's: the stations come from them).
         speed: Mean speed U (m/s), > 0.
+        source: The case file, named in the error of too many stations.
+
+    Raises:
+        CaseError: More than :data:`MAX_STATIONS` stations (``fluid.turbulence.spacing``).
     """
 
-    def __init__(self, spec: Turbulence, points, speed: float) -> None:
+    def __init__(self, spec: Turbulence, points, speed: float,
+                 source: str = "<dict>") -> None:
         self.spec, self.speed = spec, float(speed)
         self.stations = select_stations(points, spec.spacing)
+        if self.stations.shape[0] > MAX_STATIONS:
+            raise CaseError([("fluid.turbulence.spacing", f"{self.stations.shape[0]} stations "
+                              f"at spacing {spec.spacing:g} m, above {MAX_STATIONS}: give a "
+                              "larger spacing")], source)
         self.times, self.u, self.du = synthesise(spec, self.stations, self.speed)
         self.dt = self.times[1] - self.times[0]
 

@@ -143,7 +143,8 @@ def test_seeds_stations_and_ranks():
 def test_stations_and_interpolation():
     """Stations at least `spacing` apart among the points; a point between two stations
     gets the linear interpolation of their values (weights exact for a linear field);
-    the time interpolation is exact at the grid's times and periodic."""
+    the time interpolation is exact at the grid's times and periodic; more than
+    MAX_STATIONS stations are refused naming the spacing."""
     pts = line(41, 20.0)
     st = select_stations(pts, 2.0)
     d = np.linalg.norm(st[:, None] - st[None], axis=2) + 1e9 * np.eye(len(st))
@@ -156,6 +157,8 @@ def test_stations_and_interpolation():
     np.testing.assert_array_equal(u, field.u[5])
     u2, _ = field.at_stations(field.times[5] + 100.0)
     np.testing.assert_allclose(u2, u, atol=1e-12)
+    with pytest.raises(CaseError, match="fluid.turbulence.spacing"):  # before generating
+        TurbulentField(Turbulence("kaimal", 0.1, 50.0), line(1001, 100.0), U)
     ramp = field.spec.ramp_time(U)  # 3 L/U = 7.5 s: built up from rest
     assert ramp == 7.5 and not np.any(field.at(0.0)[0])
     np.testing.assert_array_equal(field.at(ramp + 0.3)[0], field.at_stations(ramp + 0.3)[0])
