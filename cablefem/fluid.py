@@ -42,7 +42,7 @@ from petsc4py import PETSc
 from cablefem import forms
 from cablefem.flow import POWER_FLOOR, wave_kinematics
 from cablefem.terms import Term
-from cablefem.turbulence import TurbulentField
+from cablefem.turbulence import TurbulentField, wind_frame
 from cablefem.water import water_depth_of
 
 __all__ = ["DELTA_V", "add_fluid_terms", "submerged_weight", "water_depth", "FluidMotion",
@@ -125,7 +125,8 @@ class FluidMotion:
         X = model.V.tabulate_dof_coordinates()
         points = np.concatenate(model.mesh.comm.allgather(X))
         speed = float(np.linalg.norm(fl.current))
-        self.e_wind = np.asarray(fl.current, dtype=float) / speed
+        self.frame = wind_frame(fl.current, self.up, fl.turbulence,
+                                str(getattr(model.case, "source", "<dict>")))
         self.turbulence = TurbulentField(fl.turbulence, points, speed,
                                          str(getattr(model.case, "source", "<dict>")))
         self.turb_idx, self.turb_w = self.turbulence.weights(X)
@@ -162,8 +163,8 @@ class FluidMotion:
             u, du = self.turbulence.at(t)
             w, i = self.turb_w, self.turb_idx
             for f, x in ((self.turb_v, u), (self.turb_a, du)):
-                nodal = (w * x[i]).sum(axis=1)
-                f.x.array.reshape(-1, bs)[:, :3] = np.outer(nodal, self.e_wind)
+                nodal = np.einsum("mk,mkc->mc", w, x[i])  # (nodes, components)
+                f.x.array.reshape(-1, bs)[:, :3] = nodal @ self.frame
 
 
 @contextlib.contextmanager

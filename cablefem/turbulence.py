@@ -31,7 +31,7 @@ import numpy as np
 from cablefem.errors import CaseError
 from cablefem.motion import ramp_factors
 
-__all__ = ["SPECTRA", "Turbulence", "TurbulentField", "spectrum", "davenport",
+__all__ = ["wind_frame", "SPECTRA", "Turbulence", "TurbulentField", "spectrum", "davenport",
            "select_stations", "synthesise", "OVERSAMPLE", "VON_KARMAN", "MAX_STATIONS"]
 
 #: the spectra known: their one-sided S(f) integrates to σ² over 0 < f < ∞
@@ -104,6 +104,10 @@ class Turbulence:
         f_max: Highest frequency (Hz), > 0.
         duration: Period of the field (s), > 0.
         ramp: Build-up time from rest (s), >= 0, or None (3 L/U).
+        lateral_intensity, vertical_intensity: σ_v/U and σ_w/U, >= 0 (0: none; Kaimal
+            only).
+        lateral_length_scale, vertical_length_scale: Their length scales (m), or None
+            (IEC 61400-1's ratios to ``length_scale``).
     """
 
     spectrum: str
@@ -115,6 +119,22 @@ class Turbulence:
     f_max: float = 2.0
     duration: float = 600.0
     ramp: float | None = None
+    lateral_intensity: float = 0.0
+    vertical_intensity: float = 0.0
+    lateral_length_scale: float | None = None
+    vertical_length_scale: float | None = None
+
+    def component(self, c: int) -> tuple[float, float]:
+        """``(intensity, length scale)`` of component ``c`` (0 longitudinal, 1 lateral,
+        2 vertical); the transverse length scales default to IEC 61400-1's Kaimal ratios
+        (2.7/8.1 and 0.66/8.1 of the longitudinal one)."""
+        if c == 0:
+            return self.intensity, self.length_scale
+        if c == 1:
+            return self.lateral_intensity, (self.lateral_length_scale or
+                                            self.length_scale * 2.7 / 8.1)
+        return self.vertical_intensity, (self.vertical_length_scale or
+                                         self.length_scale * 0.66 / 8.1)
 
     def ramp_time(self, speed: float) -> float:
         """The build-up time (s): ``ramp``, or three integral time scales ``3 L/U``."""
@@ -124,7 +144,11 @@ class Turbulence:
         return {"spectrum": self.spectrum, "intensity": self.intensity,
                 "length_scale": self.length_scale, "coherence_decay": self.coherence_decay,
                 "seed": self.seed, "spacing": self.spacing, "f_max": self.f_max,
-                "duration": self.duration, "ramp": self.ramp}
+                "duration": self.duration, "ramp": self.ramp,
+                "lateral_intensity": self.lateral_intensity,
+                "vertical_intensity": self.vertical_intensity,
+                "lateral_length_scale": self.component(1)[1],
+                "vertical_length_scale": self.component(2)[1]}
 
 
 def select_stations(points, spacing: float) -> np.ndarray:
@@ -151,8 +175,10 @@ def _factor(coh: np.ndarray) -> np.ndarray:
         return vec * np.sqrt(np.maximum(lam, 0.0))
 
 
-def synthesise(spec: Turbulence, stations: np.ndarray, speed: float):
-    """The field's time series at ``stations`` (n, 3) for mean speed ``speed`` (m/s).
+def synthesise(spec: Turbulence, stations: np.ndarray, speed: float, component: int = 0):
+    """The field's time series at ``stations`` (n, 3) for mean speed ``speed`` (m/s):
+    ``component`` 0 (longitudinal, phases from ``default_rng(seed)``), 1 (lateral) or 2
+    (vertical; phases from ``default_rng([seed, component])``: independent of the others).
 
     Returns:
         ``(times, u, du)``: (N_t,) times over one period, (N_t, n) fluctuation (m/s) and its
@@ -163,9 +189,9 @@ def synthesise(spec: Turbulence, stations: np.ndarray, speed: float):
     df = 1.0 / spec.duration
     nf = max(1, int(math.floor(spec.f_max / df + 1e-9)))
     f = df * np.arange(1, nf + 1)
-    amp = np.sqrt(2.0 * spectrum(spec.spectrum, f, spec.intensity * speed, speed,
-                                 spec.length_scale) * df)
-    rng = np.random.default_rng(spec.seed)
+    intensity, length = spec.component(component)
+    amp = np.sqrt(2.0 * spectrum(spec.spectrum, f, intensity * speed, speed, length) * df)
+    rng = np.random.default_rng(spec.seed if component == 0 else [spec.seed, component])
     phases = np.exp(1j * rng.uniform(0.0, 2.0 * math.pi, (nf, n)))
     dist = np.linalg.norm(stations[:, None, :] - stations[None, :, :], axis=2)
     nt = 2 * ((OVERSAMPLE * (nf + 1) + 1) // 2)  # even, OVERSAMPLE samples a period of f_max
@@ -179,6 +205,25 @@ def synthesise(spec: Turbulence, stations: np.ndarray, speed: float):
     u = np.fft.irfft(coef, nt, axis=0)
     du = np.fft.irfft(coef * (2j * math.pi * freq)[:, None], nt, axis=0)
     return spec.duration / nt * np.arange(nt), u, du
+
+
+def wind_frame(current, up, spec: Turbulence | None = None, source: str = "<dict>"):
+    """The rows ``e_u`` (along ``current``), ``e_v = up × e_u / |up × e_u|`` (lateral,
+    horizontal) and ``e_w = e_u × e_v`` (vertical for a horizontal wind) of the turbulence's
+    components.
+
+    Raises:
+        CaseError: Transverse components asked for in a wind along ``up`` (``fluid.current``).
+    """
+    e_u = np.asarray(current, float) / np.linalg.norm(current)
+    side = np.cross(np.asarray(up, float), e_u)
+    if np.linalg.norm(side) < 1e-6:
+        if spec is not None and (spec.lateral_intensity > 0 or spec.vertical_intensity > 0):
+            raise CaseError([("fluid.current", "the lateral and vertical turbulence need a "
+                              "mean wind that is not along gravity")], source)
+        side = np.cross(e_u, np.eye(3)[int(np.argmin(np.abs(e_u)))])  # unused: no v, w
+    e_v = side / np.linalg.norm(side)
+    return np.vstack([e_u, e_v, np.cross(e_u, e_v)])
 
 
 class TurbulentField:
@@ -207,6 +252,10 @@ class TurbulentField:
                               "larger spacing")], source)
         self.times, self.u, self.du = synthesise(spec, self.stations, self.speed)
         self.dt = self.times[1] - self.times[0]
+        #: the (u, du) series of each component (None: not generated)
+        self.series = [(self.u, self.du)] + [
+            synthesise(spec, self.stations, self.speed, c)[1:]
+            if spec.component(c)[0] > 0 else None for c in (1, 2)]
 
     def weights(self, points) -> tuple[np.ndarray, np.ndarray]:
         """``(index, weight)``, each (m, 2): the two nearest stations of each point and
@@ -223,21 +272,29 @@ class TurbulentField:
         w /= np.where(tot == 0, 1.0, tot)[:, None]
         return idx, w
 
-    def at_stations(self, t: float) -> tuple[np.ndarray, np.ndarray]:
-        """Fluctuation and its derivative at the stations at time ``t`` (periodic)."""
+    def at_stations(self, t: float, component: int = 0) -> tuple[np.ndarray, np.ndarray]:
+        """Fluctuation of ``component`` and its derivative at the stations at time ``t``
+        (periodic; zero for a component not generated)."""
+        if self.series[component] is None:
+            return np.zeros(self.stations.shape[0]), np.zeros(self.stations.shape[0])
+        u, du = self.series[component]
         s = (t % self.spec.duration) / self.dt
         i = int(math.floor(s))
         r = s - i
         j = (i + 1) % self.times.size
         i %= self.times.size
-        return ((1 - r) * self.u[i] + r * self.u[j], (1 - r) * self.du[i] + r * self.du[j])
+        return ((1 - r) * u[i] + r * u[j], (1 - r) * du[i] + r * du[j])
 
     def at(self, t: float) -> tuple[np.ndarray, np.ndarray]:
-        """:meth:`at_stations` built up from rest over the ramp
+        """The three components (n, 3: longitudinal, lateral, vertical) and their
+        derivatives at the stations, built up from rest over the ramp
         (:func:`cablefem.motion.ramp_factors`: ``r u'`` and ``r u̇' + ṙ u'``): the cable
         starts from its static state in the mean wind, which statics solves."""
+        n = self.stations.shape[0]
         r, dr, _ = ramp_factors(t, self.spec.ramp_time(self.speed))
         if r == 0.0 and dr == 0.0:
-            return np.zeros(self.stations.shape[0]), np.zeros(self.stations.shape[0])
-        u, du = self.at_stations(t)
+            return np.zeros((n, 3)), np.zeros((n, 3))
+        parts = [self.at_stations(t, c) for c in range(3)]
+        u = np.column_stack([p[0] for p in parts])
+        du = np.column_stack([p[1] for p in parts])
         return r * u, r * du + dr * u

@@ -161,7 +161,44 @@ def test_stations_and_interpolation():
         TurbulentField(Turbulence("kaimal", 0.1, 50.0), line(1001, 100.0), U)
     ramp = field.spec.ramp_time(U)  # 3 L/U = 7.5 s: built up from rest
     assert ramp == 7.5 and not np.any(field.at(0.0)[0])
-    np.testing.assert_array_equal(field.at(ramp + 0.3)[0], field.at_stations(ramp + 0.3)[0])
+    np.testing.assert_array_equal(field.at(ramp + 0.3)[0][:, 0],
+                                  field.at_stations(ramp + 0.3)[0])
+    assert not np.any(field.at(ramp + 0.3)[0][:, 1:])  # no transverse components asked
+
+
+def test_transverse_components():
+    """Lateral and vertical components (IEC 61400-1's Kaimal ratios: sigma_v = 0.8,
+    sigma_w = 0.5 sigma_u, L_v = L/3, L_w = 0.0815 L): each one's first station has the
+    variance sum S_c(f_k) df of its own spectrum to round-off (fixed amplitudes, as for u);
+    their phases are independent of u's (the longitudinal series is the same with or
+    without them) and of each other's; the frame is (along the wind, horizontal across it, up) for a
+    horizontal wind, and a wind along gravity is refused when they are asked for."""
+    from cablefem.turbulence import wind_frame
+
+    base = dict(spectrum="kaimal", intensity=0.15, length_scale=LU, seed=2, f_max=1.0)
+    spec = Turbulence(**base, lateral_intensity=0.12, vertical_intensity=0.075)
+    field = TurbulentField(spec, line(4, 30.0), U)
+    f = np.arange(1, 601) / 600.0
+    for c, (sigma, length) in enumerate([(0.15, LU), (0.12, LU / 3), (0.075, 0.0815 * LU)]):
+        band = np.sum(spectrum("kaimal", f, sigma * U, U, spec.component(c)[1])) / 600.0
+        assert np.var(field.series[c][0][:, 0]) == pytest.approx(band, rel=1e-12)
+        assert spec.component(c)[1] == pytest.approx(length, rel=2e-3)
+    plain = TurbulentField(Turbulence(**base), line(4, 30.0), U)
+    np.testing.assert_array_equal(plain.u, field.u)
+    # independent phases: the first stations' series have fixed amplitudes a_k, b_k, their
+    # correlation sum a_k b_k cos(d_k)/sqrt(sum a^2 sum b^2) has mean 0 and std
+    # sqrt(sum a^2 b^2/2)/sqrt(sum a^2 sum b^2): 4 std allowed
+    a2, b2 = (spectrum("kaimal", f, spec.component(c)[0] * U, U, spec.component(c)[1])
+              for c in (1, 2))
+    corr = np.corrcoef(field.series[1][0][:, 0], field.series[2][0][:, 0])[0, 1]
+    assert abs(corr) < 4.0 * math.sqrt(np.sum(a2 * b2) / 2 / (np.sum(a2) * np.sum(b2)))
+    frame = wind_frame([3.0, 4.0, 0.0], [0.0, 0.0, 1.0])
+    np.testing.assert_allclose(frame, [[0.6, 0.8, 0], [-0.8, 0.6, 0], [0, 0, 1]], atol=1e-15)
+    with pytest.raises(CaseError, match="fluid.current"):
+        wind_frame([0.0, 0.0, 2.0], [0.0, 0.0, 1.0], spec)
+    with pytest.raises(CaseError, match="fluid.turbulence.lateral_intensity"):
+        parse_case(level_cable({"spectrum": "von_karman", "intensity": 0.1,
+                                "length_scale": 50.0, "lateral_intensity": 0.08}))
 
 
 def level_cable(turbulence, current=(1.0, 0.0, 0.0), dynamics=None):
@@ -206,7 +243,8 @@ def test_turbulence_needs_a_mean_wind_and_a_long_enough_period():
     case = parse_case(level_cable(turb, dynamics={"t_end": 10.0, "dt": 0.1}))
     assert [k for k, _ in case.warnings] == ["fluid.turbulence.f_max"]  # 5 steps a period
     case = parse_case(level_cable(turb))
-    assert case.fluid.turbulence == Turbulence("kaimal", 0.1, 50.0, 10.0, 1, 0.0, 2.0, 600.0, None)
+    assert case.fluid.turbulence == Turbulence("kaimal", 0.1, 50.0, 10.0, 1, 0.0, 2.0, 600.0, None,
+                                                 0.0, 0.0, None, None)
     assert case.fluid.turbulence.ramp_time(1.0) == 150.0
     assert startup_time(case)[0] == 150.0  # the statistics start after the build-up
 
@@ -241,7 +279,7 @@ def test_stiff_cable_feels_the_quasi_static_drag():
     for t, forces in integrate(model, 3.0, 0.01, 0.9, 2):
         times.append(t)
         measured.append(float(np.sum(forces, axis=0)[0]))
-        u, du = field.at(t)
+        u, du = (x[:, 0] for x in field.at(t))
         a, b = 1.0 + u[:-1], 1.0 + u[1:]
         drag = 0.5 * rho * 1.2 * D * np.sum((a * a + a * b + b * b) / 3 * h)
         inertia = 2.0 * rho * np.pi * D**2 / 4 * np.sum((du[:-1] + du[1:]) / 2 * h)

@@ -85,11 +85,18 @@ def _parse_turbulence(r: Reader | None, current, fluid: Reader) -> Turbulence | 
     values = (r.number("intensity", gt=0, le=1), r.number("length_scale", gt=0),
               r.number("coherence_decay", ge=0), r.integer("seed", ge=0),
               r.number("spacing", ge=0), r.number("f_max", gt=0), r.number("duration", gt=0),
-              r.number("ramp", ge=0))
+              r.number("ramp", ge=0), r.number("lateral_intensity", ge=0, le=1),
+              r.number("vertical_intensity", ge=0, le=1),
+              r.number("lateral_length_scale", gt=0), r.number("vertical_length_scale", gt=0))
     if current is not None and not np.linalg.norm(current) > 0:
         fluid.add("current", "turbulence needs the mean wind: a nonzero fluid.current")
         return None
-    if any_missing(kind, *values[:-1]) or current is None:
+    for key, value in (("lateral_intensity", values[8]), ("vertical_intensity", values[9])):
+        if kind == "von_karman" and value:
+            r.add(key, "the transverse components are generated with the Kaimal spectrum "
+                  "only: spectrum = 'kaimal'")
+            return None
+    if any_missing(kind, *values[:7], *values[8:10]) or current is None:
         return None
     if values[5] * values[6] > 1.0e5:
         r.add("f_max", f"f_max x duration = {values[5] * values[6]:.4g} frequencies, above "

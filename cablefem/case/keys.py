@@ -260,6 +260,16 @@ CASE_KEYS: dict[str, KeyDoc | TableDoc] = {
                                "1/duration), > 0, >= dynamics.t_end."),
             "ramp": KeyDoc("number", None, "s", "Build-up of the field from rest, >= 0 (0: "
                            "none); default 3 length_scale/U."),
+            "lateral_intensity": KeyDoc("number", 0.0, "-", "sigma_v/U of the lateral "
+                                        "(horizontal, across the wind) component, 0 to 1 (0: "
+                                        "none; IEC 61400-1: 0.8 intensity); kaimal only."),
+            "vertical_intensity": KeyDoc("number", 0.0, "-", "sigma_w/U of the vertical "
+                                         "component, 0 to 1 (0: none; IEC 61400-1: 0.5 "
+                                         "intensity); kaimal only."),
+            "lateral_length_scale": KeyDoc("number", None, "m", "Its length scale, > 0; "
+                                           "default length_scale/3 (IEC 61400-1)."),
+            "vertical_length_scale": KeyDoc("number", None, "m", "Its length scale, > 0; "
+                                            "default 0.0815 length_scale (IEC 61400-1)."),
         }),
         "surface": KeyDoc("number", None, "m", "Elevation of the free surface along -gravity "
                           "(buoyancy and added mass below it only); default: everywhere "
