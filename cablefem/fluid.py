@@ -1,12 +1,12 @@
 """Water and wind on a cable or a network: Morison's drag, added mass, fluid inertia and
 buoyancy (``[fluid]``, ``docs/fluid.md``).
 
-The fluid's velocity is ``u_f = f_t(t) f_z(z) U + u_w(x, t) + u_s(t) + u'(X, t) e_U``: the
+The fluid's velocity is ``u_f = f_t(t) f_z(z) U + u_w(x, t) + u_s(t) + u_t(X, t)``: the
 current ``U`` times the profile's factor at the elevation of the cable's current position (a
 UFL expression, :func:`_profile_factor`) and the time function, plus the waves, the uniform
-velocity history and the turbulence along the current at the nodes' reference positions
-(:mod:`cablefem.turbulence`; :class:`FluidMotion`, from :mod:`cablefem.flow`). Per unit current
-length, with the relative velocity ``v_r = u_f − ṙ`` split along the cable's current unit
+velocity history and the turbulence (along the current, optionally across it) at the
+nodes' reference positions (:mod:`cablefem.turbulence`; :class:`FluidMotion`, from
+:mod:`cablefem.flow`). Per unit current length, with the relative velocity ``v_r = u_f − ṙ`` split along the cable's current unit
 tangent ``t`` into ``v_rn`` (normal) and ``v_rt = (v_r·t) t`` (tangential)::
 
     drag       f_d = ½ ρ C_dn D |v_rn| v_rn + ½ ρ C_dt π D |v_rt| v_rt

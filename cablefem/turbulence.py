@@ -1,9 +1,10 @@
 """A turbulent wind field along a cable (``[fluid.turbulence]``, ``docs/fluid.md``): the
-longitudinal fluctuation ``u'(x, t)`` of a Kaimal or von Kármán spectrum with Davenport's
-exponential coherence between points, generated reproducibly from a seed.
+longitudinal fluctuation ``u'(x, t)`` of a Kaimal or von Kármán spectrum (optionally the
+lateral ``v'`` and vertical ``w'``, Kaimal, independent of it) with Davenport's exponential
+coherence between points, generated reproducibly from a seed.
 
 Pure NumPy (no dolfinx): :class:`cablefem.fluid.FluidMotion` evaluates the field at the
-nodes and adds ``u' e_U`` (``e_U`` the mean wind's direction) to the fluid's velocity.
+nodes and adds ``u' e_u + v' e_v + w' e_w`` (:func:`wind_frame`) to the fluid's velocity.
 
 Method (spectral representation, Shinozuka and Deodatis; Veers): at ``n`` stations and
 frequencies ``f_k = k Δf`` (``k = 1 .. N``, ``Δf = 1/duration``, ``N Δf <= f_max``), the
