@@ -7,7 +7,8 @@ UFL expression, :func:`_profile_factor`) and the time function, plus the waves, 
 velocity history and the turbulence (along the current, optionally across it) at the
 nodes' reference positions (:mod:`cablefem.turbulence`; :class:`FluidMotion`, from
 :mod:`cablefem.flow`). Per unit current length, with the relative velocity
-``v_r = u_f − ṙ`` split along the cable's current unit tangent ``t`` into ``v_rn`` (normal) and ``v_rt = (v_r·t) t`` (tangential)::
+``v_r = u_f − ṙ`` split along the cable's current unit tangent ``t`` into ``v_rn`` (normal)
+and ``v_rt = (v_r·t) t`` (tangential)::
 
     drag       f_d = ½ ρ C_dn D |v_rn| v_rn + ½ ρ C_dt π D |v_rt| v_rt
     added mass f_a = −C_an ρ A (r̈ − (r̈·t) t) − C_at ρ A ((r̈ − u̇_f)·t) t,  A = π D²/4
