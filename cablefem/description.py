@@ -23,6 +23,7 @@ from cablefem.anchor import Anchor
 from cablefem.flow import AiryWave, Profile, VelocitySeries
 from cablefem.motion import DEFAULT_RAMP_PERIODS, TimeFunction
 from cablefem.properties import Section
+from cablefem.turbulence import Turbulence
 
 __all__ = ["Gravity", "Geometry", "MeshSpec", "DistributedLoad", "PointMass", "PointLoad",
            "Damper", "DamperLink", "Fluid", "Seabed", "AiryWave", "Profile", "VelocitySeries",
@@ -214,6 +215,7 @@ class Fluid:
         wave_ramp: The waves' build-up time (s), or None (3 periods of the longest wave).
         velocity: A uniform velocity history (:class:`cablefem.flow.VelocitySeries`), or None.
         ca_tangential: Tangential added-mass coefficient.
+        turbulence: A turbulent wind field along the current (dynamics only), or None.
     """
 
     density: float
@@ -232,6 +234,8 @@ class Fluid:
     velocity: VelocitySeries | None = None
     #: tangential added-mass coefficient (MoorDyn's Cat), on the relative acceleration
     ca_tangential: float = 0.0
+    #: a turbulent wind along the current (:class:`cablefem.turbulence.Turbulence`), or None
+    turbulence: Turbulence | None = None
 
     def diameter_on(self, section) -> float:
         """The hydrodynamic diameter on a cable of ``section`` (m): ``diameter``, or (a

@@ -1,12 +1,14 @@
 """Water and wind on a cable or a network: Morison's drag, added mass, fluid inertia and
 buoyancy (``[fluid]``, ``docs/fluid.md``).
 
-The fluid's velocity is ``u_f = f_t(t) f_z(z) U + u_w(x, t) + u_s(t)``: the current ``U``
-times the profile's factor at the elevation of the cable's current position (a UFL
-expression, :func:`_profile_factor`) and the time function, plus the waves and the uniform
-velocity history (:class:`FluidMotion`, from :mod:`cablefem.flow`). Per unit current
-length, with the relative velocity ``v_r = u_f − ṙ`` split along the cable's current unit
-tangent ``t`` into ``v_rn`` (normal) and ``v_rt = (v_r·t) t`` (tangential)::
+The fluid's velocity is ``u_f = f_t(t) f_z(z) U + u_w(x, t) + u_s(t) + u_t(X, t)``: the
+current ``U`` times the profile's factor at the elevation of the cable's current position (a
+UFL expression, :func:`_profile_factor`) and the time function, plus the waves, the uniform
+velocity history and the turbulence (along the current, optionally across it) at the
+nodes' reference positions (:mod:`cablefem.turbulence`; :class:`FluidMotion`, from
+:mod:`cablefem.flow`). Per unit current length, with the relative velocity
+``v_r = u_f − ṙ`` split along the cable's current unit tangent ``t`` into ``v_rn`` (normal)
+and ``v_rt = (v_r·t) t`` (tangential)::
 
     drag       f_d = ½ ρ C_dn D |v_rn| v_rn + ½ ρ C_dt π D |v_rt| v_rt
     added mass f_a = −C_an ρ A (r̈ − (r̈·t) t) − C_at ρ A ((r̈ − u̇_f)·t) t,  A = π D²/4
@@ -41,6 +43,7 @@ from petsc4py import PETSc
 from cablefem import forms
 from cablefem.flow import POWER_FLOOR, wave_kinematics
 from cablefem.terms import Term
+from cablefem.turbulence import TurbulentField, wind_frame
 from cablefem.water import water_depth_of
 
 __all__ = ["DELTA_V", "add_fluid_terms", "submerged_weight", "water_depth", "FluidMotion",
@@ -90,8 +93,9 @@ def water_depth(model) -> float | None:
 
 class FluidMotion:
     """The unsteady part of the fluid's velocity and acceleration at the nodes: the waves
-    (P1 vector functions, evaluated at the nodes' positions of the last converged state)
-    and the uniform velocity history (Constants). :meth:`update` sets them for time t."""
+    (P1 vector functions, evaluated at the nodes' positions of the last converged state),
+    the turbulence (P1 functions at the nodes' reference positions) and the uniform
+    velocity history (Constants). :meth:`update` sets them for time t."""
 
     def __init__(self, model) -> None:
         fl = model.case.fluid
@@ -107,17 +111,41 @@ class FluidMotion:
             self.wave_v = fem.Function(model.V, name="wave_velocity")
             self.wave_a = fem.Function(model.V, name="wave_acceleration")
             self.X = model.V.tabulate_dof_coordinates()
+        self.turb_v = self.turb_a = None
+        if fl.turbulence is not None:
+            self._init_turbulence(model)
         zero = np.zeros(3, dtype=PETSc.ScalarType)
         self.series_v = fem.Constant(mesh, zero)
         self.series_a = fem.Constant(mesh, zero.copy())
 
+    def _init_turbulence(self, model) -> None:
+        """The turbulent field (:class:`cablefem.turbulence.TurbulentField`) at the stations
+        chosen among every rank's nodes (the same field on every rank), and the P1
+        functions of its fluctuation along the mean wind at this rank's nodes."""
+        fl = self.fluid
+        X = model.V.tabulate_dof_coordinates()
+        points = np.concatenate(model.mesh.comm.allgather(X))
+        speed = float(np.linalg.norm(fl.current))
+        self.frame = wind_frame(fl.current, self.up, fl.turbulence,
+                                str(getattr(model.case, "source", "<dict>")))
+        self.turbulence = TurbulentField(fl.turbulence, points, speed,
+                                         str(getattr(model.case, "source", "<dict>")))
+        self.turb_idx, self.turb_w = self.turbulence.weights(X)
+        self.turb_v = fem.Function(model.V, name="turbulence_velocity")
+        self.turb_a = fem.Function(model.V, name="turbulence_acceleration")
+
+    @staticmethod
+    def _unsteady(series, wave, turb):
+        out = series if wave is None else wave + series
+        return out if turb is None else out + turb
+
     def velocity(self):
-        """UFL: the unsteady velocity (waves plus history)."""
-        return self.series_v if self.wave_v is None else self.wave_v + self.series_v
+        """UFL: the unsteady velocity (waves, turbulence and history)."""
+        return self._unsteady(self.series_v, self.wave_v, self.turb_v)
 
     def acceleration(self):
-        """UFL: the fluid's acceleration (waves plus history)."""
-        return self.series_a if self.wave_a is None else self.wave_a + self.series_a
+        """UFL: the fluid's acceleration (waves, turbulence and history)."""
+        return self._unsteady(self.series_a, self.wave_a, self.turb_a)
 
     def update(self, t: float) -> None:
         fl = self.fluid
@@ -131,6 +159,13 @@ class FluidMotion:
                                        self.g, self.ramp)
             self.wave_v.x.array.reshape(-1, bs)[:, :3] = vel
             self.wave_a.x.array.reshape(-1, bs)[:, :3] = acc
+        if self.turb_v is not None:
+            bs = self.model.bs
+            u, du = self.turbulence.at(t)
+            w, i = self.turb_w, self.turb_idx
+            for f, x in ((self.turb_v, u), (self.turb_a, du)):
+                nodal = np.einsum("mk,mkc->mc", w, x[i])  # (nodes, components)
+                f.x.array.reshape(-1, bs)[:, :3] = nodal @ self.frame
 
 
 @contextlib.contextmanager
@@ -140,7 +175,8 @@ def steady_flow(factor, motion: FluidMotion):
     ``fluid_dynamic`` term's ``linearised``). ``factor``: the time function's Constant."""
     parts = [factor, motion.series_v, motion.series_a]
     saved = [np.array(c.value, copy=True) for c in parts]
-    funcs = [f for f in (motion.wave_v, motion.wave_a) if f is not None]
+    funcs = [f for f in (motion.wave_v, motion.wave_a, motion.turb_v, motion.turb_a)
+             if f is not None]
     saved_f = [f.x.array.copy() for f in funcs]
     factor.value = 1.0
     for c in parts[1:]:

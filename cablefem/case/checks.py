@@ -56,6 +56,10 @@ def check_table_ends(case: Case, t_end: float) -> list[tuple[str, str]]:
             problems.append((f"{key}.file", f"the table ends at t = {last:g} s, before the "
                                             f"end of the run t = {t_end:g} s: extend it, or "
                                             f"set {key}.hold = true to hold its last row"))
+    turbulence = getattr(getattr(case, "fluid", None), "turbulence", None)
+    if turbulence is not None and turbulence.duration < t_end * (1 - 1e-12) - 1e-12:
+        problems.append(("fluid.turbulence.duration", f"the field's period {turbulence.duration:g}"
+                         f" s is shorter than the run t = {t_end:g} s: it would repeat"))
     return problems
 
 
@@ -104,14 +108,20 @@ def table_warnings(case: Case, dt: float, t_end: float) -> list[tuple[str, str]]
                 out.append((f"{key}.file", f"the table {name} at t = {edge:g} s with a velocity "
                                            f"{np.round(v, 12).tolist()} m/s and is held "
                                            f"constant beyond: the velocity jumps to 0 there"))
+    turbulence = getattr(getattr(case, "fluid", None), "turbulence", None)
+    if turbulence is not None and turbulence.f_max * dt > 0.1:
+        out.append(("fluid.turbulence.f_max", f"the time step {dt:g} s samples the field's "
+                    f"highest frequency {turbulence.f_max:g} Hz with fewer than 10 steps a "
+                    f"period: its drag is filtered by the integrator above {0.1 / dt:.3g} Hz"))
     return out
 
 
 def startup_time(case: Case) -> tuple[float, str]:
-    """End of the start-up of the anchor motions and waves (s) and why: the longest ramp of a
-    harmonic or elliptic motion; a motion with ``ramp = 0`` that jumps at ``t = 0``
-    (displacement or velocity not zero) counts :data:`DEFAULT_RAMP_PERIODS` of its
-    periods, as long as its default ramp. 0 without such motions (tables start as given).
+    """End of the start-up of the anchor motions, waves and turbulence (s) and why: the
+    longest ramp of a harmonic or elliptic motion; a motion with ``ramp = 0`` that jumps at
+    ``t = 0`` (displacement or velocity not zero) counts :data:`DEFAULT_RAMP_PERIODS` of its
+    periods, as long as its default ramp; the waves' and the turbulence's build-up. 0
+    without such motions (tables start as given).
 
     Args:
         case: The case.
@@ -138,4 +148,9 @@ def startup_time(case: Case) -> tuple[float, str]:
     fluid = getattr(case, "fluid", None)
     if fluid is not None and fluid.waves and fluid.ramp() > best:
         best, why = fluid.ramp(), f"the waves' build-up fluid.wave_ramp = {fluid.ramp():g} s"
+    turbulence = getattr(fluid, "turbulence", None)
+    if turbulence is not None:
+        t = turbulence.ramp_time(float(np.linalg.norm(fluid.current)))
+        if t > best:
+            best, why = t, f"the turbulence's build-up fluid.turbulence.ramp = {t:g} s"
     return best, why

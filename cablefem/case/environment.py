@@ -12,6 +12,7 @@ from cablefem.case.tables import any_missing, parse_time
 from cablefem.description import AiryWave, Fluid, Profile, Seabed, VelocitySeries
 from cablefem.flow import jonswap_waves, read_velocity_csv
 from cablefem.motion import TimeFunction
+from cablefem.turbulence import SPECTRA, Turbulence
 
 
 def parse_seabed(r: Reader | None) -> Seabed | None:
@@ -71,7 +72,37 @@ def parse_fluid(r: Reader | None, section, base_dir: Path) -> Fluid | None:
                  parse_time(r.table("time"), base_dir) or TimeFunction.constant(),
                  _parse_profile(r.table("profile")), tuple(w for w in waves if w is not None),
                  r.number("depth", gt=0), r.number("wave_ramp", ge=0), velocity,
-                 r.number("ca_tangential", ge=0))
+                 r.number("ca_tangential", ge=0),
+                 _parse_turbulence(r.table("turbulence"), current, r))
+
+
+def _parse_turbulence(r: Reader | None, current, fluid: Reader) -> Turbulence | None:
+    """``[fluid.turbulence]``: a turbulent wind along the current
+    (:class:`cablefem.turbulence.Turbulence`); it needs a nonzero ``fluid.current``."""
+    if r is None:
+        return None
+    kind = r.string("spectrum", SPECTRA)
+    values = (r.number("intensity", gt=0, le=1), r.number("length_scale", gt=0),
+              r.number("coherence_decay", ge=0), r.integer("seed", ge=0),
+              r.number("spacing", ge=0), r.number("f_max", gt=0), r.number("duration", gt=0),
+              r.number("ramp", ge=0), r.number("lateral_intensity", ge=0, le=1),
+              r.number("vertical_intensity", ge=0, le=1),
+              r.number("lateral_length_scale", gt=0), r.number("vertical_length_scale", gt=0))
+    if current is not None and not np.linalg.norm(current) > 0:
+        fluid.add("current", "turbulence needs the mean wind: a nonzero fluid.current")
+        return None
+    for key, value in (("lateral_intensity", values[8]), ("vertical_intensity", values[9])):
+        if kind == "von_karman" and value:
+            r.add(key, "the transverse components are generated with the Kaimal spectrum "
+                  "only: spectrum = 'kaimal'")
+            return None
+    if any_missing(kind, *values[:7], *values[8:10]) or current is None:
+        return None
+    if values[5] * values[6] > 1.0e5:
+        r.add("f_max", f"f_max x duration = {values[5] * values[6]:.4g} frequencies, above "
+              "1e5: lower f_max or duration")
+        return None
+    return Turbulence(kind, *values)
 
 
 def _parse_profile(r: Reader | None) -> Profile | None:

@@ -237,6 +237,40 @@ CASE_KEYS: dict[str, KeyDoc | TableDoc] = {
                            "dynamics.t_end unless hold = true."),
             "hold": KeyDoc("boolean", False, "", "Hold the last row after the table ends."),
         }),
+        "turbulence": TableDoc("table", None, "", "A turbulent wind added in dynamics: "
+                               "the fluctuation along current (mean speed U = |current|) "
+                               "of a spectrum with Davenport's coherence between points of "
+                               "the cable, from a seed (docs/fluid.md).", {
+            "spectrum": KeyDoc("string", "kaimal", "", "'kaimal' | 'von_karman' (one-sided, "
+                               "longitudinal)."),
+            "intensity": KeyDoc("number", REQUIRED, "-", "Turbulence intensity sigma/U, "
+                                "0 < I <= 1."),
+            "length_scale": KeyDoc("number", REQUIRED, "m", "Integral length scale L of "
+                                   "the spectrum, > 0."),
+            "coherence_decay": KeyDoc("number", 10.0, "-", "Davenport's decay constant C: "
+                                      "coherence exp(-C f distance/U), >= 0 (0: fully "
+                                      "correlated)."),
+            "seed": KeyDoc("integer", 1, "-", "Seed of the random phases, >= 0 (the same "
+                           "field for the same seed)."),
+            "spacing": KeyDoc("number", 0.0, "m", "Least distance between the stations the "
+                              "field is generated at, >= 0 (0: every node); nodes between "
+                              "stations are interpolated linearly."),
+            "f_max": KeyDoc("number", 2.0, "Hz", "Highest frequency of the field, > 0."),
+            "duration": KeyDoc("number", 600.0, "s", "Period of the field (frequency step "
+                               "1/duration), > 0, >= dynamics.t_end."),
+            "ramp": KeyDoc("number", None, "s", "Build-up of the field from rest, >= 0 (0: "
+                           "none); default 3 length_scale/U."),
+            "lateral_intensity": KeyDoc("number", 0.0, "-", "sigma_v/U of the lateral "
+                                        "(horizontal, across the wind) component, 0 to 1 (0: "
+                                        "none; IEC 61400-1: 0.8 intensity); kaimal only."),
+            "vertical_intensity": KeyDoc("number", 0.0, "-", "sigma_w/U of the vertical "
+                                         "component, 0 to 1 (0: none; IEC 61400-1: 0.5 "
+                                         "intensity); kaimal only."),
+            "lateral_length_scale": KeyDoc("number", None, "m", "Its length scale, > 0; "
+                                           "default length_scale/3 (IEC 61400-1)."),
+            "vertical_length_scale": KeyDoc("number", None, "m", "Its length scale, > 0; "
+                                            "default 0.0815 length_scale (IEC 61400-1)."),
+        }),
         "surface": KeyDoc("number", None, "m", "Elevation of the free surface along -gravity "
                           "(buoyancy and added mass below it only); default: everywhere "
                           "immersed."),
