@@ -35,6 +35,7 @@ length = 1.0
 elements = 20
 [solver]
 outer_correction = "none"
+petsc_options = {}
 [[anchors]]
 name = "p"
 position = [0.0, 0.0, 0.0]
@@ -180,6 +181,24 @@ def test_bad_set_files_are_refused_before_any_run(mpi_tmp_path, capsys, edit, ke
     assert not out.exists()
     with pytest.raises(CaseError):
         load_loadset(path)
+
+
+def test_a_failed_case_leaves_the_design_incomplete(mpi_tmp_path, capsys):
+    """A case whose Newton solve cannot converge (1 iteration, an unreachable tolerance:
+    as tests/test_dynamics.py) fails; the batch runs the others, design.json says the design
+    is incomplete with the case's status, and the command exits 1."""
+    text = SET.replace('"dynamics.t_end" = 7.0', '"solver.petsc_options" = {snes_max_it = 1, '
+                       'ts_max_reject = 0, snes_rtol = 1e-14, snes_atol = 1e-30}')
+    path, out = write_set(mpi_tmp_path, text), mpi_tmp_path / "out"
+    assert main(["batch", str(path), "--output", str(out), "--no-figures", "-q"]) == 1
+    design = json.loads((out / "design.json").read_text())
+    assert not design["complete"]
+    assert [c["status"] for c in design["cases"]] == ["completed", "completed", "failed"]
+    assert any("'high'" in w and "did not finish" in w for w in design["warnings"])
+    low = json.loads((out / "low" / "seed0" / "fatigue.json").read_text())["anchors"]["p"]
+    share = design["cases"][0]["damage"]["p"]  # the finished cases still count
+    assert share == pytest.approx(low["damage"] / low["duration"] * 3000 * 3600 * LIFE,
+                                  rel=1e-14)  # the same product: round-off
 
 
 @pytest.mark.single_rank  # pure Python: dicts
