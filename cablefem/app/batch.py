@@ -38,6 +38,15 @@ __all__ = ["BatchResult", "run_batch"]
 
 log = logging.getLogger(__name__)
 _TAG = 32
+_POLL = 0.01  # s between two looks of a rank that waits for the others
+
+
+def _wait(comm: MPI.Comm) -> None:
+    """A barrier that sleeps while it waits (MPI's own spins a core: on a shared node it
+    would take CPU from the groups still running)."""
+    req = comm.Ibarrier()
+    while not req.Test():
+        time.sleep(_POLL)
 
 
 @dataclass
@@ -192,6 +201,9 @@ def _drain(comm, progress, block: bool, groups: int = 0) -> int | None:
     ``groups`` leaders said they are done). Returns a signal a group reported."""
     while (block and progress.groups_done < groups) or comm.Iprobe(
             source=MPI.ANY_SOURCE, tag=_TAG):
+        if not comm.Iprobe(source=MPI.ANY_SOURCE, tag=_TAG):
+            time.sleep(_POLL)  # not a blocking recv: MPI would spin a core while it waits
+            continue
         msg = comm.recv(source=MPI.ANY_SOURCE, tag=_TAG)
         if msg[0] == "run":
             progress.report(*msg[1:])
@@ -236,7 +248,7 @@ def run_batch(ls: LoadSet, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, 
         sig = _work(ls, outdir, comm, group, queue, figures, progress)
         if comm.rank == 0:
             sig = _drain(comm, progress, True, comm.size // ranks_per_case - 1) or sig
-        comm.Barrier()
+        _wait(comm)
         queue.free()
         group.Free()
         design = _design(ls, outdir, progress) if comm.rank == 0 else None
