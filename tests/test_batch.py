@@ -190,7 +190,11 @@ def test_a_failed_case_leaves_the_design_incomplete(mpi_tmp_path, capsys):
     text = SET.replace('"dynamics.t_end" = 7.0', '"solver.petsc_options" = {snes_max_it = 1, '
                        'ts_max_reject = 0, snes_rtol = 1e-14, snes_atol = 1e-30}')
     path, out = write_set(mpi_tmp_path, text), mpi_tmp_path / "out"
-    assert main(["batch", str(path), "--output", str(out), "--no-figures", "-q"]) == 1
+    assert main(["batch", str(path), "--output", str(out), "--no-figures"]) == 1
+    err = capsys.readouterr().err
+    if MPI.COMM_WORLD.rank == 0:  # a line per run on rank 0, the design at the end
+        assert "[3/3]" in err and "high seed 0: failed" in err, err
+        assert "design damage over 50 years" in err and "INCOMPLETE" in err, err
     design = json.loads((out / "design.json").read_text())
     assert not design["complete"]
     assert [c["status"] for c in design["cases"]] == ["completed", "completed", "failed"]
@@ -199,6 +203,15 @@ def test_a_failed_case_leaves_the_design_incomplete(mpi_tmp_path, capsys):
     share = design["cases"][0]["damage"]["p"]  # the finished cases still count
     assert share == pytest.approx(low["damage"] / low["duration"] * 3000 * 3600 * LIFE,
                                   rel=1e-14)  # the same product: round-off
+
+
+@pytest.mark.single_rank  # text only
+def test_keys_lists_the_set_file_keys(capsys):
+    from cablefem.case.loadset import LOADSET_KEYS
+
+    assert main(["keys", "--loadset"]) == 0
+    out = capsys.readouterr().out
+    assert all(key in out for key in LOADSET_KEYS) and "cases[].overrides" in out
 
 
 @pytest.mark.single_rank  # pure Python: dicts
