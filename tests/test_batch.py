@@ -205,6 +205,17 @@ def test_a_failed_case_leaves_the_design_incomplete(mpi_tmp_path, capsys):
                                   rel=1e-14)  # the same product: round-off
 
 
+@pytest.mark.parametrize("option", [["--ranks-per-case", "3"], ["--ranks-per-case", "0"],
+                                    ["--t-end", "0"]])
+def test_bad_options_are_refused_before_any_run(mpi_tmp_path, capsys, option):
+    """--ranks-per-case must divide the number of ranks (1 or 2 here: 3 never does);
+    --t-end must be > 0: exit 2 naming the option, nothing written."""
+    path, out = write_set(mpi_tmp_path), mpi_tmp_path / "out"
+    assert main(["batch", str(path), "--output", str(out), *option]) == 2
+    assert option[0] in capsys.readouterr().err
+    assert not out.exists()
+
+
 @pytest.mark.single_rank  # text only
 def test_keys_lists_the_set_file_keys(capsys):
     from cablefem.case.loadset import LOADSET_KEYS
