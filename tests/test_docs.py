@@ -23,6 +23,15 @@ def test_case_file_keys_current(marker, network):
         "docs/case-file.md is out of date: run .venv/bin/python .ci/case_keys.py")
 
 
+def test_loadset_keys_current():
+    from cablefem.case.loadset import format_loadset_reference
+
+    text = (Path(__file__).resolve().parents[1] / "docs" / "loadsets.md").read_text()
+    block = text.split("<!-- loadset-keys:start -->")[1].split("<!-- loadset-keys:end -->")[0]
+    assert block.strip() == format_loadset_reference(markdown=True).strip(), (
+        "docs/loadsets.md is out of date: run .venv/bin/python .ci/case_keys.py")
+
+
 # ------------------------------------------------- the repository documents itself
 # Users clone the repository only: no file may point outside it, and every citation of
 # docs/theory.md ("docs/theory.md §3, step 1", "§3-4", "§8 and §9") must name a section,

@@ -1,4 +1,4 @@
-"""Command line: ``cablefem run|modes|post|fatigue|compare|keys``.
+"""Command line: ``cablefem run|modes|post|fatigue|compare|keys|batch``.
 
 Exit codes: 0 success; 1 a solve failed (the files written so far are valid and
 ``summary.json`` says why); 2 bad input (case file, options, CSV), reported one line per
@@ -170,6 +170,61 @@ def _add_keys(sub) -> None:
     keys_ = sub.add_parser("keys", help="print every case-file key with its unit and range")
     keys_.add_argument("--network", action="store_true",
                        help="the keys of a network case ([network], [[cables]], ...)")
+    keys_.add_argument("--loadset", action="store_true",
+                       help="the keys of a load-case set file ('cablefem batch')")
+
+
+def _add_batch(sub) -> None:
+    b = sub.add_parser("batch", help="every case and seed of a load-case set, and the "
+                       "design (fatigue over the design life, extremes)",
+                       description="Run every load case and seed of a set file into "
+                       "DIR/<case>/seed<k>/ (the outputs of 'cablefem run'), on one process "
+                       "or under mpirun -n P (groups of --ranks-per-case ranks take runs from "
+                       "a queue); then DIR/design.json and its figures. Run the same command "
+                       "again to resume a killed batch. Exit 0: every run completed; 1: a "
+                       "run failed (the design is incomplete); 2: bad input, before any run; "
+                       "128 + signal: stopped by a signal. Set-file keys: 'cablefem keys "
+                       "--loadset'; docs/loadsets.md.")
+    b.add_argument("set", type=Path, help="load-case set file (TOML)")
+    b.add_argument("--output", "-o", type=Path, required=True, help="output folder")
+    b.add_argument("--t-end", type=float, help="override every case's dynamics.t_end (s)")
+    b.add_argument("--ranks-per-case", type=int, default=1,
+                   help="ranks per run (a divisor of the number of ranks; default 1)")
+    b.add_argument("--no-figures", action="store_true",
+                   help="no figures of the single runs (the design's are drawn)")
+    b.add_argument("--quiet", "-q", action="store_true", help="warnings and errors only")
+
+
+def _batch(args) -> int:
+    """``cablefem batch``: the set checked in full before any run."""
+    from mpi4py import MPI
+
+    from cablefem.app.batch import run_batch
+    from cablefem.app.log import setup_logging
+    from cablefem.case import CaseError
+    from cablefem.case.loadset import load_loadset
+
+    if args.t_end is not None and not args.t_end > 0:
+        return _input_error(f"--t-end must be > 0 (s), got {args.t_end}")
+    size = MPI.COMM_WORLD.size
+    if args.ranks_per_case < 1 or size % args.ranks_per_case:
+        return _input_error(f"--ranks-per-case must be >= 1 and divide the number of "
+                            f"ranks ({size}), got {args.ranks_per_case}")
+    try:
+        ls = load_loadset(args.set, t_end=args.t_end)
+    except CaseError as err:
+        if MPI.COMM_WORLD.rank == 0:
+            sys.stderr.write(str(err) + "\n")
+        return EXIT_INPUT
+    setup_logging(logging.WARNING if args.quiet else logging.INFO)
+    try:
+        res = run_batch(ls, args.output, ranks_per_case=args.ranks_per_case,
+                        figures=not args.no_figures)
+    except ValueError as err:  # OutdirError included
+        return _input_error(str(err))
+    if res.signal:
+        return 128 + res.signal
+    return EXIT_OK if res.design.get("complete") and not res.failed else EXIT_FAILED
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -188,6 +243,7 @@ def _parser() -> argparse.ArgumentParser:
     _add_fatigue(sub)
     _add_compare(sub)
     _add_keys(sub)
+    _add_batch(sub)
     return p
 
 
@@ -289,9 +345,15 @@ def _main(argv: list[str] | None = None) -> int:
         return EXIT_INPUT
     if args.command == "keys":
         from cablefem.case import format_case_reference
+        from cablefem.case.loadset import format_loadset_reference
 
-        print(format_case_reference(network=args.network))
+        print(format_loadset_reference() if args.loadset else
+              format_case_reference(network=args.network))
         return EXIT_OK
+    if extra and args.command == "batch":
+        return _input_error(f"unexpected arguments {extra}")
+    if args.command == "batch":
+        return _batch(args)
     if extra and args.command in ("post", "fatigue", "compare"):
         return _input_error(f"unexpected arguments {extra}")
     if args.command == "compare":
