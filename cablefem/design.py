@@ -11,7 +11,10 @@ A load-case set runs every load case with one or more seeds; each run is summari
   and seed, and per case the most probable maximum (MPM) over a stated duration from its
   seeds' window maxima (a Gumbel fit by the method of moments);
 - ``cases``: per record its status, wall time, window and its share of the design damage per
-  location (the design damage is exactly the sum of the shares).
+  location (the design damage is exactly the sum of the shares), and its dampers' peaks;
+- ``dampers``: per damper the largest force, stroke and velocity over every record with its
+  case and seed, and per case the most probable maxima of its seeds' peaks (what a damper
+  is specified by).
 
 A record that did not finish makes the design incomplete: the records it would contribute
 count as zero (the damage is a lower bound, the life an upper bound), the locations say
@@ -49,6 +52,10 @@ DEFINITIONS = {
     "seed-averaged share divided among the case's seeds; the design damage is their sum",
     "extremes.max_moment": "the largest anchor or kink moment (magnitude) of every finished "
     "record in its statistics window, with its case and seed; max_tension likewise",
+    "dampers.max_force": "the largest damper force peak (N, the run's force_peak: over its "
+    "statistics window, summary.json dampers.<name>) of every finished record, with its case "
+    "and seed; max_stroke (m) and max_velocity (m/s) likewise; 'cases': per case the MPM "
+    "of its seeds' peaks as for extremes.cases.mpm",
     "extremes.cases.mpm": "most probable maximum over 'duration' (s): a Gumbel distribution "
     "fitted to the seeds' window maxima by the method of moments (beta = sqrt(6) s / pi, "
     "mu = mean - 0.5772 beta, s the sample standard deviation), MPM = mu + beta ln(duration "
@@ -73,6 +80,9 @@ class CaseRecord:
     fatigue: dict[str, dict] = field(default_factory=dict)
     maxima: dict[str, dict] = field(default_factory=dict)
     folder: str = ""
+    #: damper name -> its peaks and RMS over the statistics window (summary.json ``dampers``:
+    #: ``force_peak``, ``stroke_peak``, ``velocity_peak``, ``*_rms``, ``window``)
+    dampers: dict[str, dict] = field(default_factory=dict)
 
 
 # ---------------------------------------------------------------------------- the design
@@ -115,6 +125,7 @@ def assemble_design(records: list[CaseRecord], design_life_years: float, *,
                       "wall_time": _finite(r.wall_time),
                       "window": None if r.window is None else [float(t) for t in r.window],
                       "folder": r.folder, "damage": shares.get(id(r), {}),
+                      "dampers": r.dampers,
                       "fatigue_windows": {loc: rep["window"] for loc, rep in r.fatigue.items()
                                           if rep.get("window") is not None}})
     whole = sorted({f"{r.name}/{r.seed}" for r in records for rep in r.fatigue.values()
@@ -124,12 +135,14 @@ def assemble_design(records: list[CaseRecord], design_life_years: float, *,
                         "(fatigue.window = 'all'): its start-up counts as if it recurred "
                         "over the design life")
     extremes = _extremes(groups, extreme_duration, warnings)
+    dampers = _dampers(groups, extreme_duration)
     complete = (all(r.status in FINISHED for r in records)
                 and all(f["complete"] for f in fatigue.values())
                 and all(e["complete"] for e in extremes.values()))
     return {"design_life_years": float(design_life_years), "complete": complete,
             "hours_per_year_total": hours, "cases": cases, "fatigue": fatigue,
-            "extremes": extremes, "definitions": dict(DEFINITIONS), "warnings": warnings}
+            "extremes": extremes, "dampers": dampers, "definitions": dict(DEFINITIONS),
+            "warnings": warnings}
 
 
 def _finite(x) -> float | None:
@@ -289,6 +302,39 @@ def _extremes(groups: dict[str, list[CaseRecord]], duration: float | None,
     return out
 
 
+def _dampers(groups: dict[str, list[CaseRecord]], duration: float | None) -> dict:
+    """Per damper the largest force, stroke and velocity peak over the finished records
+    (with case and seed) and per case the MPM of its seeds' peaks (:func:`_mpm`)."""
+    done = {n: [r for r in recs if r.status in FINISHED] for n, recs in groups.items()}
+    names = list(dict.fromkeys(d for recs in done.values() for r in recs for d in r.dampers))
+    out = {}
+    for name in names:
+        entry: dict = {"complete": all(len(d) == len(groups[n]) for n, d in done.items())}
+        per_case: dict = {}
+        for q in ("force", "stroke", "velocity"):
+            best = None
+            for case, recs in done.items():
+                vals = [(float(r.dampers[name][f"{q}_peak"]), r.seed,
+                         r.dampers[name].get("window")) for r in recs
+                        if r.dampers.get(name, {}).get(f"{q}_peak") is not None]
+                if len(vals) < len(recs):
+                    entry["complete"] = False
+                if not vals:
+                    continue
+                top = max(vals, key=lambda v: v[0])
+                if best is None or top[0] > best[0]:
+                    best = (top[0], case, top[1])
+                wins = [w[1] - w[0] for _, _, w in vals if w is not None]
+                per_case.setdefault(case, {})[q] = _mpm(
+                    [v for v, _, _ in vals], [s for _, s, _ in vals],
+                    float(np.mean(wins)) if wins else None, duration)
+            if best is not None:
+                entry[f"max_{q}"], entry[f"{q}_case"], entry[f"{q}_seed"] = best
+        entry["cases"] = per_case
+        out[name] = entry
+    return out
+
+
 # ---------------------------------------------------------------------------- figures
 def write_design_figures(design: dict, outdir, *, comm=None) -> list[str]:
     """Draw the design's figures into ``outdir`` (docs/design.md): the damage per location
@@ -331,8 +377,9 @@ def case_record(folder, name: str, seed: int, hours_per_year: float, *,
         except (OSError, ValueError, KeyError):
             fatigue = summary.get("fatigue") or {}
     maxima = window_maxima(folder, window) if window is not None else {}
+    dampers = dict(summary.get("dampers") or {}) if status in FINISHED else {}
     return CaseRecord(name, seed, hours_per_year, status, float(wall),
-                      window, fatigue, maxima, rel)
+                      window, fatigue, maxima, rel, dampers)
 
 
 def _summary_window(summary: dict) -> tuple[float, float] | None:

@@ -292,3 +292,33 @@ def test_extremes_figure_says_when_a_location_has_no_moment(monkeypatch, tmp_pat
     texts = {ax.get_ylabel(): [t.get_text() for t in ax.texts] for ax in fig.axes}
     assert any("no moment at pin" in t for t in texts["max moment\nat pin"])
     assert texts["max tension\nat pin"] == [] and texts["max moment\nat p"] == []
+
+
+def test_damper_peaks_over_the_set(tmp_path):
+    """A damper is specified by its force and stroke: the design's ``dampers`` holds the
+    largest peak of every finished record with its case and seed, and per case the Gumbel
+    MPM of the seeds' peaks (the same estimator as the extremes: checked against
+    gumbel_moments); ``case_record`` reads the peaks from summary.json's ``dampers``."""
+    peaks = {("calm", 0): (100.0, 0.01), ("calm", 1): (140.0, 0.02),
+             ("storm", 0): (900.0, 0.09), ("storm", 1): (700.0, 0.11)}
+    records = []
+    for (name, seed), (force, stroke) in peaks.items():
+        folder = tmp_path / name / f"seed{seed}"
+        folder.mkdir(parents=True)
+        summary = {"status": "completed", "wall_time": {"total": 1.0},
+                   "dampers": {"damper0": {"window": [2.0, 12.0], "force_peak": force,
+                                           "stroke_peak": stroke, "velocity_peak": 1.0,
+                                           "force_rms": force / 2}}}
+        (folder / "summary.json").write_text(json.dumps(summary))
+        records.append(case_record(folder, name, seed, 10.0))
+    assert records[0].dampers["damper0"]["force_peak"] == 100.0
+    d = assemble_design(records, 10.0, extreme_duration=100.0)["dampers"]["damper0"]
+    assert (d["max_force"], d["force_case"], d["force_seed"]) == (900.0, "storm", 0)
+    assert (d["max_stroke"], d["stroke_case"], d["stroke_seed"]) == (0.11, "storm", 1)
+    assert d["complete"]
+    mu, beta = gumbel_moments([900.0, 700.0])
+    # the MPM over 100 s from 10 s windows: mu + beta ln 10 (round-off of the log only)
+    assert math.isclose(d["cases"]["storm"]["force"]["mpm"], mu + beta * math.log(10.0),
+                        rel_tol=1e-14)
+    failed = records[:3] + [CaseRecord("storm", 1, 10.0, "failed", 1.0, None)]
+    assert not assemble_design(failed, 10.0)["dampers"]["damper0"]["complete"]
