@@ -19,7 +19,8 @@
 # dimensionless, lives in years).
 #
 # Run: `python demos/demo_stay_wind_set.py --output output/stay_wind_set` (on P ranks:
-# `mpirun -n P python ...`: P runs at a time). The full set is 8 runs of 600 s; with the
+# `mpirun -n P python ...`: P runs at a time). The full set is 8 runs of 600 s (about 8
+# minutes a run on one core: `--t-end 20` takes 15 to 20 s a run); with the
 # environment variable `CI` set, the short version runs the same set for 3 s of wind each
 # (its statistics window from 1 s, a turbulence field of period 20 s), which checks the
 # machinery, not the design.
