@@ -251,6 +251,49 @@ def test_case_record_window_and_maxima_from_the_files(tmp_path):
     assert "max_moment" not in d["extremes"]["a"] and d["extremes"]["a"]["max_tension"] == 100
 
 
+def _drawn(monkeypatch, draw):
+    """The matplotlib Figure that ``draw`` saves (kept for inspection)."""
+    from matplotlib.figure import Figure
+
+    figs = []
+    monkeypatch.setattr(Figure, "savefig", lambda self, *a, **k: figs.append(self))
+    draw()
+    return figs[0]
+
+
+@pytest.mark.serial
+def test_damage_figure_scales_to_a_small_damage(monkeypatch, tmp_path):
+    """A design damage far below 1 (a stay cable's: 1e-7 over 100 years) fills the axis
+    (the axis ends at 1.2x the largest stack; before, it ended at 1.05 and the bars were
+    invisible), and the failure line, off the scale, is left out; a damage near 1 keeps it."""
+    from cablefem.app.designplots import damage_figure
+
+    for damage, top, line in ((1e-7, 1.2e-7, False), (0.9, 1.08, True)):
+        design = assemble_design([rec("c", 0, 100.0, {"p": damage * 600.0 / (100.0 * 3600.0
+                                                                           * 25.0)})], 25.0)
+        fig = _drawn(monkeypatch, lambda: damage_figure(design, tmp_path / "d.png"))
+        ax = fig.axes[0]
+        assert ax.get_ylim()[1] == pytest.approx(top, rel=1e-9)  # 1.2 x the damage
+        assert (len(ax.lines) == 1) is line  # the axhline at 1
+
+
+@pytest.mark.serial
+def test_extremes_figure_says_when_a_location_has_no_moment(monkeypatch, tmp_path):
+    """A pinned anchor has a tension but no moment: its moment panel says so (no empty
+    frame with an empty legend)."""
+    from cablefem.app.designplots import extremes_figure
+
+    records = two_by_two()
+    for r in records:
+        r.maxima = {"p": {"max_moment": 1.0 + r.seed, "max_tension": 10.0 + r.seed},
+                    "pin": {"max_tension": 5.0 + r.seed}}
+    design = assemble_design(records, 25.0)
+    fig = _drawn(monkeypatch, lambda: extremes_figure(design, tmp_path / "e.png"))
+    texts = {ax.get_ylabel(): [t.get_text() for t in ax.texts] for ax in fig.axes}
+    assert any("no moment at pin" in t for t in texts["max moment\nat pin"])
+    assert texts["max tension\nat pin"] == [] and texts["max moment\nat p"] == []
+
+
 def test_damper_peaks_over_the_set(tmp_path):
     """A damper is specified by its force and stroke: the design's ``dampers`` holds the
     largest peak of every finished record with its case and seed, and per case the Gumbel

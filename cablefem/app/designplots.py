@@ -56,11 +56,17 @@ def damage_figure(design: dict, path: Path) -> Path:
             text += "\n(incomplete: damage\na lower bound)"
         ax.annotate(text, (x[i], bottom[i]), ha="center", va="bottom", fontsize=7,
                     xytext=(0, 2), textcoords="offset points")
-    ax.axhline(1.0, color="r", lw=0.6, ls="--", label="damage 1 (failure)")
+    # the axis scales to the largest damage (a damage far below 1, the usual design, would
+    # be an invisible sliver under the failure line); the line is drawn when it is in view
+    top = 1.2 * float(bottom.max(initial=0.0))
+    top = 1.05 if top <= 0.0 or 0.5 <= top < 1.05 else top
+    if top >= 1.0:
+        ax.axhline(1.0, color="r", lw=0.6, ls="--", label="damage 1 (failure)")
     ax.set_xticks(x)
     ax.set_xticklabels(locs, rotation=30, ha="right", fontsize=8)
-    ax.set_ylabel(f"damage over {design['design_life_years']:g} years")
-    ax.set_ylim(0, max(1.05, 1.2 * float(bottom.max(initial=0.0))))
+    ax.set_ylabel(f"damage over {design['design_life_years']:g} years"
+                  + ("" if top >= 1.0 else "\n(failure, 1, off the scale)"))
+    ax.set_ylim(0, top)
     ax.grid(True, axis="y", lw=0.3)
     ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), title="case",
               title_fontsize=7)
@@ -100,7 +106,13 @@ def extremes_figure(design: dict, path: Path) -> Path:
             ax.set_xticklabels(cases, rotation=20, ha="right", fontsize=7)
             ax.set_ylabel(f"max {quantity}\nat {loc}", fontsize=8)
             ax.grid(True, lw=0.3)
-            ax.legend(fontsize=6, loc="upper left")
+            if any(ext[loc]["cases"][c].get(quantity) for c in cases):
+                ax.legend(fontsize=6, loc="upper left")
+            else:  # a pinned anchor's moment: say so rather than leave an empty frame
+                ax.set_yticks([])
+                ax.text(0.5, 0.5, f"no {quantity} at {loc} in any case\n(e.g. a pinned "
+                        "anchor has no moment)", transform=ax.transAxes, ha="center",
+                        va="center", fontsize=8)
     durations = {q.get("duration") for e in ext.values() for c in e.get("cases", {}).values()
                  for q in c.values()}
     dur = ", ".join(f"{d:.4g} s" for d in sorted(d for d in durations if d is not None))
