@@ -124,9 +124,11 @@ class AnchorReactions:
         if self.ksp.getConvergedReason() < 0:
             raise RuntimeError(f"mass-matrix solve failed at t={t:g} "
                                f"(KSP reason {self.ksp.getConvergedReason()})")
-        self.da.ghostUpdate(addv=INSERT, mode=FORWARD)
+        if m.comm.size > 1:  # one rank: no ghosts to update
+            self.da.ghostUpdate(addv=INSERT, mode=FORWARD)
         m.a.vector.axpy(1.0, self.da)
-        m.a.vector.ghostUpdate(addv=INSERT, mode=FORWARD)
+        if m.comm.size > 1:
+            m.a.vector.ghostUpdate(addv=INSERT, mode=FORWARD)
 
     def compute(self, t: float, dynamic: bool = True) -> np.ndarray:
         """Anchor forces ``N_a`` (n_anchors, 3) in N, identical on every rank; for a beam
