@@ -14,7 +14,8 @@ from petsc4py import PETSc
 __all__ = ["default_options", "case_options", "assemble_residual", "assemble_jacobian",
            "assemble_residual_rows", "assemble_jacobian_rows",
            "SNESHistory",
-           "lu_options", "linear_solver_options", "copy_in", "RowsAssembler"]
+           "lu_options", "linear_solver_options", "copy_in", "RowsAssembler",
+           "jacobian_columns"]
 
 INSERT, ADD = PETSc.InsertMode.INSERT, PETSc.InsertMode.ADD
 FORWARD, REVERSE = PETSc.ScatterMode.FORWARD, PETSc.ScatterMode.REVERSE
@@ -179,12 +180,15 @@ class RowsAssembler:
         self.F, self.J, self.bcs = F, J, list(bcs)
         self.rows, self.kappa = rows, kappa
         self.serial = comm.size == 1
+        self.cols = jacobian_columns(F, J)
+        self.packed: dict | None = None  # the residual's packed coefficients, last call
 
     def residual(self, b: PETSc.Vec, x: PETSc.Vec) -> None:
         """The residual into ``b`` at the state the form's coefficients hold; the Dirichlet
         rows ``kappa (x - g)``."""
         F = self.F
         consts, coeffs = dcpp.fem.pack_constants(F), dcpp.fem.pack_coefficients(F)
+        self.packed = coeffs
         if self.serial:  # one rank: no ghosts, the vector's array is its local form
             arr = b.array_w
             arr[:] = 0.0
@@ -199,15 +203,62 @@ class RowsAssembler:
         arr[self.rows] *= self.kappa
 
     def jacobian(self, A: PETSc.Mat) -> None:
-        """The Jacobian into ``A``, its Dirichlet rows ``kappa`` times identity rows."""
+        """The Jacobian into ``A``, its Dirichlet rows ``kappa`` times identity rows, at
+        the state of the last :meth:`residual` (SNES evaluates the residual at a state
+        before its Jacobian; the coefficients have not changed since): the Jacobian's
+        packed coefficients are columns of the residual's (:func:`jacobian_columns`)."""
         J = self.J
+        if self.cols is not None and self.packed is not None:
+            coeffs = {key: self.packed[key][:, cols] for key, cols in self.cols.items()}
+        else:
+            coeffs = dcpp.fem.pack_coefficients(J)
         A.zeroEntries()
-        dcpp.fem.petsc.assemble_matrix(A, J, dcpp.fem.pack_constants(J),
-                                       dcpp.fem.pack_coefficients(J), [])
+        dcpp.fem.petsc.assemble_matrix(A, J, dcpp.fem.pack_constants(J), coeffs, [])
         A.assemblyBegin(PETSc.Mat.AssemblyType.FLUSH)  # as dolfinx's wrapper does
         A.assemblyEnd(PETSc.Mat.AssemblyType.FLUSH)
         A.assemble()
         A.zeroRowsLocal(self.rows, diag=self.kappa)
+
+
+def jacobian_columns(F: fem.FormMetaClass, J: fem.FormMetaClass) -> dict | None:
+    """Where the Jacobian form ``J``'s packed coefficients sit in the residual form ``F``'s,
+    per integral: ``{key: column indices}`` with ``pack(J)[key] == pack(F)[key][:, cols]``
+    exactly whatever the coefficients' values, or None when that does not hold (then the
+    Jacobian packs its own). Found by packing each coefficient's number, then checked with
+    random values (the coefficients' values are restored)."""
+    arrays = [c.x.array for c in F.coefficients]
+    saved = [a.copy() for a in arrays]
+    try:
+        for k, a in enumerate(arrays):
+            a[:] = k + 1.0
+        pf, pj = dcpp.fem.pack_coefficients(F), dcpp.fem.pack_coefficients(J)
+        if not set(pj) <= set(pf) or any(pf[k].shape[0] != pj[k].shape[0] for k in pj):
+            return None
+        cols = {}
+        for key, packed in pj.items():
+            owner_f, owner_j = pf[key][0], packed[0]  # coefficient number + 1 per column
+            if pf[key].shape[0] == 0:
+                return None
+            c = []
+            for k in np.unique(owner_j):
+                src, dst = np.flatnonzero(owner_f == k), np.flatnonzero(owner_j == k)
+                if src.size != dst.size:
+                    return None
+                c.append((dst, src))
+            idx = np.empty(packed.shape[1], np.int64)
+            for dst, src in c:
+                idx[dst] = src
+            cols[key] = idx
+        rng = np.random.default_rng(0)
+        for a in arrays:
+            a[:] = rng.standard_normal(a.size)
+        pf, pj = dcpp.fem.pack_coefficients(F), dcpp.fem.pack_coefficients(J)
+        if not all(np.array_equal(pj[k], pf[k][:, c]) for k, c in cols.items()):
+            return None
+        return cols
+    finally:
+        for a, s in zip(arrays, saved):
+            a[:] = s
 
 
 def assemble_jacobian(A: PETSc.Mat, J: fem.FormMetaClass, bcs) -> None:
