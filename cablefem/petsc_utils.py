@@ -236,9 +236,9 @@ def jacobian_columns(F: fem.FormMetaClass, J: fem.FormMetaClass) -> dict | None:
             return None
         cols = {}
         for key, packed in pj.items():
-            owner_f, owner_j = pf[key][0], packed[0]  # coefficient number + 1 per column
-            if pf[key].shape[0] == 0:
+            if pf[key].shape[0] == 0:  # no cells on this rank: nothing to pack anyway
                 return None
+            owner_f, owner_j = pf[key][0], packed[0]  # coefficient number + 1 per column
             c = []
             for k in np.unique(owner_j):
                 src, dst = np.flatnonzero(owner_f == k), np.flatnonzero(owner_j == k)
