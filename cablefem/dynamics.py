@@ -46,9 +46,8 @@ from cablefem.errors import DynamicsError, Interrupted
 from cablefem.hinge import HingeError
 from cablefem.initial import initial_velocity
 from cablefem.petsc_utils import (
+    RowsAssembler,
     SNESHistory,
-    assemble_jacobian_rows,
-    assemble_residual_rows,
     case_options,
     copy_in,
     default_options,
@@ -138,20 +137,25 @@ def _make_ts(model, dt: float, rho_inf: float, history: SNESHistory,
     F_vec = fpetsc.create_vector(model.f_dynamic)
     kappa = bc_row_scale(model)
 
+    # the residual and Jacobian of assemble_residual_rows / assemble_jacobian_rows, the
+    # anchors' rows x - g weighted by kappa (bc_row_scale), without per-call dispatch
+    rows = RowsAssembler(model.f_dynamic, model.j_dynamic, model.bcs, bc_rows, kappa,
+                         model.comm)
+    serial = model.comm.size == 1
+    u, v, a = model.u, model.v, model.a
+
     def I2Function(ts, t, U, V, A, F):
         model.set_time(t)
-        copy_in(U, model.u)
-        copy_in(V, model.v)
-        copy_in(A, model.a)
-        assemble_residual_rows(F, model.f_dynamic, model.bcs, U)
-        with F.localForm() as loc:  # the anchors' rows x - g, in newtons (bc_row_scale)
-            loc.array[bc_rows] *= kappa
+        copy_in(U, u, serial)
+        copy_in(V, v, serial)
+        copy_in(A, a, serial)
+        rows.residual(F, U)
 
     def I2Jacobian(ts, t, U, V, A, shift_v, shift_a, J, P):
         model.shift_v.value = shift_v
         model.shift_a.value = shift_a
         # SNES evaluates the residual at the same state just before: model.u/v/a are current
-        assemble_jacobian_rows(J, model.j_dynamic, bc_rows, diag=kappa)
+        rows.jacobian(J)
 
     ts = PETSc.TS().create(model.comm)
     ts.setOptionsPrefix(prefix)
@@ -325,8 +329,9 @@ class DynamicProblem:
 
     def _state_to_model(self) -> tuple[PETSc.Vec, PETSc.Vec]:
         U2, V2 = self.ts.getSolution2()
-        copy_in(U2, self.model.u)
-        copy_in(V2, self.model.v)
+        serial = self.model.comm.size == 1
+        copy_in(U2, self.model.u, serial)
+        copy_in(V2, self.model.v, serial)
         return U2, V2
 
     def anchor_forces(self) -> np.ndarray:

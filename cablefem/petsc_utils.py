@@ -6,6 +6,7 @@ from __future__ import annotations
 from collections import deque
 
 import numpy as np
+from dolfinx import cpp as dcpp
 from dolfinx import fem
 from dolfinx.fem import petsc as fpetsc
 from petsc4py import PETSc
@@ -13,7 +14,8 @@ from petsc4py import PETSc
 __all__ = ["default_options", "case_options", "assemble_residual", "assemble_jacobian",
            "assemble_residual_rows", "assemble_jacobian_rows",
            "SNESHistory",
-           "lu_options", "linear_solver_options", "copy_in"]
+           "lu_options", "linear_solver_options", "copy_in", "RowsAssembler",
+           "jacobian_columns"]
 
 INSERT, ADD = PETSc.InsertMode.INSERT, PETSc.InsertMode.ADD
 FORWARD, REVERSE = PETSc.ScatterMode.FORWARD, PETSc.ScatterMode.REVERSE
@@ -121,10 +123,12 @@ def _fmt(val: object) -> str:
     return str(val)
 
 
-def copy_in(x: PETSc.Vec, f: fem.Function) -> None:
-    """Copy a PETSc vector into a Function and update its ghosts."""
+def copy_in(x: PETSc.Vec, f: fem.Function, serial: bool = False) -> None:
+    """Copy a PETSc vector into a Function and update its ghosts (``serial``: the caller
+    knows the communicator has one rank, so there are no ghosts to update)."""
     x.copy(f.vector)
-    f.vector.ghostUpdate(addv=INSERT, mode=FORWARD)
+    if not serial:
+        f.vector.ghostUpdate(addv=INSERT, mode=FORWARD)
 
 
 def assemble_residual(b: PETSc.Vec, F: fem.FormMetaClass, J: fem.FormMetaClass, bcs,
@@ -158,6 +162,103 @@ def assemble_jacobian_rows(A: PETSc.Mat, J: fem.FormMetaClass, rows: np.ndarray,
     fpetsc.assemble_matrix(A, J)
     A.assemble()
     A.zeroRowsLocal(rows, diag=diag)
+
+
+class RowsAssembler:
+    """:func:`assemble_residual_rows` and :func:`assemble_jacobian_rows` for the calls of a
+    time integrator, thousands a run: the same kernels and the same sums, called without
+    dolfinx's Python dispatch (constants and coefficients packed once per call, the local
+    array taken without a local-form vector in serial, no ghost update on one rank, the
+    anchor rows' indices and weight fixed). The results are bit-identical to the two
+    functions'.
+
+    ``kappa``: the weight of the Dirichlet rows (``x - g`` times ``kappa`` in the residual,
+    ``kappa`` on the Jacobian's diagonal)."""
+
+    def __init__(self, F: fem.FormMetaClass, J: fem.FormMetaClass, bcs, rows: np.ndarray,
+                 kappa: float, comm) -> None:
+        self.F, self.J, self.bcs = F, J, list(bcs)
+        self.rows, self.kappa = rows, kappa
+        self.serial = comm.size == 1
+        self.cols = jacobian_columns(F, J)
+        self.packed: dict | None = None  # the residual's packed coefficients, last call
+
+    def residual(self, b: PETSc.Vec, x: PETSc.Vec) -> None:
+        """The residual into ``b`` at the state the form's coefficients hold; the Dirichlet
+        rows ``kappa (x - g)``."""
+        F = self.F
+        consts, coeffs = dcpp.fem.pack_constants(F), dcpp.fem.pack_coefficients(F)
+        self.packed = coeffs
+        if self.serial:  # one rank: no ghosts, the vector's array is its local form
+            arr = b.array_w
+            arr[:] = 0.0
+            dcpp.fem.assemble_vector(arr, F, consts, coeffs)
+        else:
+            with b.localForm() as loc:
+                loc.set(0.0)
+                dcpp.fem.assemble_vector(loc.array_w, F, consts, coeffs)
+            b.ghostUpdate(addv=ADD, mode=REVERSE)
+            arr = b.array_w
+        dcpp.fem.set_bc(arr, self.bcs, x.array_r, -1.0)
+        arr[self.rows] *= self.kappa
+
+    def jacobian(self, A: PETSc.Mat) -> None:
+        """The Jacobian into ``A``, its Dirichlet rows ``kappa`` times identity rows, at
+        the state of the last :meth:`residual` (SNES evaluates the residual at a state
+        before its Jacobian; the coefficients have not changed since): the Jacobian's
+        packed coefficients are columns of the residual's (:func:`jacobian_columns`)."""
+        J = self.J
+        if self.cols is not None and self.packed is not None:
+            coeffs = {key: self.packed[key][:, cols] for key, cols in self.cols.items()}
+        else:
+            coeffs = dcpp.fem.pack_coefficients(J)
+        A.zeroEntries()
+        dcpp.fem.petsc.assemble_matrix(A, J, dcpp.fem.pack_constants(J), coeffs, [])
+        A.assemblyBegin(PETSc.Mat.AssemblyType.FLUSH)  # as dolfinx's wrapper does
+        A.assemblyEnd(PETSc.Mat.AssemblyType.FLUSH)
+        A.assemble()
+        A.zeroRowsLocal(self.rows, diag=self.kappa)
+
+
+def jacobian_columns(F: fem.FormMetaClass, J: fem.FormMetaClass) -> dict | None:
+    """Where the Jacobian form ``J``'s packed coefficients sit in the residual form ``F``'s,
+    per integral: ``{key: column indices}`` with ``pack(J)[key] == pack(F)[key][:, cols]``
+    exactly whatever the coefficients' values, or None when that does not hold (then the
+    Jacobian packs its own). Found by packing each coefficient's number, then checked with
+    random values (the coefficients' values are restored)."""
+    arrays = [c.x.array for c in F.coefficients]
+    saved = [a.copy() for a in arrays]
+    try:
+        for k, a in enumerate(arrays):
+            a[:] = k + 1.0
+        pf, pj = dcpp.fem.pack_coefficients(F), dcpp.fem.pack_coefficients(J)
+        if not set(pj) <= set(pf) or any(pf[k].shape[0] != pj[k].shape[0] for k in pj):
+            return None
+        cols = {}
+        for key, packed in pj.items():
+            if pf[key].shape[0] == 0:  # no cells on this rank: nothing to pack anyway
+                return None
+            owner_f, owner_j = pf[key][0], packed[0]  # coefficient number + 1 per column
+            c = []
+            for k in np.unique(owner_j):
+                src, dst = np.flatnonzero(owner_f == k), np.flatnonzero(owner_j == k)
+                if src.size != dst.size:
+                    return None
+                c.append((dst, src))
+            idx = np.empty(packed.shape[1], np.int64)
+            for dst, src in c:
+                idx[dst] = src
+            cols[key] = idx
+        rng = np.random.default_rng(0)
+        for a in arrays:
+            a[:] = rng.standard_normal(a.size)
+        pf, pj = dcpp.fem.pack_coefficients(F), dcpp.fem.pack_coefficients(J)
+        if not all(np.array_equal(pj[k], pf[k][:, c]) for k, c in cols.items()):
+            return None
+        return cols
+    finally:
+        for a, s in zip(arrays, saved):
+            a[:] = s
 
 
 def assemble_jacobian(A: PETSc.Mat, J: fem.FormMetaClass, bcs) -> None:

@@ -16,6 +16,7 @@ balances the discrete equations exactly at that time.
 from __future__ import annotations
 
 import numpy as np
+from dolfinx import cpp as dcpp
 from dolfinx.fem import petsc as fpetsc
 from mpi4py import MPI
 from petsc4py import PETSc
@@ -91,9 +92,18 @@ class AnchorReactions:
             A.assemble()
 
     def _assemble(self) -> None:
+        """The unconstrained residual into ``self.R`` (dolfinx's kernel called directly, as
+        :class:`~cablefem.petsc_utils.RowsAssembler` does: the same sums)."""
+        F = self.model.f_dynamic
+        consts, coeffs = dcpp.fem.pack_constants(F), dcpp.fem.pack_coefficients(F)
+        if self.model.comm.size == 1:  # no ghosts: the array is the local form
+            arr = self.R.array_w
+            arr[:] = 0.0
+            dcpp.fem.assemble_vector(arr, F, consts, coeffs)
+            return
         with self.R.localForm() as loc:
             loc.set(0.0)
-        fpetsc.assemble_vector(self.R, self.model.f_dynamic)
+            dcpp.fem.assemble_vector(loc.array_w, F, consts, coeffs)
         self.R.ghostUpdate(addv=ADD, mode=REVERSE)
 
     def equilibrium_acceleration(self, t: float) -> None:
@@ -114,9 +124,11 @@ class AnchorReactions:
         if self.ksp.getConvergedReason() < 0:
             raise RuntimeError(f"mass-matrix solve failed at t={t:g} "
                                f"(KSP reason {self.ksp.getConvergedReason()})")
-        self.da.ghostUpdate(addv=INSERT, mode=FORWARD)
+        if m.comm.size > 1:  # one rank: no ghosts to update
+            self.da.ghostUpdate(addv=INSERT, mode=FORWARD)
         m.a.vector.axpy(1.0, self.da)
-        m.a.vector.ghostUpdate(addv=INSERT, mode=FORWARD)
+        if m.comm.size > 1:
+            m.a.vector.ghostUpdate(addv=INSERT, mode=FORWARD)
 
     def compute(self, t: float, dynamic: bool = True) -> np.ndarray:
         """Anchor forces ``N_a`` (n_anchors, 3) in N, identical on every rank; for a beam

@@ -1,0 +1,120 @@
+"""Benchmark: the CPU cost of one dynamic step of a case, against the bare cost of the
+compiled kernels and the factorisation it calls. Prints JSON.
+
+In process, one rank: the case's model is built and its statics solved; then, for each of
+``--repeat`` fresh :class:`cablefem.dynamics.DynamicProblem` objects, ``--steps`` steps
+with the anchor forces at every step (what ``cablefem run`` does for ``anchors.csv``) and
+``--steps`` steps without them, after 20 warm-up steps; the CPU time per step
+(``time.process_time``), the best of the repeats. The bare costs, best of 5 loops of
+``--calls`` calls: the residual kernel on packed data (``dolfinx.cpp.fem.assemble_vector``),
+the coefficients' packing, the Jacobian kernel with PETSc's matrix assembly, and the
+Jacobian with an LU factorisation and solve. Newton iterations per step come from the
+integrator's counters.
+
+    python benchmarks/bench_step.py                           # case B
+    python benchmarks/bench_step.py demos/paper_inplane.toml --steps 3000
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+
+
+def per_step(model, dt: float, steps: int, repeat: int) -> dict:
+    from cablefem.dynamics import DynamicProblem
+    from cablefem.statics import solve_static
+
+    with_forces, bare, newton = [], [], []
+    for _ in range(repeat):
+        solve_static(model)
+        with DynamicProblem(model, dt) as problem:
+            problem.anchor_forces()
+            for _ in range(20):
+                problem.step()
+                problem.anchor_forces()
+            t0 = time.process_time()
+            for _ in range(steps):
+                problem.step()
+                problem.anchor_forces()
+            t1 = time.process_time()
+            for _ in range(steps):
+                problem.step()
+            t2 = time.process_time()
+            with_forces.append((t1 - t0) / steps)
+            bare.append((t2 - t1) / steps)
+            newton.append(problem.stats.newton_iterations / problem.step_number)
+    return {"step_and_anchor_forces_us": 1e6 * min(with_forces),
+            "step_us": 1e6 * min(bare), "newton_iterations_per_step": newton[-1]}
+
+
+def kernels(model, calls: int) -> dict:
+    import dolfinx.cpp as dcpp
+    from dolfinx.fem import petsc as fpetsc
+    from petsc4py import PETSc
+
+    F, J = model.f_dynamic, model.j_dynamic
+    b = fpetsc.create_vector(F)
+    A = fpetsc.create_matrix(J, "baij")
+    A.setOption(PETSc.Mat.Option.KEEP_NONZERO_PATTERN, True)
+    cF, kF = dcpp.fem.pack_constants(F), dcpp.fem.pack_coefficients(F)
+    cJ, kJ = dcpp.fem.pack_constants(J), dcpp.fem.pack_coefficients(J)
+    arr = b.array_w
+    ksp = PETSc.KSP().create(model.comm)
+    ksp.setType("preonly")
+    ksp.getPC().setType("lu")
+    ksp.setOperators(A)
+    x = b.duplicate()
+
+    def jacobian():
+        A.zeroEntries()
+        dcpp.fem.petsc.assemble_matrix(A, J, cJ, kJ, [])
+        A.assemble()
+
+    def jacobian_lu_solve():
+        jacobian()
+        ksp.solve(b, x)
+
+    def best(f):
+        out = []
+        for _ in range(5):
+            t = time.process_time()
+            for _ in range(calls):
+                f()
+            out.append((time.process_time() - t) / calls)
+        return 1e6 * min(out)
+
+    res = {"residual_kernel_us": best(lambda: dcpp.fem.assemble_vector(arr, F, cF, kF)),
+           "pack_coefficients_residual_us": best(lambda: dcpp.fem.pack_coefficients(F)),
+           "jacobian_kernel_and_assembly_us": best(jacobian)}
+    b.set(1.0)
+    res["jacobian_lu_factor_and_solve_us"] = best(jacobian_lu_solve)
+    for obj in (ksp, A, b, x):
+        obj.destroy()
+    return res
+
+
+def main() -> None:
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("case", nargs="?", default="demos/paper_spatial.toml")
+    p.add_argument("--steps", type=int, default=1500)
+    p.add_argument("--repeat", type=int, default=3)
+    p.add_argument("--calls", type=int, default=2000)
+    args = p.parse_args()
+    from mpi4py import MPI
+
+    from cablefem.case import load_case
+    from cablefem.create import model_from_case
+
+    case = load_case(args.case)
+    model = model_from_case(MPI.COMM_WORLD, case)
+    out = {"case": args.case,
+           "dofs": model.bs * model.V.dofmap.index_map.size_global,
+           "per_step": per_step(model, case.dynamics.dt, args.steps, args.repeat),
+           "kernels": kernels(model, args.calls)}
+    print(json.dumps(out, indent=1))
+
+
+if __name__ == "__main__":
+    main()

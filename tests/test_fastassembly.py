@@ -1,0 +1,105 @@
+"""The time integrator's assembly without dolfinx's per-call Python dispatch
+(:class:`cablefem.petsc_utils.RowsAssembler`, the anchor reactions' residual) gives the same
+numbers as dolfinx's wrappers, bit for bit: the same kernels with the same packed constants
+and coefficients add the same terms in the same order."""
+
+from __future__ import annotations
+
+import numpy as np
+from conftest import level_case
+from dolfinx.fem import petsc as fpetsc
+from mpi4py import MPI
+from petsc4py import PETSc
+
+from cablefem.cable import CableModel
+from cablefem.case import parse_case
+from cablefem.dynamics import bc_row_scale
+from cablefem.petsc_utils import (
+    RowsAssembler,
+    assemble_jacobian_rows,
+    assemble_residual_rows,
+    jacobian_columns,
+)
+from cablefem.reactions import AnchorReactions
+from cablefem.statics import solve_static
+
+MOTION = {"type": "harmonic", "amplitude": [2e-4, 1e-4, 0], "omega": 32.814}
+DAMPING = {"ratio": 0.005, "frequencies": [16.407, 32.814]}
+
+
+def _moved_model():
+    """A sagging cable off its static state, moving, at a time its anchor has moved: every
+    term of the residual (stiffness, damping, inertia, weight) and the Dirichlet rows
+    ``x - g`` non-zero."""
+    model = CableModel(MPI.COMM_WORLD, parse_case(level_case(elements=8, motion=MOTION,
+                                                             damping=DAMPING)))
+    solve_static(model)
+    rng = np.random.default_rng(3 + model.comm.rank)
+    for f, scale in ((model.u, 1e-4), (model.v, 1e-2), (model.a, 1.0)):
+        f.x.array[:] += scale * rng.standard_normal(f.x.array.size)
+        f.x.scatter_forward()
+    model.set_time(0.0123)
+    model.shift_v.value, model.shift_a.value = 412.0, 8.1e4
+    return model
+
+
+def test_rows_assembler_is_bit_identical_to_the_wrappers():
+    """Residual and Jacobian of the fast path equal dolfinx's wrapper route exactly
+    (difference 0, not a tolerance: the same floating-point operations)."""
+    model = _moved_model()
+    n_owned = model.V.dofmap.index_map.size_local
+    rows = np.concatenate([a.flat_dofs for a in model.anchors]).astype(np.int32)
+    rows = rows[rows < model.bs * n_owned]
+    kappa = bc_row_scale(model)
+    fast = RowsAssembler(model.f_dynamic, model.j_dynamic, model.bcs, rows, kappa, model.comm)
+    if model.mesh.topology.index_map(1).size_local:  # a rank with cells: the fast route
+        assert fast.cols is not None  # the Jacobian's coefficients taken from the residual's
+    x = model.u.vector
+    b_ref, b_fast = fpetsc.create_vector(model.f_dynamic), fpetsc.create_vector(model.f_dynamic)
+    b_fast.set(7.0)  # stale content must not leak into the result
+    assemble_residual_rows(b_ref, model.f_dynamic, model.bcs, x)
+    with b_ref.localForm() as loc:
+        loc.array[rows] *= kappa
+    fast.residual(b_fast, x)
+    assert b_ref.norm() > 0
+    assert np.array_equal(b_ref.array_r, b_fast.array_r)
+
+    A_ref = fpetsc.create_matrix(model.j_dynamic)
+    A_fast = fpetsc.create_matrix(model.j_dynamic)
+    A_fast.setOption(PETSc.Mat.Option.KEEP_NONZERO_PATTERN, True)
+    assemble_jacobian_rows(A_ref, model.j_dynamic, rows, diag=kappa)
+    fast.jacobian(A_fast)
+    fast.jacobian(A_fast)  # a second assembly into the same matrix: zeroed first
+    A_fast.axpy(-1.0, A_ref)
+    assert A_ref.norm() > 0
+    assert A_fast.norm() == 0.0
+    for obj in (b_ref, b_fast, A_ref, A_fast):
+        obj.destroy()
+
+
+def test_reactions_residual_is_bit_identical_to_the_wrapper():
+    """The anchor reactions' unconstrained residual, assembled directly, equals
+    ``dolfinx.fem.petsc.assemble_vector`` plus the ghost accumulation exactly."""
+    model = _moved_model()
+    with AnchorReactions(model) as reactions:
+        reactions.R.set(3.0)
+        reactions._assemble()
+        ref = fpetsc.create_vector(model.f_dynamic)
+        with ref.localForm() as loc:
+            loc.set(0.0)
+        fpetsc.assemble_vector(ref, model.f_dynamic)
+        ref.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        assert ref.norm() > 0
+        assert np.array_equal(ref.array_r, reactions.R.array_r)
+        ref.destroy()
+
+
+def test_jacobian_columns_refuses_a_coefficient_the_residual_lacks():
+    """The residual's form packs the acceleration, the Jacobian's does not: the Jacobian's
+    coefficients are columns of the residual's, not the other way round (None: pack anew);
+    and the coefficients' values are left as they were."""
+    model = _moved_model()
+    before = [f.x.array.copy() for f in (model.u, model.v, model.a)]
+    assert jacobian_columns(model.j_dynamic, model.f_dynamic) is None
+    for f, b in zip((model.u, model.v, model.a), before):
+        assert np.array_equal(f.x.array, b)
