@@ -27,7 +27,6 @@ import argparse
 import json
 import math
 import os
-import tomllib
 from pathlib import Path
 
 from mpi4py import MPI
@@ -46,29 +45,10 @@ SHORT = {"dynamics.statistics_start": 1.0, "fluid.wave_ramp": 1.0,
          "anchors.fairlead.motion.ramp": 1.0, "mesh.elements": 100}
 
 
-def short_set(src: Path, dst: Path, extra: dict) -> Path:
-    """The set ``src`` with ``extra`` overrides added to every case, written to ``dst``
-    (rank 0; the base case by its absolute path)."""
-    data = tomllib.loads(src.read_text())
-    if comm.rank == 0:
-        lines = [f"base = {json.dumps(str((src.parent / data['base']).resolve()))}"]
-        lines += [f"{k} = {json.dumps(v)}" for k, v in data.items() if k not in ("base", "cases")]
-        for case in data["cases"]:
-            lines += ["", "[[cases]]"]
-            lines += [f"{k} = {json.dumps(v)}" for k, v in case.items() if k != "overrides"]
-            lines.append("[cases.overrides]")
-            for k, v in {**case.get("overrides", {}), **extra}.items():
-                lines.append(f"{json.dumps(k)} = {json.dumps(v)}")
-        dst.parent.mkdir(parents=True, exist_ok=True)
-        dst.write_text("\n".join(lines) + "\n")
-    comm.barrier()
-    return dst
 
-
-set_file, t_end, figures = here / "mooring_set.toml", None, True
+set_file, t_end, extra, figures = here / "mooring_set.toml", None, None, True
 if os.environ.get("CI"):  # the short version: no figures of the single runs either
-    figures = False
-    set_file, t_end = short_set(set_file, args.output / "short_set.toml", SHORT), 3.0
+    t_end, extra, figures = 3.0, SHORT, False
 
 # %% [markdown]
 # ## Run the set
@@ -76,7 +56,7 @@ if os.environ.get("CI"):  # the short version: no figures of the single runs eit
 # `output/<case>/seed<k>/`, then `design.json` and its figures.
 
 # %%
-ls = load_loadset(set_file, t_end=t_end)
+ls = load_loadset(set_file, t_end=t_end, overrides=extra)
 result = run_batch(ls, args.output, comm, figures=figures)
 design = result.design
 

@@ -276,3 +276,21 @@ def test_killed_batch_resumes_to_the_same_design(tmp_path):
         assert b["extremes"][loc]["max_moment"] == pytest.approx(
             a["extremes"][loc]["max_moment"], rel=1e-12)
     assert [c["status"] for c in b["cases"]] == ["completed"] * 3
+
+
+def test_overrides_for_every_case(mpi_tmp_path):
+    """``load_loadset(..., overrides=)`` sets its keys in every case after the case's own
+    (what the set demos do for a short run); a key the base case does not set is refused
+    once, under ``overrides.<key>``."""
+    path = write_set(mpi_tmp_path)
+    ls = load_loadset(path, overrides={"dynamics.statistics_start": 1.5,
+                                       "anchors.q.motion.amplitude": [0.0, 0.0, 1e-3]})
+    for case in ls.cases:
+        for d in case.cases:
+            assert d["dynamics"]["statistics_start"] == 1.5
+            assert d["anchors"][1]["motion"]["amplitude"] == [0.0, 0.0, 1e-3]
+    assert ls.cases[2].cases[0]["dynamics"]["t_end"] == 7.0  # the case's own key stays
+    with pytest.raises(CaseError) as err:
+        load_loadset(path, overrides={"fluid.current": [1.0, 0.0, 0.0]})
+    keys = [k for k, _ in err.value.problems]
+    assert keys == ["overrides.fluid.current"]

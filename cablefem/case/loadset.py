@@ -196,17 +196,21 @@ def _load_case_entry(r: Reader, problems: list, total: float | None, seen: set):
     return name, hours, seeds, overrides
 
 
-def load_loadset(path: str | os.PathLike, *, t_end: float | None = None) -> LoadSet:
+def load_loadset(path: str | os.PathLike, *, t_end: float | None = None,
+                 overrides: dict | None = None) -> LoadSet:
     """Read and validate a load-case set file (see the module docstring).
 
     Args:
         path: The set file (TOML).
         t_end: The run's end (s) for every case (``--t-end``), else each case's own.
+        overrides: Dotted keys set in every case after its own overrides (e.g. a shorter
+            statistics window for a quick look), validated as theirs are.
 
     Raises:
         CaseError: Every problem of the set, its overrides and its cases, by key.
     """
     path = Path(path)
+    overrides_all = overrides
     data = _read_toml(path, "load-case set file")
     problems: list = []
     top = Reader(data, "", LOADSET_KEYS, problems)
@@ -228,12 +232,16 @@ def load_loadset(path: str | os.PathLike, *, t_end: float | None = None) -> Load
             problems += [(f"base ({k})", m) for k, m in err.problems]
     cases = []
     if base_data is not None:
-        for i, (name, hours, seeds, overrides) in enumerate(parsed):
+        for i, (name, hours, seeds, own) in enumerate(parsed):
+            extra = overrides_all or {}
+            overrides = {**own, **extra}
             bad = False
             for key in overrides:
                 _, _, why = _walk(base_data, str(key))
                 if why:
-                    problems.append((f"cases[{i}].overrides.{key}", why))
+                    where = "overrides" if key in extra and key not in own else \
+                        f"cases[{i}].overrides"
+                    problems.append((f"{where}.{key}", why))
                     bad = True
             if bad or name is None or seeds is None:
                 continue
@@ -252,8 +260,8 @@ def load_loadset(path: str | os.PathLike, *, t_end: float | None = None) -> Load
                     problems += [(f"cases[{i}] ({name}, seed {k}): {key}", m)
                                  for key, m in err.problems]
             cases.append(LoadCase(name, hours, seeds, dict(overrides), dicts))
-    if problems:
-        raise CaseError(problems, str(path))
+    if problems:  # an override of every case is reported once
+        raise CaseError(list(dict.fromkeys(problems)), str(path))
     return LoadSet(str(path), base, life, extreme, cases, t_end)
 
 
