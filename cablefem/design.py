@@ -83,6 +83,9 @@ class CaseRecord:
     #: damper name -> its peaks and RMS over the statistics window (summary.json ``dampers``:
     #: ``force_peak``, ``stroke_peak``, ``velocity_peak``, ``*_rms``, ``window``)
     dampers: dict[str, dict] = field(default_factory=dict)
+    #: the run's own warnings (summary.json ``warnings``: ``{"key", "message"}``), which
+    #: the design repeats: a design is only as good as its runs
+    warnings: list[dict] = field(default_factory=list)
 
 
 # ---------------------------------------------------------------------------- the design
@@ -117,6 +120,9 @@ def assemble_design(records: list[CaseRecord], design_life_years: float, *,
     if hours > year_seconds / 3600 * (1 + 1e-12):  # round-off of the weights' sum
         warnings.append(f"the cases' hours per year add up to {hours:.6g}, more than the "
                         f"{year_seconds / 3600:.6g} h of a year")
+    for r in records:
+        warnings += [f"case {r.name!r} seed {r.seed}: {w.get('key')}: {w.get('message')}"
+                     for w in r.warnings]
     shares, fatigue = _fatigue(groups, design_life_years, warnings)
     cases = []
     for r in records:
@@ -125,7 +131,7 @@ def assemble_design(records: list[CaseRecord], design_life_years: float, *,
                       "wall_time": _finite(r.wall_time),
                       "window": None if r.window is None else [float(t) for t in r.window],
                       "folder": r.folder, "damage": shares.get(id(r), {}),
-                      "dampers": r.dampers,
+                      "dampers": r.dampers, "warnings": len(r.warnings),
                       "fatigue_windows": {loc: rep["window"] for loc, rep in r.fatigue.items()
                                           if rep.get("window") is not None}})
     whole = sorted({f"{r.name}/{r.seed}" for r in records for rep in r.fatigue.values()
@@ -379,7 +385,8 @@ def case_record(folder, name: str, seed: int, hours_per_year: float, *,
     maxima = window_maxima(folder, window) if window is not None else {}
     dampers = dict(summary.get("dampers") or {}) if status in FINISHED else {}
     return CaseRecord(name, seed, hours_per_year, status, float(wall),
-                      window, fatigue, maxima, rel, dampers)
+                      window, fatigue, maxima, rel, dampers,
+                      list(summary.get("warnings") or []))
 
 
 def _summary_window(summary: dict) -> tuple[float, float] | None:

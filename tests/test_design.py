@@ -322,3 +322,19 @@ def test_damper_peaks_over_the_set(tmp_path):
                         rel_tol=1e-14)
     failed = records[:3] + [CaseRecord("storm", 1, 10.0, "failed", 1.0, None)]
     assert not assemble_design(failed, 10.0)["dampers"]["damper0"]["complete"]
+
+
+def test_the_runs_warnings_reach_the_design(tmp_path):
+    """A design is only as good as its runs: a run's own warnings (summary.json) are
+    repeated in design.json's warnings, named by case and seed, and counted per record."""
+    folder = tmp_path / "gust" / "seed1"
+    folder.mkdir(parents=True)
+    warning = {"key": "anchors.p", "message": "the moment is still building up"}
+    (folder / "summary.json").write_text(json.dumps(
+        {"status": "completed", "wall_time": {"total": 1.0}, "warnings": [warning]}))
+    r = case_record(folder, "gust", 1, 5.0)
+    assert r.warnings == [warning]
+    design = assemble_design([r, rec("calm", 0, 10.0, {"p": 1e-6})], 1.0)
+    assert "case 'gust' seed 1: anchors.p: the moment is still building up" \
+        in design["warnings"]
+    assert [c["warnings"] for c in design["cases"]] == [1, 0]
