@@ -101,12 +101,8 @@ class DamperOutput:
     def flush(self) -> None:
         if not self._pending or self.csv is None:
             return
-        n = len(self.names)
-        table = {"time": [t for t, _ in self._pending for _ in range(n)],
-                 "damper": self.names * len(self._pending)}
-        for c in DAMPER_COLUMNS[2:]:
-            table[c] = np.concatenate([cols[c] for _, cols in self._pending])
-        self.csv.write(table)
+        self.csv.write(anchorcsv.stacked_rows(self._pending, {"damper": self.names},
+                                              DAMPER_COLUMNS[2:]))
         self._pending = []
 
     def close(self) -> None:

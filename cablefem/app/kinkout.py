@@ -73,13 +73,8 @@ class KinkOutput:
     def flush(self) -> None:
         if not self._pending or self.csv is None:
             return
-        n = len(self.kinks)
-        table = {"time": [t for t, _ in self._pending for _ in range(n)],
-                 "kink": [k.name for _ in self._pending for k in self.kinks],
-                 "s": [k.s for _ in self._pending for k in self.kinks]}
-        for c in KINK_COLUMNS[3:]:
-            table[c] = np.concatenate([cols[c] for _, cols in self._pending])
-        self.csv.write(table)
+        labels = {"kink": [k.name for k in self.kinks], "s": [k.s for k in self.kinks]}
+        self.csv.write(anchorcsv.stacked_rows(self._pending, labels, KINK_COLUMNS[3:]))
         self._pending = []
 
     def close(self) -> None:

@@ -31,7 +31,7 @@ import numpy as np
 
 __all__ = ["ANCHOR_COLUMNS", "MOMENT_COLUMNS", "OPTIONAL_MOMENT_COLUMNS", "FORCE_COLUMNS",
            "INTEGER_COLUMNS", "columns", "AnchorCSV", "format_rows", "read", "read_forces",
-           "read_moments", "AnchorHistory", "truncate"]
+           "read_moments", "AnchorHistory", "truncate", "stacked_rows"]
 
 #: The anchor force (of the span on the anchor, into the span) and its magnitude.
 ANCHOR_COLUMNS = ["time", "anchor", "Nx", "Ny", "Nz", "tension"]
@@ -392,3 +392,25 @@ def _comm(comm):
 
 def _rank(comm) -> int:
     return _comm(comm).rank
+
+
+def stacked_rows(pending: Sequence[tuple[float, Mapping[str, np.ndarray]]],
+                 labels: Mapping[str, Sequence], columns: Sequence[str]) -> dict:
+    """The rows of several items (kinks, dampers) per time as one table of columns.
+
+    Args:
+        pending: ``(t, cols)`` per time, ``cols`` a column -> (n,) array of the n items.
+        labels: The columns that name the items (``"kink"``, ``"s"``, ...), n values each,
+            the same at every time.
+        columns: The numeric columns taken from ``cols``.
+
+    Returns:
+        Column -> values, ``time`` first, n rows per time in the items' order.
+    """
+    n = len(next(iter(labels.values())))
+    table: dict = {"time": [t for t, _ in pending for _ in range(n)]}
+    for key, values in labels.items():
+        table[key] = list(values) * len(pending)
+    for c in columns:
+        table[c] = np.concatenate([cols[c] for _, cols in pending])
+    return table
