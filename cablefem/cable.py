@@ -104,6 +104,13 @@ class CableModel:
     #: first-order correction, with the hinges' ``solver.outer_correction = "hinge"``);
     #: the rod resolves its layers
     kink_offsets = True
+    #: terms assembled outside UFL onto a few nodes' rows (a network's kink corners,
+    #: cablefem.junctions): the solvers add their residual and Jacobian
+    node_terms: tuple = ()
+    #: the names of a network's kinks the corner term corrects, and (name, why) of those
+    #: it leaves out (cablefem.junctions)
+    corner_kinks: frozenset = frozenset()
+    junction_gaps: tuple = ()
     builders = STRING  #: what the model is built from (cablefem.contract.Builders)
 
     def __init__(self, comm: MPI.Comm, description: CableDescription, prefix: str = "cable_"):

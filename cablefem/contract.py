@@ -25,6 +25,7 @@ CAPABILITIES: dict[str, Any] = {
     "bs": 3, "is_beam": False, "is_network": False, "string_alone": False, "hinges": None,
     "law": None, "static_stages": None, "static_options": {}, "ramp_weight": False,
     "damper_s": (), "damper_nodes": (), "kink_gaps": (), "kink_offsets": True,
+    "node_terms": (), "corner_kinks": frozenset(), "junction_gaps": (),
 }
 
 
@@ -100,6 +101,9 @@ class LineModel(Protocol):
     damper_nodes: tuple
     kink_gaps: tuple
     kink_offsets: bool
+    node_terms: tuple  #: terms assembled outside UFL (cablefem.junctions)
+    corner_kinks: frozenset  #: the kinks the network's corner term corrects
+    junction_gaps: tuple  #: (kink, why) of those it leaves out
     builders: Builders  #: what the model was built from
 
     # -- compiled forms (read-only, derived from the terms)

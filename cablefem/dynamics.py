@@ -41,6 +41,7 @@ from dolfinx.fem import petsc as fpetsc
 from mpi4py import MPI
 from petsc4py import PETSc
 
+from cablefem import junctions
 from cablefem.alpha2 import BackwardEuler, retry_from_start
 from cablefem.errors import DynamicsError, Interrupted
 from cablefem.hinge import HingeError
@@ -139,8 +140,12 @@ def _make_ts(model, dt: float, rho_inf: float, history: SNESHistory,
 
     # the residual and Jacobian of assemble_residual_rows / assemble_jacobian_rows, the
     # anchors' rows x - g weighted by kappa (bc_row_scale), without per-call dispatch
+    extra = None
+    if model.node_terms:  # terms outside UFL (a network's kink corners), at model.u
+        extra = (lambda arr: junctions.add_residual(model, arr),
+                 lambda A: junctions.add_jacobian(model, A))
     rows = RowsAssembler(model.f_dynamic, model.j_dynamic, model.bcs, bc_rows, kappa,
-                         model.comm)
+                         model.comm, extra)
     serial = model.comm.size == 1
     u, v, a = model.u, model.v, model.a
 
@@ -167,8 +172,8 @@ def _make_ts(model, dt: float, rho_inf: float, history: SNESHistory,
     with default_options(prefix, defaults, user):
         # -cable_mat_type (default baij: bs x bs blocks, assembly and triangular solves
         # faster than aij) is read here: the matrix must exist before the TS is configured
-        J_mat = fpetsc.create_matrix(model.j_dynamic,
-                                     PETSc.Options().getString(prefix + "mat_type"))
+        J_mat = junctions.create_matrix(model, model.j_dynamic,
+                                        PETSc.Options().getString(prefix + "mat_type"))
         # zeroing the anchor rows must keep the sparsity pattern: otherwise every assembly
         # changes it and every factorisation redoes its symbolic phase (and allocates)
         J_mat.setOption(PETSc.Mat.Option.KEEP_NONZERO_PATTERN, True)

@@ -47,6 +47,7 @@ from types import SimpleNamespace
 import numpy as np
 
 from cablefem import asymptotics
+from cablefem.junctions import corners
 
 __all__ = ["KINK_COLUMNS", "MIN_SPACING", "Kink", "KinkMoments", "kink_points", "network_kinks"]
 
@@ -115,7 +116,7 @@ def kink_points(model) -> list[Kink]:
     return out
 
 
-def network_kinks(model) -> list[Kink]:
+def network_kinks(model, which: str | None = None, record: bool = True) -> list[Kink]:
     """The kinks of a network (:class:`cablefem.network.NetworkModel`): at every node that
     is not a clamped anchor, where a point load, a point mass, a damper or a pinned anchor
     acts or several cables meet (a junction), each cable group with exactly two elements
@@ -133,7 +134,8 @@ def network_kinks(model) -> list[Kink]:
     ``node<k>/<group>``; ``spacing`` runs along the group's elements to the nearest other
     kink of the group, anchor, junction or end. ``network.kinks`` of the case chooses:
     "all" (loaded nodes, supports and junctions), "loaded" (nodes with point loads, point
-    masses, dampers or pinned anchors) or "none"."""
+    masses, dampers or pinned anchors) or "none"; ``which`` overrides it. ``record``:
+    keep the nodes left without a kink in ``model.kink_gaps``."""
     geo = model.geometry
     net, case = geo.net, model.case
     cells = np.asarray(geo.cells, np.int64)
@@ -158,12 +160,14 @@ def network_kinks(model) -> list[Kink]:
         for end, k in enumerate(cells[e]):
             label.setdefault(int(k), f"{case.dampers[i].group}:{j}.{end}")
     junctions = {int(k) for k in net.junctions}
-    which = getattr(case.network, "kinks", "all")
+    which = getattr(case.network, "kinks", "all") if which is None else which
     out = []
     #: (node, where, why) of the nodes with no kink moment: where a group meets itself
     #: with more than two elements (its path through the node is ambiguous), or where a
     #: concentrated force acts at the meeting of two cable groups of different sections
-    model.kink_gaps = []
+    gaps = []
+    if record:
+        model.kink_gaps = gaps
     candidates = [] if which == "none" else sorted(
         (set(label) | (junctions if which == "all" else set())) - clamped)
 
@@ -180,7 +184,7 @@ def network_kinks(model) -> list[Kink]:
         if in_line and k in label:  # a force where two cable groups meet in line
             where = "+".join(net.groups[int(net.cell_group[e])] for e in cab)
             if geo.cell_section[cab[0]] != geo.cell_section[cab[1]]:
-                model.kink_gaps.append((k, where, "two cable groups of different sections "
+                gaps.append((k, where, "two cable groups of different sections "
                                                   "meet there in line (the layer straddles "
                                                   "a change of section)"))
                 continue
@@ -189,7 +193,7 @@ def network_kinks(model) -> list[Kink]:
         for g in sorted({int(net.cell_group[e]) for e in cab}):
             es = [e for e in at_node[k] if net.cell_group[e] == g]
             if len(es) > 2:
-                model.kink_gaps.append((k, net.groups[g], f"the group meets itself with "
+                gaps.append((k, net.groups[g], f"the group meets itself with "
                                                           f"{len(es)} elements there"))
             if len(es) == 2:
                 add_kink(f"{label.get(k, f'node{k}')}/{net.groups[g]}", k, es)
@@ -251,6 +255,11 @@ class KinkMoments:
         damp = model.case.damping
         self.damping = (damp.model, float(damp.alpha), float(damp.beta))
         self._static = None  # rayleigh_k0: the static state's positions (first use)
+        #: the kinks whose elements run to the string's corner (a network's, on the
+        #: default route: cablefem.junctions), or None
+        names = model.corner_kinks
+        self.corner = (np.array([k.name in names for k in self.kinks], bool)
+                       if names else None)
 
     @property
     def names(self) -> list[str]:
@@ -339,10 +348,17 @@ class KinkMoments:
         the fluid's and the seabed's force on both half elements together), each
         element's share of it in proportion to its length. Also the elements' unit
         vectors ``e`` (n_kinks, 2, 3), along the cable (before -> node -> after)."""
+        h = self.h
+        if self.corner is not None and self.corner.any():  # a network's corrected kinks:
+            # the elements run to the string's corner (cablefem.junctions)
+            c, hc = corners(r[self.corner], h[self.corner], self.EA[self.corner],
+                            self.EI[self.corner])
+            r, h = np.array(r, float, copy=True), h.copy()
+            r[self.corner], h[self.corner] = c, hc
         d = np.diff(r, axis=1)  # (n, 2, 3): the two elements
         length = np.linalg.norm(d, axis=2)
         e = d / length[..., None]
-        strain = length / self.h - 1.0
+        strain = length / h - 1.0
         T2 = self.EA[:, None] * (np.maximum(strain, 0.0) if self.model.tension_only else strain)
         away = np.stack([-e[:, 0], e[:, 1]], axis=1)
         F = T2[..., None] * away

@@ -31,6 +31,7 @@ from dolfinx import fem
 from dolfinx.fem import petsc as fpetsc
 from slepc4py import SLEPc
 
+from cablefem import junctions
 from cablefem.petsc_utils import case_options, default_options, lu_options
 from cablefem.units import unit
 
@@ -171,8 +172,10 @@ class ModalProblem:
         with forms.linearised():
             try:
                 # K: the static tangent, plus the dynamic terms' stiffness (dampers' springs)
-                self.K = fpetsc.assemble_matrix(forms.k_dynamic if dynamic_terms else
-                                                model.j_static, model.bcs, diagonal=1.0)
+                k_form = forms.k_dynamic if dynamic_terms else model.j_static
+                self.K = junctions.create_matrix(model, k_form)
+                fpetsc.assemble_matrix(self.K, k_form, model.bcs, diagonal=1.0)
+                junctions.add_jacobian(model, self.K, junctions.fixed_dofs(model))
                 self.K.assemble()
                 self.M = fpetsc.assemble_matrix(model.m_form, model.bcs, diagonal=0.0)
                 self.M.assemble()

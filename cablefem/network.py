@@ -362,6 +362,14 @@ class NetworkModel(CableModel):
         f.x.array[:] = per_cell[self.cell_index].astype(PETSc.ScalarType)
         return f
 
+    def compile(self) -> None:
+        """Build the kinks' corner term (:func:`cablefem.junctions.junction_terms`), then
+        compile the forms."""
+        from cablefem.junctions import junction_terms
+
+        self.node_terms = junction_terms(self)
+        super().compile()
+
     def cable_cells(self) -> np.ndarray:
         n_owned = self.mesh.topology.index_map(1).size_local
         return self.geometry.is_cable[self.cell_index[:n_owned]]

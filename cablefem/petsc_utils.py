@@ -132,11 +132,15 @@ def copy_in(x: PETSc.Vec, f: fem.Function, serial: bool = False) -> None:
 
 
 def assemble_residual(b: PETSc.Vec, F: fem.FormMetaClass, J: fem.FormMetaClass, bcs,
-                      x: PETSc.Vec) -> None:
-    """Residual with Dirichlet rows ``x - g`` (so Newton drives ``x`` to ``g``)."""
+                      x: PETSc.Vec, extra=None) -> None:
+    """Residual with Dirichlet rows ``x - g`` (so Newton drives ``x`` to ``g``);
+    ``extra(array)`` adds terms assembled outside UFL to the local form."""
     with b.localForm() as loc:
         loc.set(0.0)
     fpetsc.assemble_vector(b, F)
+    if extra is not None:
+        with b.localForm() as loc:
+            extra(loc.array_w)
     fpetsc.apply_lifting(b, [J], [bcs], x0=[x], scale=-1.0)
     b.ghostUpdate(addv=ADD, mode=REVERSE)
     fpetsc.set_bc(b, bcs, x, -1.0)
@@ -176,7 +180,9 @@ class RowsAssembler:
     ``kappa`` on the Jacobian's diagonal)."""
 
     def __init__(self, F: fem.FormMetaClass, J: fem.FormMetaClass, bcs, rows: np.ndarray,
-                 kappa: float, comm) -> None:
+                 kappa: float, comm, extra=None) -> None:
+        #: ``extra``: (residual(array), jacobian(A)) of terms assembled outside UFL, or None
+        self.extra = extra
         self.F, self.J, self.bcs = F, J, list(bcs)
         self.rows, self.kappa = rows, kappa
         self.serial = comm.size == 1
@@ -193,10 +199,14 @@ class RowsAssembler:
             arr = b.array_w
             arr[:] = 0.0
             dcpp.fem.assemble_vector(arr, F, consts, coeffs)
+            if self.extra is not None:
+                self.extra[0](arr)
         else:
             with b.localForm() as loc:
                 loc.set(0.0)
                 dcpp.fem.assemble_vector(loc.array_w, F, consts, coeffs)
+                if self.extra is not None:
+                    self.extra[0](loc.array_w)
             b.ghostUpdate(addv=ADD, mode=REVERSE)
             arr = b.array_w
         dcpp.fem.set_bc(arr, self.bcs, x.array_r, -1.0)
@@ -216,6 +226,8 @@ class RowsAssembler:
         dcpp.fem.petsc.assemble_matrix(A, J, dcpp.fem.pack_constants(J), coeffs, [])
         A.assemblyBegin(PETSc.Mat.AssemblyType.FLUSH)  # as dolfinx's wrapper does
         A.assemblyEnd(PETSc.Mat.AssemblyType.FLUSH)
+        if self.extra is not None:
+            self.extra[1](A)
         A.assemble()
         A.zeroRowsLocal(self.rows, diag=self.kappa)
 
@@ -261,9 +273,13 @@ def jacobian_columns(F: fem.FormMetaClass, J: fem.FormMetaClass) -> dict | None:
             a[:] = s
 
 
-def assemble_jacobian(A: PETSc.Mat, J: fem.FormMetaClass, bcs) -> None:
+def assemble_jacobian(A: PETSc.Mat, J: fem.FormMetaClass, bcs, extra=None) -> None:
+    """The Jacobian with the conditions' rows and columns identity; ``extra(A)`` adds
+    terms assembled outside UFL before the final assembly."""
     A.zeroEntries()
     fpetsc.assemble_matrix(A, J, bcs)
+    if extra is not None:
+        extra(A)
     A.assemble()
 
 

@@ -21,6 +21,7 @@ from dolfinx.fem import petsc as fpetsc
 from mpi4py import MPI
 from petsc4py import PETSc
 
+from cablefem.junctions import add_residual
 from cablefem.petsc_utils import (
     ADD,
     FORWARD,
@@ -100,10 +101,12 @@ class AnchorReactions:
             arr = self.R.array_w
             arr[:] = 0.0
             dcpp.fem.assemble_vector(arr, F, consts, coeffs)
+            add_residual(self.model, arr)
             return
         with self.R.localForm() as loc:
             loc.set(0.0)
             dcpp.fem.assemble_vector(loc.array_w, F, consts, coeffs)
+            add_residual(self.model, loc.array_w)
         self.R.ghostUpdate(addv=ADD, mode=REVERSE)
 
     def equilibrium_acceleration(self, t: float) -> None:

@@ -23,6 +23,7 @@ from dolfinx.fem import petsc as fpetsc
 from mpi4py import MPI
 from petsc4py import PETSc
 
+from cablefem import junctions
 from cablefem.errors import StaticError
 from cablefem.hinge import hinge_fixed_point
 from cablefem.petsc_utils import (
@@ -73,17 +74,20 @@ def _make_snes(model, history: SNESHistory, bilateral: bool = False, prefix: str
     f_form = model.f_static_bilateral if bilateral else model.f_static
     j_form = model.j_static_bilateral if bilateral else model.j_static
     b = fpetsc.create_vector(f_form)
-    A = fpetsc.create_matrix(j_form)
+    A = junctions.create_matrix(model, j_form)
     snes = PETSc.SNES().create(model.comm)
     snes.setOptionsPrefix(prefix)
+    fixed = junctions.fixed_dofs(model) if model.node_terms else None
 
     def F(snes, x, f):
         copy_in(x, model.u)
-        assemble_residual(f, f_form, j_form, model.bcs, x)
+        assemble_residual(f, f_form, j_form, model.bcs, x,
+                          extra=lambda arr: junctions.add_residual(model, arr))
 
     def J(snes, x, jac, pre):
         copy_in(x, model.u)
-        assemble_jacobian(jac, j_form, model.bcs)
+        assemble_jacobian(jac, j_form, model.bcs,
+                          extra=lambda A: junctions.add_jacobian(model, A, fixed))
 
     snes.setFunction(F, b)
     snes.setJacobian(J, A)

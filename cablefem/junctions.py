@@ -1,0 +1,340 @@
+"""The first-order correction at a network's interior kinks: each cable meets the others
+at the rod's node, not at its string corner.
+
+Where a cable of a network turns at a node (a junction of cables, a crossing, a loaded or
+pinned node) by the angle ``Δ``, a cable with bending stiffness rounds the corner over a
+boundary layer on each side, and its node (where the other cables, loads, masses and
+dampers hold it) lies *inside* the corner of its straight outer parts by (docs/kinks.md)::
+
+    o = N − C = (ℓ_r/2) (a + b),   ℓ_r = sqrt(EI/T) sqrt(1 + T/EA)
+
+``a``, ``b`` the unit vectors from the node along the cable's two elements, ``T`` their
+mean tension (``ℓ_r`` is the virtual hinge's distance ``λ∞ ℓ`` of a small angle). One
+cable alone could put its corner at the node (a force at the node is the same force at the
+corner for the outer string), but two cables crossing each have their own corner, on
+opposite sides of the node for a saddle net's two families: a string net whose cables all
+meet at one point moves each family's straight parts by ``|o|`` (a few millimetres), which
+over a bay turns the clamp angles by a few percent. This term makes every cable's two
+elements at such a node run to its corner ``C = N − o(x)``, with ``o`` computed from the
+chords to the node (the chords to the corner differ by ``O(|o|/h)``: a second-order change
+of ``o``), and the node's test function moved with it (``δC = δN − δo``): the elements'
+forces act on the node through the layer, as a rigid link, and the node's equation is the
+rod's. Exact at first order in ``ℓ`` for a small angle (the exact clamped layer's offset
+differs by ``O(Δ²)`` relative: 0.1 % of the offset at ``Δ = 0.08``).
+
+What is left out (second order): the elements' weight, inertia, fluid and damping forces
+near the corner stay on the elements to the node (a share ``|o|/h`` of one element's);
+``ℓ_r`` is capped at ``h/2.5`` (``h`` the shorter element) where the elements are shorter
+than the layer (the correction is then partial and :func:`offset_estimate` says by how
+much); a kink next to an element of a virtual hinge's region, or with a slack element,
+is not corrected.
+
+The term is assembled outside UFL (it couples a cable's two elements through the node,
+which one cell integral cannot): :class:`JunctionCorners` adds its residual and Jacobian
+(derived by complex-step differentiation of the residual, exact to round-off) to the
+vectors and matrices the solvers assemble, on the rank that owns the node, and its blocks
+to the matrices' sparsity (:func:`create_matrix`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["JunctionCorners", "corner_offsets", "corners", "create_matrix", "add_residual",
+           "add_jacobian", "junction_terms", "fixed_dofs", "CAP_RATIO"]
+
+#: ``ℓ_r`` is at most the shorter element (stress-free) over this (as a damper's offset:
+#: beyond it the offset feeds the mesh's zigzag)
+CAP_RATIO = 2.0
+#: fixed-point iterations for the corner (a fixed count: the complex step differentiates
+#: through them; 0.4^14 = 3e-6 at the cap, 1e-14 at ℓ_r/h = 0.1)
+_ITERATIONS = 16
+#: the share of the estimated derivative the fixed point extrapolates with (the elements'
+#: lengths lag an iteration: the full estimate overshoots on short elements); with 12
+#: iterations (at most; fewer on long elements) the corner is converged to 1e-6 at
+#: h = 2.3 ℓ_r, to 1e-8 at h = 10 ℓ_r
+_EXTRAPOLATION = 0.5
+_STEP = 1e-30  # the complex step
+
+
+def _dot(x, y):
+    """Row-wise dot product without conjugation (complex-step safe)."""
+    return np.sum(x * y, axis=-1)
+
+
+def _norm(x):
+    return np.sqrt(_dot(x, x))
+
+
+def _tension(length, h, EA, tension_only: bool):
+    """The string's law ``T = EA (L/h − 1)`` (``h`` stress-free), 0 in compression for a
+    tension-only cable (decided on the real part)."""
+    T = EA * (length / h - 1.0)
+    return np.where(T.real > 0.0, T, 0.0) if tension_only else T
+
+
+def _layer(r, h, EA, EI, cap):
+    """The pieces of the offset: the unit vectors ``a``, ``b`` from the node along the
+    chords, ``ℓ_r`` (capped; 0 where an element is slack) and ``β = T/EA`` of the mean
+    tension."""
+    d0, d1 = r[:, 0] - r[:, 1], r[:, 2] - r[:, 1]
+    L0, L1 = np.sqrt(_dot(d0, d0)), np.sqrt(_dot(d1, d1))
+    T0 = _tension(L0, h[:, 0], EA, True)
+    T1 = _tension(L1, h[:, 1], EA, True)
+    T = 0.5 * (T0 + T1)
+    taut = (T0.real > 0.0) & (T1.real > 0.0)
+    Ts = np.where(taut, T, 1.0)
+    ell = np.sqrt(EI / Ts) * np.sqrt(1.0 + Ts / EA)
+    ell = np.where(taut, np.where(ell.real > cap, cap, ell), 0.0)
+    return d0 / L0[:, None], d1 / L1[:, None], ell, Ts / EA
+
+
+def _corner(r, h, EA, EI, cap):
+    """``(o, δs)``: the offset :func:`corner_offsets` and the stress-free length each of
+    the two elements gains when it runs to the corner instead of the layer's virtual hinge
+    (its hinge removes ``σ_h``; the corner path is longer by ``h/cos φ``)."""
+    # the chords from the corner itself and the tension of the lengthened elements: o and
+    # δs from the node's chords, then from the corner and lengths they give, to a fixed
+    # point (the map contracts by about ℓ_r/h ≤ 1/CAP_RATIO). The node's chords alone
+    # make o low by a relative ℓ_r/h (10 % on the saddle net), and the elements' own
+    # stress-free lengths raise T by EA δs/h (on fine meshes as much as T itself)
+    c, ds, o = r, 0.0, 0.0
+    count = _ITERATIONS
+    for it in range(_ITERATIONS):
+        if it == count:
+            break
+        a, b, ell, beta = _layer(c, h + np.reshape(ds, (-1, 1)), EA, EI, cap)
+        s = a + b
+        # extrapolated: across the chords the map's derivative is about +q, q = ℓ_r (1/L0
+        # + 1/L1)/2 ≤ 1/CAP_RATIO (a corner further out is sharper), so (F − q o)/(1 − q)
+        # contracts at second order
+        q = (0.5 * ell * (1.0 / _norm(c[:, 0] - c[:, 1]) + 1.0 / _norm(c[:, 2] - c[:, 1])))
+        if it == 0 and len(q):  # as many as the largest q needs (1e-11; on the real part,
+            # the same count for every complex step)
+            rate = 0.7 * float(np.max(q.real))
+            count = _ITERATIONS if rate >= 0.5 else int(
+                np.clip(np.ceil(np.log(1e-11) / np.log(max(rate, 1e-3))), 2, _ITERATIONS))
+        q = _EXTRAPOLATION * q
+        o = ((0.5 * ell)[:, None] * s - q[:, None] * o) / (1.0 - q)[:, None]
+        # per side (angle φ = Δ/2, |s|² = 4 sin² φ): (D_n tan φ + D_t)/λ∞ of the far
+        # field (docs/theory.md §6) to O(φ²): ℓ0 φ² (3 + 2β)/(4 (1 + β)^(3/2)), with
+        # ℓ0 = ℓ_r/sqrt(1 + β)
+        ds = ell * _dot(s, s) * (3.0 + 2.0 * beta) / (16.0 * (1.0 + beta) ** 2)
+        c = np.stack([r[:, 0], r[:, 1] - o, r[:, 2]], axis=1)
+    return o, ds
+
+
+def corners(r, h, EA, EI):
+    """The kinks' string corners and their elements' stress-free lengths: ``r`` (n, 3, 3)
+    with the middle node moved to ``C = N − o``, and ``h + δs`` (n, 2) (``ℓ_r`` capped at
+    ``min(h)/CAP_RATIO``, as the term does)."""
+    o, ds = _corner(r, h, EA, EI, h.min(axis=1) / CAP_RATIO)
+    out = np.array(r, float, copy=True)
+    out[:, 1] -= o
+    return out, h + ds[:, None]
+
+
+def corner_offsets(r, h, EA, EI, cap):
+    """The rod node's offset from the string corner, ``o = N − C`` (n, 3), for the kinks'
+    positions ``r`` (n, 3, 3: the node before, the node, the node after), the elements'
+    stress-free lengths ``h`` (n, 2), axial stiffness ``EA`` (n,) and bending stiffness
+    ``EI`` (n,), ``ℓ_r`` at most ``cap`` (n,). Zero where an element is slack. Complex
+    inputs (complex step) are differentiated through."""
+    return _corner(r, h, EA, EI, cap)[0]
+
+
+def _residual(x, h, EA, EI, cap, tension_only, corrected: bool = True):
+    """The two elements' internal forces on their three nodes (n, 9), ``[−f0, f0 − f1,
+    f1]``: with ``corrected`` the elements run to the corner ``C = N − o(x)`` with their
+    stress-free lengths lengthened by ``δs`` (:func:`_corner`), and the node
+    takes the sum of their forces at the corner (the layer carries it to the rod's node:
+    no moment, the node is free to turn); without, the plain string's (what the UFL
+    forms assemble)."""
+    P0, N, P1 = x[:, 0], x[:, 1], x[:, 2]
+    if corrected:
+        o, ds = _corner(x, h, EA, EI, cap)
+        C, h = N - o, h + ds[:, None]
+    else:
+        C = N
+    d0, d1 = C - P0, P1 - C
+    L0, L1 = np.sqrt(_dot(d0, d0)), np.sqrt(_dot(d1, d1))
+    f0 = _tension(L0, h[:, 0], EA, tension_only)[:, None] * d0 / L0[:, None]
+    f1 = _tension(L1, h[:, 1], EA, tension_only)[:, None] * d1 / L1[:, None]
+    return np.stack([-f0, f0 - f1, f1], axis=1).reshape(len(x), 9)
+
+
+class JunctionCorners:
+    """The corner term of a network's kinks (the module's docstring). ``items``: each
+    kink's three local dof blocks (n, 3: before, node, after) on this rank, the kinks
+    whose node this rank owns; ``X`` their reference positions (n, 3, 3); ``h``, ``EA``,
+    ``EI``, ``cap`` as :func:`corner_offsets`; ``names`` the kinks' names."""
+
+    def __init__(self, blocks, X, h, EA, EI, cap, names, tension_only: bool = True):
+        self.blocks = np.asarray(blocks, np.int32).reshape(-1, 3)
+        self.X = np.asarray(X, float).reshape(-1, 3, 3)
+        self.h = np.asarray(h, float).reshape(-1, 2)
+        self.EA, self.EI = np.asarray(EA, float), np.asarray(EI, float)
+        self.cap = np.asarray(cap, float)
+        self.names = list(names)
+        self.tension_only = tension_only
+        self._flat = (3 * self.blocks[:, :, None] + np.arange(3, dtype=np.int32)
+                      ).reshape(-1, 9).astype(np.int32)
+
+    def __len__(self) -> int:
+        return len(self.blocks)
+
+    def positions(self, u_local: np.ndarray) -> np.ndarray:
+        """(n, 3, 3) the current positions from the displacement's local array (owned and
+        ghost entries, 3 per node)."""
+        return self.X + u_local[self._flat].reshape(-1, 3, 3)
+
+    def residual(self, u_local: np.ndarray) -> np.ndarray:
+        """(n, 9) the correction of the three nodes' rows: the corner's forces less the
+        plain string's, which the forms assemble."""
+        x = self.positions(u_local)
+        args = (self.h, self.EA, self.EI, self.cap, self.tension_only)
+        return _residual(x, *args) - _residual(x, *args, corrected=False)
+
+    def jacobian(self, u_local: np.ndarray) -> np.ndarray:
+        """(n, 9, 9) the derivative of :meth:`residual` (complex step over the nine
+        coordinates, in one batch: exact to round-off)."""
+        x = self.positions(u_local)
+        n = len(x)
+        if not n:
+            return np.zeros((0, 9, 9))
+        xs = np.repeat(x.reshape(n, 1, 9), 9, axis=1).astype(complex)  # (n, 9 dirs, 9)
+        xs[:, np.arange(9), np.arange(9)] += 1j * _STEP
+        xs = xs.reshape(9 * n, 3, 3)
+        rep = (lambda a: np.repeat(a, 9, axis=0))
+        args = (rep(self.h), rep(self.EA), rep(self.EI), rep(self.cap), self.tension_only)
+        col = _residual(xs, *args) - _residual(xs, *args, corrected=False)
+        return np.ascontiguousarray(np.transpose(col.imag.reshape(n, 9, 9) / _STEP, (0, 2, 1)))
+
+    def add_residual(self, arr: np.ndarray, u_local: np.ndarray) -> None:
+        """Add the correction into ``arr``, a vector's local form (owned and ghost entries,
+        before the ghosts are added to their owners)."""
+        if len(self):
+            np.add.at(arr, self._flat.ravel(), self.residual(u_local).ravel())
+
+    def add_jacobian(self, A, u_local: np.ndarray, fixed: np.ndarray | None = None) -> None:
+        """Add the correction's Jacobian into ``A`` (local indices, ADD; flushed before).
+        ``fixed``: unrolled local dofs whose rows and columns are left alone (Dirichlet rows
+        and columns a matrix assembled with its conditions has zeroed)."""
+        from petsc4py import PETSc
+
+        A.assemblyBegin(PETSc.Mat.AssemblyType.FLUSH)
+        A.assemblyEnd(PETSc.Mat.AssemblyType.FLUSH)
+        if not len(self):
+            return
+        K = self.jacobian(u_local)
+        if fixed is not None and fixed.size:
+            keep = ~np.isin(self._flat, fixed)
+            K = K * keep[:, :, None] * keep[:, None, :]
+        for rows, block in zip(self.blocks, K):  # blocked: AIJ and BAIJ alike
+            A.setValuesBlockedLocal(rows, rows, np.ascontiguousarray(block),
+                                    addv=PETSc.InsertMode.ADD)
+
+    def insert_pattern(self, pattern) -> None:
+        """Every item's 3 x 3 dof blocks into a sparsity pattern (blocked local indices)."""
+        for b in self.blocks:
+            pattern.insert(b, b)
+
+    def offsets(self, r: np.ndarray, rows) -> np.ndarray:
+        """(n, 3) the offsets ``o`` of the items ``rows`` at positions ``r``."""
+        return corner_offsets(r, self.h[rows], self.EA[rows], self.EI[rows], self.cap[rows])
+
+
+def create_matrix(model, form, mat_type: str | None = None):
+    """``form``'s matrix, with the blocks of the model's node terms in its sparsity
+    pattern (dolfinx's own matrix when it has none)."""
+    from dolfinx import cpp as dcpp
+    from dolfinx.fem import petsc as fpetsc
+
+    terms = model.node_terms
+    if not terms:
+        return fpetsc.create_matrix(form, mat_type) if mat_type else fpetsc.create_matrix(form)
+    V = form.function_spaces[0]
+    mesh = V.mesh
+    pattern = dcpp.fem.create_sparsity_pattern(
+        mesh.topology, [form.function_spaces[0].dofmap, form.function_spaces[1].dofmap],
+        set(form.integral_types))
+    for t in terms:
+        t.insert_pattern(pattern)
+    pattern.assemble()
+    return dcpp.la.petsc.create_matrix(mesh.comm, pattern, mat_type or "")
+
+
+def _local_array(model) -> np.ndarray:
+    return model.u.x.array
+
+
+def fixed_dofs(model) -> np.ndarray:
+    """The anchors' prescribed unrolled local dofs (the rows and columns a matrix
+    assembled with the model's conditions has zeroed)."""
+    parts = [np.asarray(a.flat_dofs, np.int64) for a in model.anchors]
+    return np.concatenate(parts) if parts else np.zeros(0, np.int64)
+
+
+def add_residual(model, arr: np.ndarray) -> None:
+    """Add the model's node terms to a residual's local form ``arr`` at ``model.u``."""
+    for t in model.node_terms:
+        t.add_residual(arr, _local_array(model))
+
+
+def add_jacobian(model, A, fixed: np.ndarray | None = None) -> None:
+    """Add the model's node terms' Jacobian at ``model.u`` into ``A`` (``fixed``: rows and
+    columns left alone, :meth:`JunctionCorners.add_jacobian`)."""
+    for t in model.node_terms:
+        t.add_jacobian(A, _local_array(model), fixed)
+
+
+def junction_terms(model) -> tuple:
+    """The network's corner term (:class:`JunctionCorners`) at every kink
+    (:func:`cablefem.kinks.network_kinks` with ``"all"``, whatever ``network.kinks``
+    reports) whose node this rank owns, on the default route (``solver.outer_correction
+    = "hinge"``); () at leading order, for a model without bending stiffness, or when no
+    kink is corrected on any rank. Kinks next to a virtual hinge's region are left out
+    (``model.junction_gaps`` names them)."""
+    from cablefem.kinks import network_kinks
+
+    model.junction_gaps = []
+    if model.case.solver.outer_correction != "hinge" or model.string_alone:
+        return ()
+    kinks = network_kinks(model, which="all", record=False)
+    region = set()
+    for hg in (model.hinges.items if model.hinges else ()):
+        region |= {int(e) for e in hg.elements[:hg.touched]}
+    line, geo = model.line, model.geometry
+    n_owned = model.V.dofmap.index_map.size_local
+    block = np.full(len(geo.points), -1, np.int64)
+    nodes = line.dof_nodes(model.V)
+    block[nodes] = np.arange(nodes.size)
+    owned = np.zeros(len(geo.points), bool)
+    owned[nodes[:n_owned]] = True
+    secs = model.case.network.sections
+    keep = []
+    model.corner_kinks = set()
+    for k in kinks:
+        if region & set(k.cells):
+            model.junction_gaps.append((k.name, "next to a virtual hinge's region"))
+            continue
+        model.corner_kinks.add(k.name)
+        if owned[k.node]:
+            if np.any(block[list(k.nodes)] < 0):
+                raise RuntimeError(f"kink {k.name}: its neighbours are not on the rank "
+                                   "that owns its node")
+            keep.append(k)
+    pts = np.asarray(geo.points, float)
+    h = np.array([k.h for k in keep], float).reshape(-1, 2)
+    term = JunctionCorners(
+        [block[list(k.nodes)] for k in keep], [pts[list(k.nodes)] for k in keep], h,
+        [secs[k.section].EA for k in keep], [secs[k.section].EI for k in keep],
+        h.min(axis=1) / CAP_RATIO, [k.name for k in keep], model.tension_only)
+    if model.comm.allreduce(len(term), op=_sum()) == 0:
+        return ()
+    return (term,)
+
+
+def _sum():
+    from mpi4py import MPI
+    return MPI.SUM
