@@ -255,8 +255,7 @@ class KinkMoments:
         damp = model.case.damping
         self.damping = (damp.model, float(damp.alpha), float(damp.beta))
         self._static = None  # rayleigh_k0: the static state's positions (first use)
-        #: the kinks whose elements run to the string's corner (a network's, on the
-        #: default route: cablefem.junctions), or None
+        #: the kinks whose elements run to the string corner (cablefem.junctions), or None
         names = model.corner_kinks
         self.corner = (np.array([k.name in names for k in self.kinks], bool)
                        if names else None)
@@ -349,8 +348,7 @@ class KinkMoments:
         element's share of it in proportion to its length. Also the elements' unit
         vectors ``e`` (n_kinks, 2, 3), along the cable (before -> node -> after)."""
         h = self.h
-        if self.corner is not None and self.corner.any():  # a network's corrected kinks:
-            # the elements run to the string's corner (cablefem.junctions)
+        if self.corner is not None and self.corner.any():  # to the string corners
             c, hc = corners(r[self.corner], h[self.corner], self.EA[self.corner],
                             self.EI[self.corner])
             r, h = np.array(r, float, copy=True), h.copy()
