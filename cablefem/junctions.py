@@ -41,7 +41,7 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = ["JunctionCorners", "corner_offsets", "corners", "create_matrix", "add_residual",
-           "add_jacobian", "junction_terms", "fixed_dofs", "CAP_RATIO"]
+           "add_jacobian", "junction_terms", "fixed_dofs", "CAP_RATIO", "REUSE"]
 
 #: ``ℓ_r`` is at most the shorter element (stress-free) over this (as a damper's offset:
 #: beyond it the offset feeds the mesh's zigzag)
@@ -54,16 +54,14 @@ _ITERATIONS = 16
 #: iterations (at most; fewer on long elements) the corner is converged to 1e-6 at
 #: h = 2.3 ℓ_r, to 1e-8 at h = 10 ℓ_r
 _EXTRAPOLATION = 0.5
+#: the term's Jacobian is reused until a node moved by this share of the shortest element
+REUSE = 1e-4
 _STEP = 1e-30  # the complex step
 
 
 def _dot(x, y):
     """Row-wise dot product without conjugation (complex-step safe)."""
     return np.sum(x * y, axis=-1)
-
-
-def _norm(x):
-    return np.sqrt(_dot(x, x))
 
 
 def _tension(length, h, EA, tension_only: bool):
@@ -73,42 +71,37 @@ def _tension(length, h, EA, tension_only: bool):
     return np.where(T.real > 0.0, T, 0.0) if tension_only else T
 
 
-def _layer(r, h, EA, EI, cap):
-    """The pieces of the offset: the unit vectors ``a``, ``b`` from the node along the
-    chords, ``ℓ_r`` (capped; 0 where an element is slack) and ``β = T/EA`` of the mean
-    tension."""
-    d0, d1 = r[:, 0] - r[:, 1], r[:, 2] - r[:, 1]
-    L0, L1 = np.sqrt(_dot(d0, d0)), np.sqrt(_dot(d1, d1))
-    T0 = _tension(L0, h[:, 0], EA, True)
-    T1 = _tension(L1, h[:, 1], EA, True)
-    T = 0.5 * (T0 + T1)
-    taut = (T0.real > 0.0) & (T1.real > 0.0)
-    Ts = np.where(taut, T, 1.0)
-    ell = np.sqrt(EI / Ts) * np.sqrt(1.0 + Ts / EA)
-    ell = np.where(taut, np.where(ell.real > cap, cap, ell), 0.0)
-    return d0 / L0[:, None], d1 / L1[:, None], ell, Ts / EA
-
-
 def _corner(r, h, EA, EI, cap):
     """``(o, δs)``: the offset :func:`corner_offsets` and the stress-free length each of
     the two elements gains when it runs to the corner instead of the layer's virtual hinge
     (its hinge removes ``σ_h``; the corner path is longer by ``h/cos φ``)."""
     # the chords from the corner itself and the tension of the lengthened elements: o and
     # δs from the node's chords, then from the corner and lengths they give, to a fixed
-    # point (the map contracts by about ℓ_r/h ≤ 1/CAP_RATIO). The node's chords alone
-    # make o low by a relative ℓ_r/h (10 % on the saddle net), and the elements' own
-    # stress-free lengths raise T by EA δs/h (on fine meshes as much as T itself)
-    c, ds, o = r, 0.0, 0.0
+    # point. The node's chords alone make o low by a relative ℓ_r/h (10 % on the saddle
+    # net), and the elements' own stress-free lengths raise T by EA δs/h (on fine meshes
+    # as much as T itself)
+    ends = r[:, 0::2]  # (n, 2, 3) the nodes before and after
+    N = r[:, 1]
+    o = np.zeros_like(N)
+    ds = np.zeros(len(r), dtype=r.dtype)
     count = _ITERATIONS
+    EAn = EA[:, None]
     for it in range(_ITERATIONS):
         if it == count:
             break
-        a, b, ell, beta = _layer(c, h + np.reshape(ds, (-1, 1)), EA, EI, cap)
-        s = a + b
+        d = ends - (N - o)[:, None, :]  # the chords from the corner
+        L = np.sqrt(np.einsum("ijk,ijk->ij", d, d))
+        T2 = EAn * (L / (h + ds[:, None]) - 1.0)  # the two elements' tensions
+        taut = (T2.real > 0.0).all(axis=1)
+        T = np.where(taut, 0.5 * T2.sum(axis=1), 1.0)
+        beta = T / EA
+        ell = np.sqrt(EI / T * (1.0 + beta))
+        ell = np.where(taut, np.where(ell.real > cap, cap, ell), 0.0)
+        s = np.einsum("ijk,ij->ik", d, 1.0 / L)  # a + b, the unit chords' sum
         # extrapolated: across the chords the map's derivative is about +q, q = ℓ_r (1/L0
-        # + 1/L1)/2 ≤ 1/CAP_RATIO (a corner further out is sharper), so (F − q o)/(1 − q)
-        # contracts at second order
-        q = (0.5 * ell * (1.0 / _norm(c[:, 0] - c[:, 1]) + 1.0 / _norm(c[:, 2] - c[:, 1])))
+        # + 1/L1)/2 ≤ 1/CAP_RATIO (a corner further out is sharper), so (F − q o)/(1 − q),
+        # with a share of q (the lengths lag an iteration), contracts faster
+        q = 0.5 * ell * (1.0 / L).sum(axis=1)
         if it == 0 and len(q):  # as many as the largest q needs (1e-11; on the real part,
             # the same count for every complex step)
             rate = 0.7 * float(np.max(q.real))
@@ -119,8 +112,7 @@ def _corner(r, h, EA, EI, cap):
         # per side (angle φ = Δ/2, |s|² = 4 sin² φ): (D_n tan φ + D_t)/λ∞ of the far
         # field (docs/theory.md §6) to O(φ²): ℓ0 φ² (3 + 2β)/(4 (1 + β)^(3/2)), with
         # ℓ0 = ℓ_r/sqrt(1 + β)
-        ds = ell * _dot(s, s) * (3.0 + 2.0 * beta) / (16.0 * (1.0 + beta) ** 2)
-        c = np.stack([r[:, 0], r[:, 1] - o, r[:, 2]], axis=1)
+        ds = ell * np.einsum("ij,ij->i", s, s) * (3.0 + 2.0 * beta) / (16.0 * (1.0 + beta) ** 2)
     return o, ds
 
 
@@ -169,7 +161,8 @@ class JunctionCorners:
     whose node this rank owns; ``X`` their reference positions (n, 3, 3); ``h``, ``EA``,
     ``EI``, ``cap`` as :func:`corner_offsets`; ``names`` the kinks' names."""
 
-    def __init__(self, blocks, X, h, EA, EI, cap, names, tension_only: bool = True):
+    def __init__(self, blocks, X, h, EA, EI, cap, names, tension_only: bool = True,
+                 comm=None):
         self.blocks = np.asarray(blocks, np.int32).reshape(-1, 3)
         self.X = np.asarray(X, float).reshape(-1, 3, 3)
         self.h = np.asarray(h, float).reshape(-1, 2)
@@ -177,6 +170,9 @@ class JunctionCorners:
         self.cap = np.asarray(cap, float)
         self.names = list(names)
         self.tension_only = tension_only
+        self.comm = comm
+        self._K = self._xK = None  # the last Jacobian and where it was made
+        self._hmin = float(self.h.min()) if len(self.h) else 0.0
         self._flat = (3 * self.blocks[:, :, None] + np.arange(3, dtype=np.int32)
                       ).reshape(-1, 9).astype(np.int32)
 
@@ -224,15 +220,39 @@ class JunctionCorners:
 
         A.assemblyBegin(PETSc.Mat.AssemblyType.FLUSH)
         A.assemblyEnd(PETSc.Mat.AssemblyType.FLUSH)
+        x = self.positions(u_local)
+        # the term's Jacobian is a small part of the whole (~ℓ/h of the two elements'):
+        # made again only when a node moved by more than REUSE of the shortest element
+        # since (then its change, ~1e-3 of it, slows Newton by ~1e-6 per iteration);
+        # decided on all ranks alike, so that serial and parallel runs iterate alike
+        moved = self._K is None or (len(self) and bool(
+            np.max(np.abs(x - self._xK)) > REUSE * self._hmin))
+        if self.comm is not None and self.comm.size > 1:
+            from mpi4py import MPI
+            moved = self.comm.allreduce(moved, op=MPI.LOR)
+        if moved:
+            self._K, self._xK = self.jacobian(u_local), x
         if not len(self):
             return
-        K = self.jacobian(u_local)
+        K = self._K
         if fixed is not None and fixed.size:
             keep = ~np.isin(self._flat, fixed)
             K = K * keep[:, :, None] * keep[:, None, :]
         for rows, block in zip(self.blocks, K):  # blocked: AIJ and BAIJ alike
             A.setValuesBlockedLocal(rows, rows, np.ascontiguousarray(block),
                                     addv=PETSc.InsertMode.ADD)
+
+    def element_tensions(self, u_local: np.ndarray) -> np.ndarray:
+        """(n, 2) the tensions of each kink's two elements, run to the corner with their
+        lengthened stress-free lengths (the forces :meth:`residual` applies)."""
+        x = self.positions(u_local)
+        if not len(x):
+            return np.zeros((0, 2))
+        o, ds = _corner(x, self.h, self.EA, self.EI, self.cap)
+        d = x[:, 0::2] - (x[:, 1] - o)[:, None, :]
+        L = np.linalg.norm(d, axis=2)
+        T = self.EA[:, None] * (L / (self.h + ds[:, None]) - 1.0)
+        return np.maximum(T, 0.0) if self.tension_only else T
 
     def insert_pattern(self, pattern) -> None:
         """Every item's 3 x 3 dof blocks into a sparsity pattern (blocked local indices)."""
@@ -311,7 +331,6 @@ def junction_terms(model) -> tuple:
     block[nodes] = np.arange(nodes.size)
     owned = np.zeros(len(geo.points), bool)
     owned[nodes[:n_owned]] = True
-    secs = model.case.network.sections
     keep = []
     model.corner_kinks = set()
     for k in kinks:
@@ -324,15 +343,29 @@ def junction_terms(model) -> tuple:
                 raise RuntimeError(f"kink {k.name}: its neighbours are not on the rank "
                                    "that owns its node")
             keep.append(k)
-    pts = np.asarray(geo.points, float)
-    h = np.array([k.h for k in keep], float).reshape(-1, 2)
-    term = JunctionCorners(
-        [block[list(k.nodes)] for k in keep], [pts[list(k.nodes)] for k in keep], h,
-        [secs[k.section].EA for k in keep], [secs[k.section].EI for k in keep],
-        h.min(axis=1) / CAP_RATIO, [k.name for k in keep], model.tension_only)
-    if model.comm.allreduce(len(term), op=_sum()) == 0:
+    if model.comm.allreduce(len(keep), op=_sum()) == 0:
         return ()
+    term = _term(model, keep, block)
+    # every kink whose three nodes are here, owned or not: the cells' own tensions
+    # (:meth:`JunctionCorners.element_tensions`, the network's tension field)
+    seen = [k for k in kinks if k.name in model.corner_kinks and np.all(block[list(k.nodes)] >= 0)]
+    cell_of = np.full(len(geo.cells), -1, np.int64)
+    ref = line.reference_cells()
+    cell_of[ref] = np.arange(ref.size)
+    model.corner_report = (_term(model, seen, block),
+                           np.array([cell_of[list(k.cells)] for k in seen],
+                                    np.int64).reshape(-1, 2))
     return (term,)
+
+
+def _term(model, kinks, block) -> JunctionCorners:
+    secs = model.case.network.sections
+    pts = np.asarray(model.geometry.points, float)
+    h = np.array([k.h for k in kinks], float).reshape(-1, 2)
+    return JunctionCorners(
+        [block[list(k.nodes)] for k in kinks], [pts[list(k.nodes)] for k in kinks], h,
+        [secs[k.section].EA for k in kinks], [secs[k.section].EI for k in kinks],
+        h.min(axis=1) / CAP_RATIO, [k.name for k in kinks], model.tension_only, model.comm)
 
 
 def _sum():

@@ -370,6 +370,30 @@ class NetworkModel(CableModel):
         self.node_terms = junction_terms(self)
         super().compile()
 
+    #: the corner term on every kink whose nodes are on this rank, and the local cells of
+    #: its two elements (cablefem.junctions): the tension field's values there
+    corner_report = None
+
+    def tension_field(self, name: str = "tension") -> fem.Function:
+        """The cells' tensions; a corrected kink's two elements carry the tension of the
+        string run to its corner (:mod:`cablefem.junctions`), not the chord to the node."""
+        f = super().tension_field(name)
+        if self.corner_report is not None and len(self.corner_report[0]):
+            term, cells = self.corner_report
+            f.x.array[self.W.dofmap.list.array[cells.ravel()]] = \
+                term.element_tensions(self.u.x.array).ravel()
+        return f
+
+    def strain_field(self, name: str = "strain") -> fem.Function:
+        """The cells' strains, ``T/EA`` on a corrected kink's elements (as
+        :meth:`tension_field`)."""
+        f = super().strain_field(name)
+        if self.corner_report is not None and len(self.corner_report[0]):
+            term, cells = self.corner_report
+            T = term.element_tensions(self.u.x.array)
+            f.x.array[self.W.dofmap.list.array[cells.ravel()]] = (T / term.EA[:, None]).ravel()
+        return f
+
     def cable_cells(self) -> np.ndarray:
         n_owned = self.mesh.topology.index_map(1).size_local
         return self.geometry.is_cable[self.cell_index[:n_owned]]
