@@ -154,7 +154,44 @@ def _kinks(b: Built, h: Histories, start: float | None, warnings: Warnings) -> d
                          "overlaps a neighbouring kink or anchor): see valid in kinks.csv")
     if not b.kind.resolves_layers:  # the rod resolves its layers
         _damper_offsets(b, kinks, h.kinks.kinks, warnings)
+        _corners(b, kinks, h.kinks.kinks, warnings)
     return kinks
+
+
+def _corners(b: Built, entries: dict, kinks, warnings: Warnings) -> None:
+    """A network's kinks: the share of the string corner's offset applied
+    (``corner_applied`` in each corrected kink's entry: 1, or ``CAP_RATIO`` elements per
+    ``ℓ_r`` over their length where they are shorter), a warning where it is partial, and
+    one naming the kinks left at the node (next to a virtual hinge's region)."""
+    from cablefem.junctions import CAP_RATIO
+
+    model = b.model
+    if model.corner_kinks:
+        secs = model.case.network.sections
+        partial = []
+        for k in kinks:
+            entry = entries.get(k.name)
+            if k.name not in model.corner_kinks or entry is None:
+                continue
+            T, ell = entry.get("static_tension", np.nan), entry.get("layer_length", np.nan)
+            ell_r = ell * (1.0 + T / secs[k.section].EA)  # sqrt(EI/T) sqrt(1 + T/EA)
+            applied = min(1.0, min(k.h) / CAP_RATIO / ell_r) if ell_r > 0 else 1.0
+            entry["corner_applied"] = float(applied)
+            if applied < 1.0:
+                partial.append((applied, k.name))
+        if partial:
+            share, name = min(partial)
+            warnings.add(f"kinks.{name}", f"{len(partial)} kink(s) with elements shorter "
+                         f"than {CAP_RATIO:g} layer lengths: the cables there meet "
+                         f"{100 * (1 - share):.2g} % (the most) short of the rod's node, "
+                         "a first-order error of that share of the junction's effect on "
+                         "the anchors' angles and the frequencies (corner_applied in "
+                         "summary.json; docs/kinks.md): coarser elements there apply it")
+    if model.junction_gaps:
+        name, why = model.junction_gaps[0]
+        warnings.add("kinks", f"{len(model.junction_gaps)} kink(s) where the cables meet at "
+                     f"the string's corner, not at the rod's node (e.g. {name}: {why}): "
+                     "a first-order error there (docs/kinks.md)")
 
 
 def _damper_offsets(b: Built, entries: dict, kinks, warnings: Warnings) -> None:
@@ -164,6 +201,7 @@ def _damper_offsets(b: Built, entries: dict, kinks, warnings: Warnings) -> None:
     damper kink's estimate of the error that makes (``damper_offset_estimate`` in its
     summary entry) and warn where it exceeds :data:`DAMPER_OFFSET_WARN`."""
     from cablefem.dampers import MESH_RATIO, applied_offset
+    from cablefem.junctions import CAP_RATIO
     from cablefem.kinks import damper_offset_estimate
 
     model = b.model
@@ -172,7 +210,9 @@ def _damper_offsets(b: Built, entries: dict, kinks, warnings: Warnings) -> None:
     for k in kinks:
         entry = entries.get(k.name, {})
         ell = entry.get("layer_length", float("nan"))
-        corrected = applied_offset(ell, min(k.h)) if applies else 0.0
+        corrected = (applied_offset(ell, min(k.h)) if applies else
+                     # a network's corrected kink: its node is the rod's (cablefem.junctions)
+                     min(ell, min(k.h) / CAP_RATIO) if k.name in model.corner_kinks else 0.0)
         est = damper_offset_estimate(k, ell, corrected)
         if est is None:
             continue
