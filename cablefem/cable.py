@@ -111,6 +111,8 @@ class CableModel:
     #: it leaves out (cablefem.junctions)
     corner_kinks: frozenset = frozenset()
     junction_gaps: tuple = ()
+    #: a network's kinks' offsets at the static state (cablefem.junctions.junction_state)
+    junction_offsets: dict = {}
     builders = STRING  #: what the model is built from (cablefem.contract.Builders)
 
     def __init__(self, comm: MPI.Comm, description: CableDescription, prefix: str = "cable_"):
@@ -198,6 +200,12 @@ class CableModel:
     def initial_guess(self) -> np.ndarray:
         """Nodal start of statics (n, bs): the elastic catenary through the anchors."""
         return self.initial_shape - self.geometry.points
+
+    def anchor_junction_offset(self, name: str) -> float:
+        """The rod node offsets the string leaves at the far end of anchor ``name``'s span
+        (a network's junctions, :meth:`cablefem.network.NetworkModel.
+        anchor_junction_offset`): none on a single cable, m."""
+        return 0.0
 
     def anchor_span(self, name: str) -> float:
         """The length clamped anchor ``name``'s layer is measured against (its validity

@@ -26,6 +26,7 @@ CAPABILITIES: dict[str, Any] = {
     "law": None, "static_stages": None, "static_options": {}, "ramp_weight": False,
     "damper_s": (), "damper_nodes": (), "kink_gaps": (), "kink_offsets": True,
     "node_terms": (), "corner_kinks": frozenset(), "junction_gaps": (),
+    "junction_offsets": {},
 }
 
 
@@ -104,6 +105,7 @@ class LineModel(Protocol):
     node_terms: tuple  #: terms assembled outside UFL (cablefem.junctions)
     corner_kinks: frozenset  #: the kinks the network's corner term corrects
     junction_gaps: tuple  #: (kink, why) of those it leaves out
+    junction_offsets: dict  #: the kinks' offsets at the static state
     builders: Builders  #: what the model was built from
 
     # -- compiled forms (read-only, derived from the terms)
@@ -130,6 +132,7 @@ class LineModel(Protocol):
     def output_fields(self) -> list: ...
     def displacement_part(self, f, name: str) -> Any: ...
     def anchor_span(self, name: str) -> float: ...
+    def anchor_junction_offset(self, name: str) -> float: ...
     def applies_damper_offsets(self) -> bool: ...
     def section_field(self, name: str, value) -> Any: ...
     def bending_vertices(self) -> tuple: ...

@@ -41,7 +41,8 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = ["JunctionCorners", "corner_offsets", "corners", "create_matrix", "add_residual",
-           "add_jacobian", "junction_terms", "fixed_dofs", "CAP_RATIO", "REUSE"]
+           "add_jacobian", "junction_terms", "fixed_dofs", "junction_state", "CAP_RATIO",
+           "REUSE"]
 
 #: ``ℓ_r`` is at most the shorter element (stress-free) over this (as a damper's offset:
 #: beyond it the offset feeds the mesh's zigzag)
@@ -366,6 +367,50 @@ def _term(model, kinks, block) -> JunctionCorners:
         [block[list(k.nodes)] for k in kinks], [pts[list(k.nodes)] for k in kinks], h,
         [secs[k.section].EA for k in kinks], [secs[k.section].EI for k in kinks],
         h.min(axis=1) / CAP_RATIO, [k.name for k in kinks], model.tension_only, model.comm)
+
+
+def junction_state(model) -> None:
+    """Each kink's string-corner offset at the model's current state (collective), as
+    ``model.junction_offsets``: ``{node: [(kink, |o|, applied, Δ), ...]}`` on every rank,
+    ``|o| = ℓ_r sin(Δ/2)`` the whole offset, ``applied`` the share the corner term applies
+    (0 where it does not: leading order, next to a hinge's region), ``Δ`` the kink's angle
+    (for the anchors' error estimate, :meth:`cablefem.network.NetworkModel.
+    anchor_junction_offset`)."""
+    from cablefem.kinks import network_kinks
+
+    if model.string_alone:
+        model.junction_offsets = {}
+        return
+    kinks = network_kinks(model, which="all", record=False)
+    line, geo = model.line, model.geometry
+    n_owned = model.V.dofmap.index_map.size_local
+    nodes = line.dof_nodes(model.V)
+    block = np.full(len(geo.points), -1, np.int64)
+    block[nodes] = np.arange(nodes.size)
+    owned = np.zeros(len(geo.points), bool)
+    owned[nodes[:n_owned]] = True
+    mine = [k for k in kinks if owned[k.node] and np.all(block[list(k.nodes)] >= 0)]
+    out = []
+    if mine:
+        t = _term(model, mine, block)
+        x = t.positions(model.u.x.array)
+        o, _ = _corner(x, t.h, t.EA, t.EI, np.full(len(x), np.inf))  # the whole offset
+        C = x[:, 1] - o
+        a = x[:, 0] - C
+        b = x[:, 2] - C
+        cos = np.sum(a * b, axis=1) / np.linalg.norm(a, axis=1) / np.linalg.norm(b, axis=1)
+        delta = np.pi - np.arccos(np.clip(cos, -1.0, 1.0))
+        size = np.linalg.norm(o, axis=1)
+        for k, so, d, cap in zip(mine, size, delta, t.cap):
+            ell = so / max(np.sin(0.5 * d), 1e-300)
+            applied = (min(1.0, cap / ell) if ell > 0 else 1.0) \
+                if k.name in model.corner_kinks and model.node_terms else 0.0
+            out.append((k.node, k.name, float(so), float(applied), float(d)))
+    state: dict[int, list] = {}
+    for part in model.comm.allgather(out):
+        for node, name, so, applied, d in part:
+            state.setdefault(int(node), []).append((name, so, applied, d))
+    model.junction_offsets = state
 
 
 def _sum():

@@ -101,7 +101,7 @@ def error_estimate(delta: np.ndarray, tension: np.ndarray, EI: float, EA: float,
                    moment: np.ndarray | None = None, static_moment: float | None = None,
                    mass: float | None = None, resonant_omega: float | None = None,
                    resonant_shift: float | None = None,
-                   discretisation: float | None = None) -> np.ndarray:
+                   discretisation: float | None = None, junction: float = 0.0) -> np.ndarray:
     """Estimated relative error of the anchor moment (docs/theory.md §5), per row.
 
     ``e_outer = HINGED_ENDS h / (lambda l)`` (``lambda = 1 + T/EA``: the stretched
@@ -129,8 +129,11 @@ def error_estimate(delta: np.ndarray, tension: np.ndarray, EI: float, EA: float,
     ``discretisation``: the resonant mode's signed frequency error from the string's own
     mesh (:func:`cablefem.discretisation.frequency_error`). The two are one frequency
     error of the mode, with signs (:func:`resonant_frequency_error`): its size is amplified,
-    not the sum of their sizes. The estimate is at most 1: an error of the size of the
-    moment itself (a history whose phase is not determined).
+    not the sum of their sizes. ``junction``: the normal offset (m) the string leaves at the
+    span's far end (a network's kinks, :meth:`cablefem.network.NetworkModel.
+    anchor_junction_offset`), which turns the anchor's angle by ``junction/l``: the
+    moment's relative error ``junction / (2 l tan(Delta/2))``. The estimate is at most 1:
+    an error of the size of the moment itself (a history whose phase is not determined).
     """
     h, _ = asymptotics.virtual_hinge(delta, tension, EI, EA)
     with np.errstate(invalid="ignore"):
@@ -146,6 +149,8 @@ def error_estimate(delta: np.ndarray, tension: np.ndarray, EI: float, EA: float,
                                                     resonant_shift, discretisation)) * dyn
         if period_ratio is not None:
             e = e + np.nan_to_num(np.asarray(period_ratio, float) ** 2, nan=0.0)
+        if junction and length:
+            e = e + junction / (2.0 * length * np.tan(0.5 * np.asarray(delta, float)))
     return np.minimum(e, 1.0)
 
 
@@ -167,7 +172,8 @@ def anchor_moments(forces: np.ndarray, direction: np.ndarray, EI: float, EA: flo
                    static_moment: float | None = None,
                    resonant_omega: float | None = None,
                    resonant_shift: float | None = None,
-                   discretisation: float | None = None) -> dict[str, np.ndarray]:
+                   discretisation: float | None = None, junction: float = 0.0
+                   ) -> dict[str, np.ndarray]:
     """Anchor moment columns for one clamped anchor over ``n`` times.
 
     Rows with ``delta`` above :data:`MAX_ANCHOR_ANGLE` are invalid; ``invalid_reason``
@@ -187,7 +193,8 @@ def anchor_moments(forces: np.ndarray, direction: np.ndarray, EI: float, EA: flo
         ``resonant_omega`` the resonant mode's circular frequency (its span-bending
         frequency error is amplified too; None when the outer problem bends) and
         ``resonant_shift`` that error measured on the mode (None: the taut beam's);
-        ``discretisation`` its frequency error from the mesh and the time step.
+        ``discretisation`` its frequency error from the mesh and the time step;
+        ``junction`` the offset a network leaves at the span's far end, m.
     """
     N = np.atleast_2d(np.asarray(forces, float))
     qs = (mass, omega) if omega else None
@@ -224,7 +231,7 @@ def anchor_moments(forces: np.ndarray, direction: np.ndarray, EI: float, EA: flo
                                              lay.period_ratio, outer_order, amplification,
                                              np.linalg.norm(M, axis=1), static_moment,
                                              mass, resonant_omega, resonant_shift,
-                                             discretisation),
+                                             discretisation, junction),
             "invalid_reason": reason, "tension": lay.tension, "normal": lay.normal,
             "slack": lay.slack}
 
@@ -296,6 +303,8 @@ class ClampedAnchor:
     diameter: float | None = None  #: m, the fluid's diameter there (buoyancy; None: none)
     #: m, the span its layer is measured against (None: the cable's length)
     length: float | None = None
+    #: m, the rod node offsets the string leaves at the span's far end (a network's)
+    junction: float = 0.0
 
     def acceleration(self, times: np.ndarray) -> np.ndarray:
         """(n, 3) acceleration of the anchor at ``times``, m/s²."""
@@ -354,7 +363,8 @@ class AnchorMoments:
         clamped = [ClampedAnchor(a.name, i, np.asarray(a.direction, float), a.section.EI,
                                  a.section.EA, a.section.mass, a.motion,
                                  None if fluid is None else fluid.diameter_on(a.section),
-                                 model.anchor_span(a.name))
+                                 model.anchor_span(a.name),
+                                 model.anchor_junction_offset(a.name))
                    for i, a in enumerate(model.anchors) if a.kind == "clamped"]
         loads = [(np.asarray(ld.value, float), ld.time) for _, ld in model.loads]
         order = 1 if model.hinges else 0
@@ -413,7 +423,7 @@ class AnchorMoments:
                               self.length if a.length is None else a.length, self.omega,
                               self.form, self.outer_order, self.amplification,
                               self.static_moments.get(name), self.resonant_omega,
-                              self.resonant_shift, self.discretisation)
+                              self.resonant_shift, self.discretisation, a.junction)
 
     def compute(self, times: np.ndarray, forces) -> dict[str, dict[str, np.ndarray]]:
         """Columns of every clamped anchor: ``{name: {column: (n,) array}}``. ``forces``:

@@ -531,5 +531,17 @@ class NetworkModel(CableModel):
         chain, _ = self.chain(self.geometry.anchor_nodes[name])
         return float(np.sum(self.geometry.cell_lengths[chain]))
 
+    def anchor_junction_offset(self, name: str) -> float:
+        """What the string leaves of the rod's node offsets at the far end of clamped
+        anchor ``name``'s chain (:meth:`chain`), m: at every kink there the part of
+        ``|o| = ℓ_r sin(Δ/2)`` its corner does not apply, ``(1 − applied) |o|``, plus
+        ``applied |o| Δ²/4``, the small-angle form's own error (docs/theory.md §6.3);
+        from the static state (:func:`cablefem.junctions.junction_state`). A normal shift
+        of the chain's far end by that much turns the anchor's angle by it over the span
+        (:func:`cablefem.moments.error_estimate`)."""
+        _, far = self.chain(self.geometry.anchor_nodes[name])
+        return float(sum(so * ((1.0 - ap) + ap * d * d / 4.0)
+                         for _, so, ap, d in self.junction_offsets.get(int(far), ())))
+
     def item_nodes(self, item) -> list[int]:
         return [int(k) for k in self.geometry.net.vertex_groups[item.s]]

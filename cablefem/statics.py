@@ -303,6 +303,8 @@ class StaticProblem:
             finally:
                 hooks.destroy()
         model.u_static.x.array[:] = model.u.x.array
+        if model.is_network and not model.is_beam:  # the kinks' offsets, for the estimates
+            junctions.junction_state(model)
         T = model.tension_field()
         n_owned = model.mesh.topology.index_map(1).size_local
         T_cab = T.x.array[:n_owned][model.cable_cells()]  # a network's dampers: no tension

@@ -37,7 +37,8 @@ def static_anchor_entries(model, static, columns, form: str, kind: str) -> dict[
                                 a.section.mass, np.zeros((1, 3)),
                                 section_load(columns, model.case, 0.0, a.section),
                                 model.anchor_span(a.name),
-                                None, form, 1 if model.hinges else 0)
+                                None, form, 1 if model.hinges else 0,
+                                junction=model.anchor_junction_offset(a.name))
             if kind == "beam":  # the rod's own; the composite with the beam's force beside
                 entry["static_moment_composite"] = float(st["moment"][0])
                 st = rod_moment_columns(st, F[None, 3:6], a.direction)
