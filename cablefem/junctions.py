@@ -103,11 +103,11 @@ def _corner(r, h, EA, EI, cap):
         # + 1/L1)/2 ≤ 1/CAP_RATIO (a corner further out is sharper), so (F − q o)/(1 − q),
         # with a share of q (the lengths lag an iteration), contracts faster
         q = 0.5 * ell * (1.0 / L).sum(axis=1)
-        if it == 0 and len(q):  # as many as the largest q needs (1e-11; on the real part,
+        if it == 0 and len(q):  # as many as the largest q needs (1e-10; on the real part,
             # the same count for every complex step)
             rate = 0.7 * float(np.max(q.real))
             count = _ITERATIONS if rate >= 0.5 else int(
-                np.clip(np.ceil(np.log(1e-11) / np.log(max(rate, 1e-3))), 2, _ITERATIONS))
+                np.clip(np.ceil(np.log(1e-10) / np.log(max(rate, 1e-3))), 2, _ITERATIONS))
         q = _EXTRAPOLATION * q
         o = ((0.5 * ell)[:, None] * s - q[:, None] * o) / (1.0 - q)[:, None]
         # per side (angle φ = Δ/2, |s|² = 4 sin² φ): (D_n tan φ + D_t)/λ∞ of the far
