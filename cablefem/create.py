@@ -188,10 +188,15 @@ def model_from_case(comm: MPI.Comm, case, *, model: str = "string", refine: floa
     """The model of a case (a :class:`cablefem.case.Case`, itself a description) built as
     the string (:class:`cablefem.cable.CableModel`, a :class:`cablefem.network.NetworkModel`
     for a network) or, with ``model="beam"``, the reference rod
-    (:class:`cablefem.rod.BeamModel`, mesh density scaled by ``refine``). Collective on
+    (:class:`cablefem.rod.BeamModel`; a network's: :class:`cablefem.rod_network.
+    NetworkRodModel`; mesh density scaled by ``refine``). Collective on
     ``comm``."""
     if model not in ("string", "beam"):
         raise ValueError(f"model must be 'string' or 'beam', got {model!r}")
+    if model == "beam" and case.network is not None:
+        from cablefem.rod_network import NetworkRodModel
+
+        return NetworkRodModel(comm, case, refine=refine)
     if model == "beam":
         from cablefem.rod import BeamModel
 

@@ -486,7 +486,7 @@ def _network_keys() -> dict:
         "number", None, "m", "Hydrodynamic diameter D of every cable, > 0; default: each "
         "cable's sections.diameter (required then for every section a cable uses).")})
     keys["seabed"] = c["seabed"]
-    for name in ("damping", "dynamics", "fatigue", "modal", "solver"):
+    for name in ("damping", "dynamics", "fatigue", "modal", "beam", "solver"):
         keys[name] = c[name]
     return keys
 
