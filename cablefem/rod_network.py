@@ -36,8 +36,7 @@ from cablefem.cable import CableModel
 from cablefem.contract import Builders
 from cablefem.errors import CaseError
 from cablefem.jit import quiet_compiler
-from cablefem.network import NetworkModel, network_anchors, network_coefficients, \
-    network_geometry
+from cablefem.network import NetworkModel, network_anchors, network_coefficients, network_geometry
 from cablefem.rod import POISSON, SHEAR_FACTOR, BeamModel, rod_bcs
 from cablefem.rod_kinematics import (
     cayley_from_rotation,
