@@ -30,6 +30,7 @@ from __future__ import annotations
 import numpy as np
 import ufl
 from dolfinx import fem
+from mpi4py import MPI
 from petsc4py import PETSc
 
 from cablefem.cable import CableModel
@@ -206,7 +207,11 @@ class NetworkRodModel(BeamModel, NetworkModel):
         self.Pi = psi * cc * dxr
         self._psi = psi
         F_int = ufl.derivative(self.Pi, u, du)
-        park = self._parking(dxr)
+        # parked rotations: a stiffness (GA) and a mass (the largest rhoI), so that
+        # their own frequencies, sqrt(GA/rhoI), lie with the rod's shear modes
+        GA, rhoI_max = float(self.GA.value), float(np.max(self.rhoI.x.array, initial=0.0))
+        rhoI_max = self.comm.allreduce(rhoI_max, op=MPI.MAX)
+        park = self._parking(self.u, GA, dxr)
         if park is not None:
             F_int = F_int + park
         pinned = [anc for anc in self.anchors if anc.kind == "pinned"]
@@ -216,6 +221,8 @@ class NetworkRodModel(BeamModel, NetworkModel):
         au = self.translational(a)
         F_inertia = cc * (self.m * p1_product(au, duu, t0, self.mesh)
                           + self.rhoI * rot_inertia) * dxr
+        if park is not None:
+            F_inertia = F_inertia + self._parking(a, rhoI_max, dxr)
         self.axial_strain, self.dx_rod = G3, dxr
         add_model_terms(self, F_int=F_int,
                         F_weight=cc * self.m * ufl.inner(self.gravity, duu) * dxr,
@@ -232,18 +239,19 @@ class NetworkRodModel(BeamModel, NetworkModel):
                                -ufl.inner(cc * self.m * self.gravity, self.translational(u))
                                * ufl.dx)
 
-    def _parking(self, dxr):
-        """A nodal spring ``k q_c·δq_c`` on every colour's parked nodes (``z_c = 1``),
+    def _parking(self, w, value, dxr):
+        """A nodal term ``k q_c·δq_c`` (``q_c`` colour c's vector of ``w``, ``k`` =
+        ``value``) on every colour's parked nodes (``z_c = 1``),
         integrated exactly as the trapezoidal rule does from the element's midpoint
         values: ``h [z q·δq + (h²/4)(z ∂q·∂δq + ∂z (q·∂δq + ∂q·δq))]`` is
         ``(h/2) Σ_ends z q·δq`` for P1 fields (``∂`` along the element)."""
-        k = fem.Constant(self.mesh, PETSc.ScalarType(self.force_scale))
+        k = fem.Constant(self.mesh, PETSc.ScalarType(value))
         h = ufl.CellVolume(self.mesh)
         out = None
         for c, z in enumerate(self.parked):
             if z is None:
                 continue
-            q, dq = _q(self.u, c), _q(self.du, c)
+            q, dq = _q(w, c), _q(self.du, c)
             dz = ufl.dot(ufl.grad(z), self.t0)
             gq, gdq = ufl.grad(q) * self.t0, ufl.grad(dq) * self.t0
             term = k * (z * ufl.dot(q, dq) + h * h / 4.0 * (

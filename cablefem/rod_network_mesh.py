@@ -164,8 +164,12 @@ def graded_network(model, geo, layer_elements: float, growth: float, span_elemen
         h_max = cable_length[cable[e]] / span_elements
         ends = {j: min(h_node[k], h_max) * layer_elements
                 for j, k in enumerate((a, b)) if np.isfinite(h_node[k])}
-        st = beam_stations(L, ends, layer_elements, growth, h_max) if ends else \
-            np.linspace(0.0, L, max(1, int(math.ceil(L / h_max - 1e-9))) + 1)
+        if L <= min(h_node[a], h_node[b], h_max):  # the size function's least value
+            st = np.array([0.0, L])  # fine enough: kept whole
+        elif ends:
+            st = beam_stations(L, ends, layer_elements, growth, h_max)
+        else:
+            st = np.linspace(0.0, L, int(math.ceil(L / h_max - 1e-9)) + 1)
         inner = st[1:-1] / L
         ids = [int(a)] + list(range(m, m + inner.size)) + [int(b)]
         m += inner.size
