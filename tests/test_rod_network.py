@@ -220,3 +220,30 @@ def test_compare_a_network_string_run_with_its_rod(mpi_tmp_path):
             for stat in ("steady_peak", "steady_rms"):
                 assert np.isfinite(entry[stat]["rel_diff"])
             assert np.isfinite(entry["history_error"]["value"])
+
+
+def test_create_network_rod_is_the_case_files_rod():
+    """create_network_rod builds the rod model_from_case builds from the same network
+    (the saddle case's arguments): the same graded mesh and colours (functions of the
+    mesh, the sections, pretensions and [beam] alone); a bad mesh option is refused by
+    name."""
+    from cablefem import create_network_rod
+    from cablefem.description import CableSpec
+
+    case = load_case(ROOT / "demos/saddle_2x2.toml")
+    a = model_from_case(comm, case, model="beam")
+    sec = case.network.sections["strand"]
+    b = create_network_rod(comm, ROOT / "meshes/saddle_2x2.msh", {"strand": sec},
+                           [Anchor("anchors_x", None), Anchor("anchors_y", None)],
+                           cables=[CableSpec("cables_x", "strand", 1e5),
+                                   CableSpec("cables_y", "strand", 1e5)],
+                           gravity=Gravity(9.81), point_loads=case.point_loads,
+                           damping=case.damping)
+    assert b.bs == a.bs == 9
+    np.testing.assert_array_equal(b.geometry.points, a.geometry.points)
+    np.testing.assert_array_equal(b.colour, a.colour)
+    with pytest.raises(Exception, match="layer_elements"):
+        create_network_rod(comm, ROOT / "meshes/saddle_2x2.msh", {"strand": sec},
+                           [Anchor("anchors_x", None), Anchor("anchors_y", None)],
+                           cables=[CableSpec("cables_x", "strand", 1e5)],
+                           layer_elements=0.1)
