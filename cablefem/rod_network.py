@@ -50,7 +50,7 @@ from cablefem.rod_network_mesh import cable_colours, cable_frames, graded_networ
 from cablefem.string_terms import add_model_terms
 
 __all__ = ["NetworkRodModel", "NETWORK_ROD", "network_rod_problems",
-           "network_rod_kink_moments"]
+           "network_rod_kink_moments", "rod_network_warnings"]
 
 
 def network_rod_problems(case) -> list[tuple[str, str]]:
@@ -74,12 +74,36 @@ def rod_network_geometry(model):
         model, geo, spec.layer_elements * r, 1.0 + (spec.growth - 1.0) / r,
         spec.span_elements * r)
     model.cable, model.colour, model.n_colours = cable_colours(geo)
+    model.warnings += rod_network_warnings(model, geo)
     model.bs = 3 + 3 * model.n_colours
     model.frames = cable_frames(geo, model.cable, model.case.gravity.direction)
     secs = model.case.network.sections
     EI = max(sec.EI for sec in secs.values())
     model.force_scale = max(model.force_scale, EI / geo.length ** 2)
     return geo, geo.points.copy()
+
+
+def rod_network_warnings(model, geo) -> list[tuple[str, str]]:
+    """What the network rod models otherwise than a user may expect: a cable with three
+    or more of its own elements at a node (one rod with a rigid joint there), and cables
+    without pretension (their clamps and junctions not graded: no layer length at the
+    pretension)."""
+    out = []
+    cells = np.asarray(geo.cells, np.int64)
+    mine = model.cable >= 0
+    pairs = np.concatenate([np.column_stack([cells[mine, j], model.cable[mine]])
+                            for j in (0, 1)])
+    _, counts = np.unique(pairs, axis=0, return_counts=True)
+    if np.any(counts > 2):
+        out.append(("cables", f"{int(np.sum(counts > 2))} node(s) where a cable group meets "
+                              "itself with three or more elements: the rod joins them "
+                              "rigidly there (one rod with a rigid joint)"))
+    slack = sorted(c.group for c in model.case.network.cables if not c.pretension > 0)
+    if slack:
+        out.append(("cables", f"groups {slack} have no pretension: the rod's mesh is not "
+                              "graded towards their clamps and junctions (no layer length "
+                              "at the pretension); check its convergence with --refine"))
+    return out
 
 
 def rod_network_coefficients(model) -> None:

@@ -247,3 +247,18 @@ def test_create_network_rod_is_the_case_files_rod():
                            [Anchor("anchors_x", None), Anchor("anchors_y", None)],
                            cables=[CableSpec("cables_x", "strand", 1e5)],
                            layer_elements=0.1)
+
+
+def test_a_cable_without_pretension_warns(mpi_tmp_path):
+    """A cable group without pretension has no layer length to grade the rod's mesh by
+    (ℓ = sqrt(EI/T0) is infinite): its elements at its clamps are the span's, and the model
+    says so (key ``cables``) instead of leaving the layer silently unresolved."""
+    mesh = _saddle(mpi_tmp_path / "one.msh", n=1, k=4)
+    d = {"title": "x", "network": {"mesh": mesh},
+         "sections": [{"name": "s", "EA": 2e8, "EI": 2e3, "mass": 10.0}],
+         "cables": [{"group": "cables_x", "section": "s", "pretension": 1e5},
+                    {"group": "cables_y", "section": "s", "pretension": 0.0}],
+         "gravity": {"g": 9.81}, "anchors": [{"name": "anchors_x"}, {"name": "anchors_y"}],
+         "beam": {"layer_elements": 4, "growth": 1.3, "span_elements": 20}}
+    model = model_from_case(comm, parse_case(d), model="beam")
+    assert any(k == "cables" and "cables_y" in m for k, m in model.warnings), model.warnings
