@@ -262,3 +262,18 @@ def test_a_cable_without_pretension_warns(mpi_tmp_path):
          "beam": {"layer_elements": 4, "growth": 1.3, "span_elements": 20}}
     model = model_from_case(comm, parse_case(d), model="beam")
     assert any(k == "cables" and "cables_y" in m for k, m in model.warnings), model.warnings
+
+
+def test_the_rod_solves_directly_at_every_size():
+    """Above LARGE_ABOVE unknowns the string reuses its factorisation (GMRES on an LU
+    refreshed every 10 Jacobians); the rod does not: its nearly rigid shear (GA = 1e5 T)
+    makes GMRES on a stale factorisation crawl (the 5 x 5 saddle rod: > 6 s a step against
+    0.8 s). The rod's options are a direct solve with a fresh factorisation every time."""
+    from cablefem.petsc_utils import LARGE_ABOVE, linear_solver_options
+
+    n = 10 * LARGE_ABOVE
+    string = linear_solver_options(n, 1)
+    rod = linear_solver_options(n, 1, reuse=False)
+    assert string["ksp_type"] == "gmres" and string["snes_lag_preconditioner"] == 10
+    assert rod["ksp_type"] == "preonly" and "snes_lag_preconditioner" not in rod
+    assert linear_solver_options(n, 2, reuse=False)["pc_type"] == "redundant"
