@@ -1,6 +1,7 @@
 """The reference rod on network meshes (``--model beam`` on a network, cablefem.rod_network):
 one cable is the single rod, the 2 x 2 saddle net against an independent corotational beam
-net (issue 34), the mesh's colours and grading, serial = 2 ranks."""
+net (issue 34, 4 s: statics and 4 modes on 8 856 unknowns), the mesh's colours and grading,
+serial = 2 ranks, compare on a network, the Python constructor."""
 
 from __future__ import annotations
 
@@ -114,7 +115,6 @@ REFERENCE = {"clamp_x": 117.71, "clamp_y": 117.72, "kink_x": 523.1, "kink_y": 44
              "omega": [15.262, 15.841, 16.193, 17.160]}
 
 
-@pytest.mark.slow
 def test_saddle_net_rod_matches_the_corotational_reference():
     """The issue's 2 x 2 saddle net (demos/saddle_2x2.toml: kinks of 0.0799 and 0.0575 rad
     at the crossings, clamp angles 0.0097 and 0.0075 rad on the string) on the default rod
