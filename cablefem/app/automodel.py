@@ -9,7 +9,8 @@ whose files replace the string's: the moments reported are the rod's. ``model_au
 ``summary.json`` says what was decided and why, the string's estimates and static moments,
 and the cost (both wall times). A case the rod cannot take (a network with dampers, a
 seabed, a fluid, a polyline geometry: :func:`cablefem.rod.rod_problems`) keeps the
-string's numbers and warns (``solver.model``) when the estimate is exceeded. A string run that fails is not retried.
+string's numbers and warns (``solver.model``) when the estimate is exceeded. A string
+run that fails is not retried.
 """
 
 from __future__ import annotations
