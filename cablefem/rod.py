@@ -156,7 +156,8 @@ def rod_axial_damping(model):
 # ----------------------------------------------------------------------------- the model
 def rod_problems(case) -> list[tuple[str, str]]:
     """Why the rod cannot run ``case`` (``[(key, reason)]``; empty when it can): it takes a
-    single cable with a straight stress-free reference, without seabed or fluid."""
+    single cable with a straight stress-free reference, without seabed or fluid (a network:
+    :func:`cablefem.rod_network.network_rod_problems`)."""
     if case.network is not None:  # the network rod (cablefem.rod_network)
         from cablefem.rod_network import network_rod_problems
 

@@ -21,8 +21,9 @@ two elements at the node share its rotation): its kink is the rod's own bending.
 Anchors: a clamp holds the displacement and its cable's rotation (``d3`` along the clamp
 direction, no twist); a pinned anchor the displacement, with the single rod's twist spring.
 The anchor moment is the reaction of the clamp's cable's rotation rows, as for one rod; a
-kink's moment (``kinks.csv``) the rod's element moments on each side of the node along its
-cable, extrapolated to the node and averaged (:func:`network_rod_kink_moments`).
+kink's moment (``kinks.csv``) the cable's internal moment at the node: the reaction of the
+node's rotation rows to the kink's first element (:func:`network_rod_kink_moments`). A
+network's dampers act between their nodes as in the string (their cells carry no rod).
 """
 
 from __future__ import annotations
@@ -60,8 +61,6 @@ def network_rod_problems(case) -> list[tuple[str, str]]:
         out.append(("seabed", "the beam model has no seabed contact"))
     if getattr(case, "fluid", None) is not None:
         out.append(("fluid", "the beam model has no fluid forces"))
-    if case.dampers:
-        out.append(("dampers", "the network rod takes no [[dampers]] (not implemented)"))
     return out
 
 

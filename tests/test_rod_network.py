@@ -277,3 +277,31 @@ def test_the_rod_solves_directly_at_every_size():
     assert string["ksp_type"] == "gmres" and string["snes_lag_preconditioner"] == 10
     assert rod["ksp_type"] == "preonly" and "snes_lag_preconditioner" not in rod
     assert linear_solver_options(n, 2, reuse=False)["pc_type"] == "redundant"
+
+
+def test_a_network_damper_on_the_rod(mpi_tmp_path):
+    """A network's damper cell on the rod: the taut pinned cable of tests/test_dampers.py
+    (T = 1e4 N, L = 10 m, 50 elements) with a grounded damper at a = 1 m, c at Krenk's
+    optimum for mode 1, EI = 1e-3 N m² (ℓ = 0.32 mm). The rod and the string damp mode 1
+    alike: the string's damper acts at the string's node, (ℓ/2)(1/a + 1/(L − a)) = 1.8e-4
+    (relative) from the rod's (docs/dampers.md), and the string's 50 elements put its
+    frequencies (π/50)²/12 = 3.3e-4 high; 5e-4 covers both. The mode across the damper's
+    plane stays undamped (1e-9)."""
+    from test_dampers import M, T, _tie_network
+
+    from cablefem.network import NetworkModel
+
+    n, a = 50, 5
+    c = np.sqrt(T * M) / (np.pi * a / n)
+    case = _tie_network(mpi_tmp_path / "tie.msh", True, c, 2e3, n, a, EI=1e-3)
+    got = {}
+    for name, model in (("string", NetworkModel(comm, case)),
+                        ("rod", model_from_case(comm, case, model="beam"))):
+        solve_static(model)
+        res = solve_modes(model, 2)
+        got[name] = (res.omegas, res.damping_ratios)
+    (w_s, z_s), (w_r, z_r) = got["string"], got["rod"]
+    assert z_s[1] > 0.04  # damped: 4.6 %
+    assert z_r[1] == pytest.approx(z_s[1], rel=5e-4)
+    np.testing.assert_allclose(w_r, w_s, rtol=5e-4)
+    assert abs(z_r[0]) < 1e-9

@@ -394,8 +394,8 @@ CASE_KEYS: dict[str, KeyDoc | TableDoc] = {
             "computed). The rod ignores it."),
         "model": KeyDoc(
             "string", "string", "", "The route: 'string' (default) the string + "
-            "asymptotics | 'beam' the reference rod (single straight cables, or networks "
-            "without [[dampers]]; not with [seabed] or [fluid]) | 'auto' the string, then "
+            "asymptotics | 'beam' the reference rod (single straight cables or networks, "
+            "without [seabed] or [fluid]) | 'auto' the string, then "
             "the rod on the same case where "
             "the string's estimated moment error at a clamped anchor exceeds 2 % (the rod's "
             "numbers reported, model_auto in summary.json; docs/rod.md). '--model' "
