@@ -190,7 +190,8 @@ def _q(w, c):
 class NetworkRodModel(BeamModel, NetworkModel):
     """The reference rod of a network (module docstring): a
     :class:`~cablefem.network.NetworkModel`'s mesh, anchors and kinks with the rod's
-    physics (:class:`~cablefem.rod.BeamModel`)."""
+    physics (:class:`~cablefem.rod.BeamModel`: its soft-shear statics stages, outputs,
+    ``string.xdmf`` fields with the first colour's ``rotation``)."""
 
     builders = NETWORK_ROD
     is_network = True
@@ -317,19 +318,6 @@ class NetworkRodModel(BeamModel, NetworkModel):
                 "layer_lengths_pretension": {f"node{k}": ell
                                              for k, ell in self.layer_lengths.items()}}
 
-    def translational(self, f):
-        return ufl.as_vector([f[0], f[1], f[2]])
-
-    def static_stages(self):
-        """The single rod's soft-shear pre-solves (:meth:`BeamModel.static_stages`)."""
-        self.section_values.setdefault("GA", float(self.GA.value))
-        yield from BeamModel.static_stages(self)
-
-    def output_fields(self) -> list[fem.Function]:
-        """Displacement, velocity, the first colour's rotation (Cayley vector), tension,
-        axial strain and the element moment vector."""
-        return BeamModel.output_fields(self)
-
     def initial_guess(self) -> np.ndarray:
         """Nodal (n, bs): the mesh's positions; each cable's rotation at a node turns its
         ``E3`` onto the mean of its elements' directions there (a clamp's: the clamp's)."""
@@ -354,9 +342,6 @@ class NetworkRodModel(BeamModel, NetworkModel):
             if anc.kind == "clamped":
                 out[anc.node, anc.rot_offset: anc.rot_offset + 3] = anc.rotation
         return out
-
-    def anchor_span(self, name: str) -> float:
-        return NetworkModel.anchor_span(self, name)
 
 
 def _axial_damping(model):
