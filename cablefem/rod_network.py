@@ -318,6 +318,15 @@ class NetworkRodModel(BeamModel, NetworkModel):
                 "layer_lengths_pretension": {f"node{k}": ell
                                              for k, ell in self.layer_lengths.items()}}
 
+    def residual_floor(self, displaced: bool = False) -> float:
+        """The string's round-off floor (:meth:`CableModel.residual_floor`, from ``EA``)
+        scaled by ``GA/EA`` where the shear stiffness is the larger: a shear strain known
+        to ε carries a force ε GA. The fan of stays (GA/EA = 342) stalled at 7e-4 N, its
+        Newton's tolerance set by EA's floor (1.6e-5 N)."""
+        base = CableModel.residual_floor(self, displaced)
+        EA = self.comm.allreduce(float(np.max(self.EA.x.array, initial=0.0)), op=MPI.MAX)
+        return base * max(1.0, float(self.GA.value) / max(EA, 1e-300))
+
     def initial_guess(self) -> np.ndarray:
         """Nodal (n, bs): the mesh's positions; each cable's rotation at a node turns its
         ``E3`` onto the mean of its elements' directions there (a clamp's: the clamp's)."""
