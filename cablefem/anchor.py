@@ -70,6 +70,8 @@ class AnchorBC:
     comps: tuple = (0, 1, 2)  #: the components the anchor prescribes
     rotation: np.ndarray | None = None  #: beam: Cayley vector held by a clamp
     moment_map: np.ndarray | None = None  #: beam: reaction of the q rows -> moment
+    #: beam: the first of the anchor's rotation components (a network rod's cable colour)
+    rot_offset: int = 3
     offset: np.ndarray = field(default_factory=lambda: np.zeros(3))  #: string: where the
     #: node is prescribed relative to the anchor (a virtual hinge, cablefem.hinge), m
     #: a network's clamp a cable runs through, whose side this anchor is (cablefem.network)
@@ -99,10 +101,12 @@ class AnchorBC:
         val = getattr(self, kind)(t)
         if kind == "displacement":
             val = val + self.offset
-        if self.bs == 6:
-            rot = self.rotation if kind == "displacement" and self.rotation is not None \
-                else np.zeros(3)
-            val = np.concatenate([val, rot])
+        if self.bs > 3:  # a rod: its rotation (a network rod's: its cable's colour)
+            full = np.zeros(self.bs)
+            full[:3] = val
+            if kind == "displacement" and self.rotation is not None:
+                full[self.rot_offset:self.rot_offset + 3] = self.rotation
+            val = full
         return np.asarray(val)[self._layout()[1]]
 
     def displacement(self, t: float) -> np.ndarray:

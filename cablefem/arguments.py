@@ -367,7 +367,8 @@ def describe_network(mesh_file: str | os.PathLike, sections: dict[str, Section],
                      point_loads=(), damping: Damping | None = None, tension_only: bool = True,
                      outer_correction: str = "hinge", span_bending: bool | str = False,
                      petsc_options: dict | None = None, units: str = "SI",
-                     source: str = "<python>") -> CableDescription:
+                     source: str = "<python>", beam: BeamSpec | None = None
+                     ) -> CableDescription:
     """A checked description of a cable network (the arguments of
     :func:`cablefem.create_network`, which see); the mesh itself is read by the model.
 
@@ -381,6 +382,7 @@ def describe_network(mesh_file: str | os.PathLike, sections: dict[str, Section],
         tension_only, outer_correction, span_bending, petsc_options, units: As for
             :func:`cablefem.create_network`.
         source: Name of the network in the messages.
+        beam: The reference rod's mesh (:func:`cablefem.create_network_rod`), or None.
 
     Returns:
         The checked :class:`cablefem.description.CableDescription`.
@@ -416,6 +418,8 @@ def describe_network(mesh_file: str | os.PathLike, sections: dict[str, Section],
                     petsc_options={} if petsc_options is None else petsc_options,
                     network=True, span_bending=span_bending)
     anchor_list = _anchors(problems, anchors, network=True)
+    if beam is not None and not isinstance(beam, BeamSpec):
+        problems.append(("beam", f"expected a BeamSpec, got {show(beam)}"))
     names = [a.name for a in anchor_list]
     problems += [(f"anchors[{i}].name", f"duplicate anchor group {n!r}")
                  for i, n in enumerate(names) if n in names[:i]]
@@ -424,4 +428,4 @@ def describe_network(mesh_file: str | os.PathLike, sections: dict[str, Section],
     first = sections[cables[0].section]
     return CableDescription(section=first, anchors=anchor_list,
                             network=NetworkSpec(mesh, dict(sections), list(cables)),
-                            source=source, units=units, **parts)
+                            beam=beam or BeamSpec(), source=source, units=units, **parts)

@@ -1,6 +1,6 @@
 """Building models from Python objects: :func:`create_cable`, :func:`create_rod`,
-:func:`create_network` (plain functions, ``comm`` first, options keyword-only, as dolfinx's
-``create_*``). Each checks its arguments into a
+:func:`create_network`, :func:`create_network_rod` (plain functions, ``comm`` first,
+options keyword-only, as dolfinx's ``create_*``). Each checks its arguments into a
 :class:`cablefem.description.CableDescription` (every problem in one
 :class:`cablefem.errors.CaseError`, under the argument's name) and builds the model on it.
 ``docs/python-api.md`` shows them at work.
@@ -26,7 +26,8 @@ from cablefem.errors import CaseError
 from cablefem.properties import Section
 from cablefem.validation import number_problem
 
-__all__ = ["create_cable", "create_rod", "create_network", "model_from_case"]
+__all__ = ["create_cable", "create_rod", "create_network", "create_network_rod",
+           "model_from_case"]
 
 
 def create_cable(comm: MPI.Comm, anchors: list[Anchor], section: Section, *,
@@ -114,6 +115,13 @@ def create_rod(comm: MPI.Comm, anchors: list[Anchor], section: Section, *,
 
     prefix = options.pop("petsc_options_prefix", "cable_")
     source = options.pop("name", "<python>")
+    beam = _beam_spec(layer_elements, growth, span_elements, shear_stiffness, refine, source)
+    description = describe_cable(anchors, section, beam=beam, source=source, **options)
+    return BeamModel(comm, description, prefix, refine=refine)
+
+
+def _beam_spec(layer_elements, growth, span_elements, shear_stiffness, refine, source):
+    """The rod's :class:`BeamSpec`, its values and ``refine`` checked (CaseError)."""
     beam = BeamSpec(layer_elements, growth, span_elements, shear_stiffness)
     problems = []
     for key, value in (("layer_elements", layer_elements), ("growth", growth),
@@ -127,8 +135,7 @@ def create_rod(comm: MPI.Comm, anchors: list[Anchor], section: Section, *,
         problems.append(("refine", number_problem(refine, "", gt=0)))
     if problems:
         raise CaseError(problems, source)
-    description = describe_cable(anchors, section, beam=beam, source=source, **options)
-    return BeamModel(comm, description, prefix, refine=refine)
+    return beam
 
 
 def create_network(comm: MPI.Comm, mesh_file: str | os.PathLike, sections: dict[str, Section],
@@ -176,6 +183,35 @@ def create_network(comm: MPI.Comm, mesh_file: str | os.PathLike, sections: dict[
     return _named(NetworkModel, comm, description, petsc_options_prefix)
 
 
+def create_network_rod(comm: MPI.Comm, mesh_file: str | os.PathLike,
+                       sections: dict[str, Section], anchors: list[Anchor], *,
+                       cables: list[CableSpec], layer_elements: float = 8.0,
+                       growth: float = 1.1, span_elements: int = 100,
+                       shear_stiffness: float | None = None, refine: float = 1.0, **options):
+    """The reference rod of a network (:class:`cablefem.rod_network.NetworkRodModel`: each
+    cable a geometrically exact rod, junctions pinned ties, the mesh graded towards clamps
+    and junctions; ``docs/rod.md``).
+
+    Args:
+        comm, mesh_file, sections, anchors, cables: As for :func:`create_network`.
+        layer_elements, growth, span_elements, shear_stiffness, refine: As for
+            :func:`create_rod` (the grading also towards junctions and loaded nodes).
+        **options: The keyword arguments of :func:`create_network` (``tension_only``,
+            ``outer_correction`` and ``span_bending`` do not apply).
+
+    Raises:
+        CaseError: Every problem of the arguments, each under the argument's name.
+    """
+    from cablefem.rod_network import NetworkRodModel
+
+    prefix = options.pop("petsc_options_prefix", "cable_")
+    source = options.pop("name", "<python>")
+    beam = _beam_spec(layer_elements, growth, span_elements, shear_stiffness, refine, source)
+    description = describe_network(mesh_file, sections, anchors, cables=cables, beam=beam,
+                                   source=source, **options)
+    return NetworkRodModel(comm, description, prefix, refine=refine)
+
+
 def _named(cls, comm, description, prefix):
     if not isinstance(prefix, str):
         raise CaseError([("petsc_options_prefix", f"expected a string, got {prefix!r}")],
@@ -188,10 +224,15 @@ def model_from_case(comm: MPI.Comm, case, *, model: str = "string", refine: floa
     """The model of a case (a :class:`cablefem.case.Case`, itself a description) built as
     the string (:class:`cablefem.cable.CableModel`, a :class:`cablefem.network.NetworkModel`
     for a network) or, with ``model="beam"``, the reference rod
-    (:class:`cablefem.rod.BeamModel`, mesh density scaled by ``refine``). Collective on
+    (:class:`cablefem.rod.BeamModel`; a network's: :class:`cablefem.rod_network.
+    NetworkRodModel`; mesh density scaled by ``refine``). Collective on
     ``comm``."""
     if model not in ("string", "beam"):
         raise ValueError(f"model must be 'string' or 'beam', got {model!r}")
+    if model == "beam" and case.network is not None:
+        from cablefem.rod_network import NetworkRodModel
+
+        return NetworkRodModel(comm, case, refine=refine)
     if model == "beam":
         from cablefem.rod import BeamModel
 

@@ -130,7 +130,7 @@ def _make_ts(model, dt: float, rho_inf: float, history: SNESHistory,
                 # 1e-13 is converged
                 "snes_stol": 1e-13,
                 **linear_solver_options(model.bs * model.V.dofmap.index_map.size_global,
-                                        model.comm.size)}
+                                        model.comm.size, reuse=not model.is_beam)}
 
     n_owned = model.V.dofmap.index_map.size_local
     bc_rows = np.concatenate([a.flat_dofs for a in model.anchors]).astype(np.int32)

@@ -25,7 +25,8 @@ FORWARD, REVERSE = PETSc.ScatterMode.FORWARD, PETSc.ScatterMode.REVERSE
 LARGE_ABOVE = 20_000
 
 
-def linear_solver_options(n_dofs: int, comm_size: int = 1) -> dict[str, object]:
+def linear_solver_options(n_dofs: int, comm_size: int = 1, reuse: bool = True
+                          ) -> dict[str, object]:
     """The automatic linear solver of the time integrator's Newton steps.
 
     The Jacobian is a block matrix (``mat_type baij``, blocks of the node's 3 or 6
@@ -43,9 +44,13 @@ def linear_solver_options(n_dofs: int, comm_size: int = 1) -> dict[str, object]:
     ranks: forming the Schur complement costs 300 triangular solves), MUMPS with METIS or
     SCOTCH orderings (0.6-0.75 s). Override with ``-cable_mat_type``, ``-cable_ksp_type``,
     ``-cable_pc_type``, ``-cable_snes_lag_preconditioner``.
+
+    ``reuse=False`` (the rod): a direct solve at every size. The rod's nearly rigid shear
+    (``GA`` = 1e5 T) makes GMRES on a stale factorisation crawl: the 5 x 5 saddle net's rod
+    (34 425 dofs) took more than 6 s a step with the reused LU, 0.8 s with a fresh one.
     """
     opts: dict[str, object] = {"mat_type": "baij", **lu_options(comm_size)}
-    if n_dofs > LARGE_ABOVE:
+    if n_dofs > LARGE_ABOVE and reuse:
         opts.update(ksp_type="gmres", ksp_rtol=1e-12, ksp_max_it=500,
                     snes_lag_preconditioner=10, snes_lag_preconditioner_persists="true")
     return opts

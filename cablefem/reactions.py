@@ -60,7 +60,8 @@ class AnchorReactions:
         self._own = [(i, model.bs * int(anc.dofs[anc.dofs < n_owned][0]))
                      for i, anc in enumerate(model.anchors)
                      if np.any(anc.dofs < n_owned)]
-        self._local = np.zeros((len(model.anchors), model.bs))
+        #: force (and a rod's moment) per anchor
+        self._local = np.zeros((len(model.anchors), 6 if model.is_beam else model.bs))
         self._global = np.zeros_like(self._local)
         self.R = fpetsc.create_vector(model.f_dynamic)
         self.M = fpetsc.assemble_matrix(model.m_form, model.bcs, diagonal=1.0)
@@ -151,17 +152,17 @@ class AnchorReactions:
             m.a.x.array[:] = 0.0
             self._assemble()
             arr = self.R.array_r
-        bs = m.bs
         local = self._local
         local[:] = 0.0
         for i, row in self._own:
             anc = m.anchors[i]
-            np.negative(arr[row: row + bs], out=local[i])
+            np.negative(arr[row: row + 3], out=local[i, :3])
             if m.hinges:  # the layer's weight and inertia: the force at the real anchor
                 acc = anc.acceleration(t) if dynamic else np.zeros(3)
                 local[i, :3] += m.hinges.layer_force(i, acc)
-            if bs == 6:  # a rod: the rotation rows' reaction -> the moment (beam.py)
-                local[i, 3:] = anc.moment_map @ local[i, 3:]
+            if m.is_beam:  # a rod: its rotation rows' reaction -> the moment (rod.py)
+                off = row + anc.rot_offset
+                local[i, 3:] = -(anc.moment_map @ arr[off: off + 3])
         if m.comm.size == 1:
             return local.copy()
         m.comm.Allreduce(local, self._global, op=MPI.SUM)

@@ -156,9 +156,12 @@ def rod_axial_damping(model):
 # ----------------------------------------------------------------------------- the model
 def rod_problems(case) -> list[tuple[str, str]]:
     """Why the rod cannot run ``case`` (``[(key, reason)]``; empty when it can): it takes a
-    single cable with a straight stress-free reference, without seabed or fluid."""
-    if case.network is not None:
-        return [("network", "the beam model takes single cables, not networks")]
+    single cable with a straight stress-free reference, without seabed or fluid (a network:
+    :func:`cablefem.rod_network.network_rod_problems`)."""
+    if case.network is not None:  # the network rod (cablefem.rod_network)
+        from cablefem.rod_network import network_rod_problems
+
+        return network_rod_problems(case)
     if getattr(case, "seabed", None) is not None:
         return [("seabed", "the beam model has no seabed contact")]
     if getattr(case, "fluid", None) is not None:
@@ -329,6 +332,15 @@ class BeamModel(CableModel):
         super().__init__(comm, case, prefix)
         self.tension_only = False  # a rod carries compression (bending stiffness)
 
+    def mesh_record(self) -> dict:
+        """The rod's mesh for ``summary.json`` (``beam``): its shortest and longest
+        elements and the layer lengths it was graded to, by anchor."""
+        st = self.geometry.stations
+        return {"min_element": float(np.min(np.diff(st))),
+                "max_element": float(np.max(np.diff(st))),
+                "layer_lengths_catenary": {self.case.anchors[e].name: ell
+                                           for e, ell in self.layer_lengths.items()}}
+
     def set_time(self, t: float) -> None:
         changed = t != getattr(self, "_time", None)
         super().set_time(t)
@@ -407,7 +419,7 @@ class BeamModel(CableModel):
         self.moment_expr = fem.Expression(self._moment, self.W3.element.interpolation_points())
 
     def _part(self, f: fem.Function, comps: slice, out: fem.Function) -> fem.Function:
-        out.x.array[:] = f.x.array.reshape(-1, 6)[:, comps].reshape(-1)
+        out.x.array[:] = f.x.array.reshape(-1, self.bs)[:, comps].reshape(-1)
         return out
 
     def displacement_part(self, f: fem.Function, name: str) -> fem.Function:

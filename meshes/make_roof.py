@@ -5,7 +5,7 @@ carry the roof) and ``cables_y`` (hogging, they stabilise it) on
 ``z = h ((2y/L)^2 - (2x/L)^2)`` at the junctions (shared nodes), straight in between, so
 that with equal pretension in both families and no gravity the mesh is in equilibrium
 (the hypar's two curvatures are equal and opposite). Every cable ends at a clamped edge anchor: 0D groups
-``anchors_x`` and ``anchors_y``. ``n`` cables per family, ``k`` elements per bay.
+``anchors_x`` and ``anchors_y``; ``--load-node`` tags the first crossing as the 0D group ``load``. ``n`` cables per family, ``k`` elements per bay.
 Nodes: about ``2 n (n + 1) k``; degrees of freedom: three per node.
 
     python meshes/make_roof.py --n 5 --k 4 --out meshes/roof_small.msh
@@ -19,7 +19,7 @@ import meshio
 import numpy as np
 
 
-def roof(n: int, k: int, L: float = 40.0, h: float = 2.0):
+def roof(n: int, k: int, L: float = 40.0, h: float = 2.0, load_node: bool = False):
     ticks = np.linspace(-L / 2, L / 2, n + 2)  # cable positions incl. the edges
     n_fine = (n + 1) * k + 1  # stations along a cable
     z = lambda x, y: h * ((2 * y / L) ** 2 - (2 * x / L) ** 2)  # noqa: E731
@@ -60,12 +60,16 @@ def roof(n: int, k: int, L: float = 40.0, h: float = 2.0):
             anchors[tag] += [ids[0], ids[-1]]
     verts = anchors[1] + anchors[2]
     vtags = [10] * len(anchors[1]) + [20] * len(anchors[2])
+    field = {"cables_x": np.array([1, 1]), "cables_y": np.array([2, 1]),
+             "anchors_x": np.array([10, 0]), "anchors_y": np.array([20, 0])}
+    if load_node:  # the first crossing (first x cable, first y cable) as a point group
+        verts.append(index[(k, k)])
+        vtags.append(30)
+        field["load"] = np.array([30, 0])
     return meshio.Mesh(np.array(pts), [("line", np.array(cells)), ("vertex", np.array(verts)[:, None])],
                        cell_data={"gmsh:physical": [np.array(tags), np.array(vtags)],
                                   "gmsh:geometrical": [np.array(tags), np.array(vtags)]},
-                       field_data={"cables_x": np.array([1, 1]), "cables_y": np.array([2, 1]),
-                                   "anchors_x": np.array([10, 0]),
-                                   "anchors_y": np.array([20, 0])})
+                       field_data=field)
 
 
 if __name__ == "__main__":
@@ -74,9 +78,11 @@ if __name__ == "__main__":
     ap.add_argument("--k", type=int, default=4, help="elements per bay")
     ap.add_argument("--L", type=float, default=40.0, help="plan size, m")
     ap.add_argument("--h", type=float, default=2.0, help="saddle height, m")
+    ap.add_argument("--load-node", action="store_true",
+                    help="tag the first crossing as the 0D group 'load' (a point load there)")
     ap.add_argument("--out", default="meshes/roof_small.msh")
     a = ap.parse_args()
-    m = roof(a.n, a.k, a.L, a.h)
+    m = roof(a.n, a.k, a.L, a.h, a.load_node)
     meshio.write(a.out, m, file_format="gmsh22", binary=False)
     print(f"{a.out}: {len(m.points)} nodes, {len(m.cells[0].data)} cells, "
           f"{3 * len(m.points)} dofs")

@@ -7,9 +7,10 @@ The string + asymptotics runs first. Where the estimated moment error
 in ``summary.json``), the same case runs again as the reference rod (:mod:`cablefem.rod`),
 whose files replace the string's: the moments reported are the rod's. ``model_auto`` in
 ``summary.json`` says what was decided and why, the string's estimates and static moments,
-and the cost (both wall times). A case the rod cannot take (a network, a seabed, a fluid, a
-polyline geometry: :func:`cablefem.rod.rod_problems`) keeps the string's numbers and warns
-(``solver.model``) when the estimate is exceeded. A string run that fails is not retried.
+and the cost (both wall times). A case the rod cannot take (a seabed, a fluid, a
+polyline geometry: :func:`cablefem.rod.rod_problems`) keeps the
+string's numbers and warns (``solver.model``) when the estimate is exceeded. A string
+run that fails is not retried.
 """
 
 from __future__ import annotations

@@ -162,12 +162,7 @@ def build(comm: MPI.Comm, case: Case, asked: str, refine: float, n_modes: int | 
     for key, message in list(case.warnings) + list(model.warnings):
         out.warnings.add(key, message)
     if out.kind.resolves_layers:  # the rod: its mesh and section
-        st = model.geometry.stations
-        out.beam = {"refine": refine, "min_element": float(np.min(np.diff(st))),
-                    "max_element": float(np.max(np.diff(st))),
-                    "layer_lengths_catenary": {
-                        case.anchors[e].name: ell for e, ell in model.layer_lengths.items()},
-                    **model.section_values}
+        out.beam = {"refine": refine, **model.mesh_record(), **model.section_values}
     note = note_small_problem(out.dofs, comm)
     if note:
         out.notes = [note]

@@ -368,7 +368,8 @@ CASE_KEYS: dict[str, KeyDoc | TableDoc] = {
     "beam": TableDoc("table", None, "", "Mesh and section of the reference rod model "
                      "('cablefem run --model beam'); the string ignores it.", {
         "layer_elements": KeyDoc("number", 8.0, "-", "Elements per layer length l_a at a "
-                                 "clamped anchor (end element l_a/n), 0.5 to 1000."),
+                                 "clamped anchor (end element l_a/n; a network's: also at "
+                                 "its junctions and loaded nodes), 0.5 to 1000."),
         "growth": KeyDoc("number", 1.1, "-", "Size ratio of neighbouring elements away from "
                          "a clamp, 1 < g <= 2."),
         "span_elements": KeyDoc("integer", 100, "-", "Longest element: l/n, 1 to 1_000_000."),
@@ -393,8 +394,9 @@ CASE_KEYS: dict[str, KeyDoc | TableDoc] = {
             "computed). The rod ignores it."),
         "model": KeyDoc(
             "string", "string", "", "The route: 'string' (default) the string + "
-            "asymptotics | 'beam' the reference rod (single straight cables without "
-            "[seabed] or [fluid]) | 'auto' the string, then the rod on the same case where "
+            "asymptotics | 'beam' the reference rod (single straight cables or networks, "
+            "without [seabed] or [fluid]) | 'auto' the string, then "
+            "the rod on the same case where "
             "the string's estimated moment error at a clamped anchor exceeds 2 % (the rod's "
             "numbers reported, model_auto in summary.json; docs/rod.md). '--model' "
             "overrides it."),
@@ -486,7 +488,7 @@ def _network_keys() -> dict:
         "number", None, "m", "Hydrodynamic diameter D of every cable, > 0; default: each "
         "cable's sections.diameter (required then for every section a cable uses).")})
     keys["seabed"] = c["seabed"]
-    for name in ("damping", "dynamics", "fatigue", "modal", "solver"):
+    for name in ("damping", "dynamics", "fatigue", "modal", "beam", "solver"):
         keys[name] = c[name]
     return keys
 

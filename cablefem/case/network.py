@@ -31,7 +31,7 @@ from cablefem.case.tables import (
     parse_section,
     parse_time,
 )
-from cablefem.description import DamperLink
+from cablefem.description import BEAM_BOUNDS, BeamSpec, DamperLink
 from cablefem.errors import CaseError
 from cablefem.flow import flow_problems
 from cablefem.water import water_problems
@@ -122,6 +122,9 @@ def parse_network_case(data: dict, base_dir: Path, source: str) -> Case:
     damping = parse_damping(top.table("damping"))
     dynamics = parse_dynamics(top.table("dynamics"))
     modal = ModalSpec(table("modal").integer("modes", ge=0))
+    beam_r = table("beam")
+    beam = BeamSpec(*(beam_r.integer(k, **BEAM_BOUNDS[k][0]) if k == "span_elements"
+                      else beam_r.number(k, **BEAM_BOUNDS[k][0]) for k in BEAM_BOUNDS))
     solver_r = table("solver")
     solver = SolverSpec(solver_r.boolean("tension_only"), parse_petsc_options(solver_r),
                         solver_r.string("outer_correction", ("none", "hinge")),
@@ -144,12 +147,13 @@ def parse_network_case(data: dict, base_dir: Path, source: str) -> Case:
     problems += water_problems([], gravity, fluid, seabed)  # the anchors: in the model
     if problems:
         raise CaseError(problems, source)
-    if any_missing(title, gravity, mesh_path, first, damping, modal.modes, solver.tension_only):
+    if any_missing(title, gravity, mesh_path, first, damping, modal.modes, solver.tension_only,
+                   beam.layer_elements, beam.growth, beam.span_elements):
         raise RuntimeError("cablefem internal error: a case value failed without a message")
     return (Case(title=title, section=first, gravity=gravity, geometry=None,
                         mesh=MeshSpec(1, 1.0), anchors=anchors, loads=loads,
                         point_masses=masses, point_loads=point_loads, damping=damping,
                         dynamics=dynamics, modal=modal, solver=solver, source=source,
                         dampers=links, fatigue=fatigue, fluid=fluid, seabed=seabed,
-                        network=NetworkSpec(mesh_path, sections, cables, net_kinks),
+                        network=NetworkSpec(mesh_path, sections, cables, net_kinks), beam=beam,
                         units=units or "SI"))
