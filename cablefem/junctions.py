@@ -313,13 +313,15 @@ def junction_terms(model) -> tuple:
     """The network's corner term (:class:`JunctionCorners`) at every kink
     (:func:`cablefem.kinks.network_kinks` with ``"all"``, whatever ``network.kinks``
     reports) whose node this rank owns, on the default route (``solver.outer_correction
-    = "hinge"``); () at leading order, for a model without bending stiffness, or when no
-    kink is corrected on any rank. Kinks next to a virtual hinge's region are left out
+    = "hinge"``); () at leading order, for a model without bending stiffness or one that
+    resolves its layers (``kink_offsets`` false: the rod), or when no kink is corrected on
+    any rank. Kinks next to a virtual hinge's region are left out
     (``model.junction_gaps`` names them)."""
     from cablefem.kinks import network_kinks
 
     model.junction_gaps = []
-    if model.case.solver.outer_correction != "hinge" or model.string_alone:
+    if (model.case.solver.outer_correction != "hinge" or model.string_alone
+            or not model.kink_offsets):  # a rod resolves its kinks' layers
         return ()
     kinks = network_kinks(model, which="all", record=False)
     region = set()
