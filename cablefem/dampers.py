@@ -205,9 +205,10 @@ def damper_motion_forms(mesh, dampers, tags, u_t, v_t, us_t, du_t, t0, dS, ell=N
     return vel, stroke
 
 
-def link_work(mesh, dampers, dx, h, u, v, us, du, t0):
-    """A network's dampers (:class:`cablefem.description.DamperLink`): each cell of the
-    measure ``dx(i + 1)`` is the dashpot and spring of ``dampers[i]`` between its two nodes,
+def link_work(mesh, dampers, where, h, u, v, us, du, t0):
+    """A network's dampers (:class:`cablefem.description.DamperLink`): each cell where the
+    cell indicator ``where[i]`` is 1 is the dashpot and spring of ``dampers[i]`` between
+    its two nodes,
     along the line between them, installed at rest. With ``h`` the cell's mesh length, ``g``
     the stretch vector (the chord over ``h``, exact for P1) and ``λ = |g|``, the damper's
     extension from the static state is ``h (λ − λ_s)``, its rate ``h ∂λ/∂t = h e·∂s v``
@@ -221,6 +222,7 @@ def link_work(mesh, dampers, dx, h, u, v, us, du, t0):
     e = g / lam
     lam_s = forms.stretch(us, t0)
     work = None
+    dx = ufl.dx(domain=mesh)
     for i, d in enumerate(dampers):
         c = fem.Constant(mesh, PETSc.ScalarType(d.coefficient))
         k = fem.Constant(mesh, PETSc.ScalarType(d.stiffness))
@@ -230,11 +232,11 @@ def link_work(mesh, dampers, dx, h, u, v, us, du, t0):
             rel = c * ufl.dot(n, forms.ds_(v, t0))
             if d.stiffness > 0:
                 rel = rel + k * ufl.dot(n, forms.ds_(u - us, t0))
-            term = h * rel * ufl.dot(n, forms.ds_(du, t0)) * dx(i + 1)
+            term = where[i] * h * rel * ufl.dot(n, forms.ds_(du, t0)) * dx
         else:
             N = c * h * ufl.dot(e, forms.ds_(v, t0))
             if d.stiffness > 0:
                 N = N + k * h * (lam - lam_s)
-            term = N * ufl.dot(e, forms.ds_(du, t0)) * dx(i + 1)
+            term = where[i] * N * ufl.dot(e, forms.ds_(du, t0)) * dx
         work = term if work is None else work + term
     return work

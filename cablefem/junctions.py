@@ -106,7 +106,7 @@ def _corner(r, h, EA, EI, cap):
         if it == 0 and len(q):  # as many as the largest q needs (1e-10; on the real part,
             # the same count for every complex step)
             rate = 0.7 * float(np.max(q.real))
-            count = _ITERATIONS if rate >= 0.5 else int(
+            count = _ITERATIONS if not rate < 0.5 else int(  # (NaN: a wild iterate)
                 np.clip(np.ceil(np.log(1e-10) / np.log(max(rate, 1e-3))), 2, _ITERATIONS))
         q = _EXTRAPOLATION * q
         o = ((0.5 * ell)[:, None] * s - q[:, None] * o) / (1.0 - q)[:, None]

@@ -24,7 +24,6 @@ from dataclasses import dataclass, field
 import numpy as np
 import ufl
 from dolfinx import fem
-from dolfinx import mesh as dmesh
 from mpi4py import MPI
 from petsc4py import PETSc
 
@@ -405,19 +404,22 @@ class NetworkModel(CableModel):
 
     def damper_work(self, u_t, v_t, us_t, du_t):
         """The dampers' virtual work: each cell of a damper's group a dashpot (and spring)
-        between its nodes (:func:`cablefem.dampers.link_work`), on the owned cells."""
+        between its nodes (:func:`cablefem.dampers.link_work`), marked by a cell indicator
+        per damper (not a tagged measure: a form holds one set of cell tags, and the
+        virtual hinges' law has its own)."""
         from cablefem.dampers import link_work
 
-        n_owned = self.mesh.topology.index_map(1).size_local
-        which = np.asarray(self.geometry.cell_damper)[self.cell_index[:n_owned]]
-        ents = np.nonzero(which >= 0)[0].astype(np.int32)
-        tags = dmesh.meshtags(self.mesh, 1, ents, (which[ents] + 1).astype(np.int32))
+        which = np.asarray(self.geometry.cell_damper)[self.cell_index]
+        where = []
+        for i in range(len(self.case.dampers)):
+            chi = fem.Function(self.W, name=f"damper{i}_cells")
+            chi.x.array[:] = (which == i).astype(PETSc.ScalarType)
+            where.append(chi)
         h = fem.Function(self.W, name="damper_length")  # each cell's mesh length
         pts, cells = self.geometry.points, self.geometry.cells
         ref = cells[self.cell_index]
         h.x.array[:] = np.linalg.norm(pts[ref[:, 1]] - pts[ref[:, 0]], axis=1)
-        dx = ufl.Measure("dx", domain=self.mesh, subdomain_data=tags)
-        return link_work(self.mesh, self.case.dampers, dx, h, u_t, v_t, us_t, du_t, self.t0)
+        return link_work(self.mesh, self.case.dampers, where, h, u_t, v_t, us_t, du_t, self.t0)
 
     def bending_nodes(self) -> list[int]:
         """With ``solver.span_bending``: the nodes of :meth:`bending_vertices` (tagged in

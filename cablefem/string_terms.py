@@ -59,7 +59,11 @@ def hinge_law_fields(model) -> None:
         setattr(model, f"law_{name}" if name != "cos_ref" else "cos_ref",
                 getattr(law, name))
     law.a.x.array[:] = model.c.x.array
-    law.ka.x.array[:] = model.c.x.array / model.EA.x.array
+    EA = model.EA.x.array
+    # a network's damper cells have no section (EA = 0) and no law: a finite placeholder
+    # there (c/0 = inf warned on the console; 0 made the law's 1/ka, weighted by the
+    # cell's zero indicator, a NaN)
+    law.ka.x.array[:] = np.divide(model.c.x.array, EA, out=np.ones_like(EA), where=EA > 0)
     law.kb.x.array[:] = law.ka.x.array
     law.dcos = DCOS
     with quiet_compiler():  # the element is JIT-compiled on first use

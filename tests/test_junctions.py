@@ -69,20 +69,33 @@ def test_offset_is_the_layers():
     assert np.allclose(ds, 0.75 * np.sqrt(EI / T) * phi ** 2, rtol=2e-3)
 
 
-def _saddle(path):
+def _saddle(path, tie: bool = False):
     """The issue's net: meshes/make_roof.py with 2 cables per family, 10 elements per bay,
-    40 m plan, saddle height 1 m (rank 0 writes, every rank waits)."""
+    40 m plan, saddle height 1 m (rank 0 writes, every rank waits); ``tie``: a damper cell
+    (group ``tie``) between the two x cables at the middle of their middle bay."""
     if comm.rank == 0:
         spec = importlib.util.spec_from_file_location("make_roof", ROOT / "meshes" / "make_roof.py")
         mod = importlib.util.module_from_spec(spec)
         spec.loader.exec_module(mod)
-        meshio.write(path, mod.roof(2, 10, 40.0, 1.0), file_format="gmsh22", binary=False)
+        m = mod.roof(2, 10, 40.0, 1.0)
+        if tie:  # and a point group "load" at the first crossing
+            pts = np.asarray(m.points)
+            ends = [int(np.argmin(np.hypot(pts[:, 0], pts[:, 1] - y))) for y in (-20 / 3, 20 / 3)]
+            cross = int(np.argmin(np.hypot(pts[:, 0] + 20 / 3, pts[:, 1] + 20 / 3)))
+            tags = [np.append(m.cell_data["gmsh:physical"][0], 40),
+                    np.append(m.cell_data["gmsh:physical"][1], 30)]
+            m = meshio.Mesh(pts, [("line", np.vstack([m.cells[0].data, [ends]])),
+                                  ("vertex", np.vstack([m.cells[1].data, [[cross]]]))],
+                            cell_data={"gmsh:physical": tags, "gmsh:geometrical": tags},
+                            field_data=dict(m.field_data, tie=np.array([40, 1]),
+                                            load=np.array([30, 0])))
+        meshio.write(path, m, file_format="gmsh22", binary=False)
     comm.Barrier()
     return path
 
 
-def _saddle_case(mesh):
-    return parse_case({
+def _saddle_case(mesh, **extra):
+    return parse_case({**extra,
         "title": "saddle", "network": {"mesh": str(mesh)},
         "sections": [{"name": "s", "EA": 2e8, "EI": 2e3, "mass": 10.0}],
         "cables": [{"group": "cables_x", "section": "s", "pretension": 1e5},
@@ -143,3 +156,33 @@ def test_saddle_net_against_beam_net(mpi_tmp_path):
     assert s["static"]["min_tension"] == pytest.approx(Tx, rel=5e-3)
     omega = [m["omega"] for m in s["modes"][:4]]
     assert omega == pytest.approx([15.262, 15.841, 16.193, 17.160], rel=5e-3)
+
+
+def test_a_damper_between_cables_on_the_default_route(mpi_tmp_path):
+    """A network's damper between two cables with the virtual hinges (the default route):
+    with a point load it stopped the run with a UFL error before (two sets of cell tags in
+    one form: the dampers' and the point terms'), and the hinges' law divided by the
+    damper cells' EA = 0 (a warning on the console).
+    Its two kinks are corrected in full (the damper holds the rod's node), so their
+    damper_offset_estimate is 0; the damper adds to the first mode's damping ratio."""
+    mesh = _saddle(mpi_tmp_path / "tie.msh", tie=True)
+    damper = [{"group": "tie", "coefficient": 5.0e4, "direction": [0.0, 0.0, 1.0]}]
+    w1, w2, zeta = 12.0, 17.16, 0.01  # Rayleigh's damping besides (the crash needed it)
+    load = [{"group": "load", "value": [0.0, 0.0, 3000.0]}]  # with the dampers' cell
+    # tags, the point terms' node tags made the form fail
+    res = run_case(_saddle_case(mesh, dampers=damper, point_loads=load,
+                                damping={"ratio": zeta, "frequencies": [w1, w2]}),
+                   mpi_tmp_path / "out", comm, dynamics=False, figures=False, progress=False)
+    s = res.summary
+    ties = {n: k for n, k in s["kinks"].items() if n.startswith("tie:")}
+    assert "load:0/cables_x" in s["kinks"]
+    assert len(ties) == 2
+    for k in ties.values():
+        assert k["corner_applied"] == 1.0
+        assert k["damper_offset_estimate"] == 0.0
+    # the first mode's ratio is Rayleigh's, alpha/(2 w) + beta w/2 (0.0098 at w = 15.27),
+    # plus the damper's (~1e-3)
+    alpha, beta = 2 * zeta * w1 * w2 / (w1 + w2), 2 * zeta / (w1 + w2)
+    w = s["modes"][0]["omega"]
+    assert s["modes"][0]["damping_ratio"] > alpha / (2 * w) + beta * w / 2 + 1e-4
+    assert not [w for w in s["warnings"] if "damper" in w.get("message", "")]
