@@ -41,7 +41,8 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = ["JunctionCorners", "corner_offsets", "corners", "create_matrix", "add_residual",
-           "add_jacobian", "junction_terms", "fixed_dofs", "junction_state", "CAP_RATIO",
+           "add_jacobian", "junction_terms", "fixed_dofs", "junction_state", "kink_estimate",
+           "CAP_RATIO",
            "REUSE"]
 
 #: ``ℓ_r`` is at most the shorter element (stress-free) over this (as a damper's offset:
@@ -413,6 +414,24 @@ def junction_state(model) -> None:
         for node, name, so, applied, d in part:
             state.setdefault(int(node), []).append((name, so, applied, d))
     model.junction_offsets = state
+
+
+def kink_estimate(model, kink, delta: float, ell: float) -> float:
+    """The static moment's estimated relative error at ``kink`` (a
+    :class:`cablefem.kinks.Kink` of angle ``delta`` and layer length ``ell``): the outer
+    problem's next order, ``(ℓ (1/d₁ + 1/d₂))²`` over the spans ``d`` to the next kink,
+    anchor, junction or end each way (the sides' first order is the corner's), plus what
+    the string leaves of the rod node offsets at the kink's node (all the cables there:
+    the node moves with each), ``δ = Σ |o| [(1 − applied) + applied Δ²/4]``, which turns
+    the sides by ``δ/d`` and the angle by ``δ (1/d₁ + 1/d₂)``; NaN without the sides or
+    the angle."""
+    sides = [d for d in getattr(kink, "sides", ()) if d and np.isfinite(d)]
+    if len(sides) < 2 or not (delta > 0) or not (ell > 0):
+        return float("nan")
+    inv = 1.0 / sides[0] + 1.0 / sides[1]
+    left = sum(so * ((1.0 - ap) + ap * d * d / 4.0)
+               for _, so, ap, d in model.junction_offsets.get(int(kink.node), ()))
+    return float((ell * inv) ** 2 + left * inv / delta)
 
 
 def _sum():

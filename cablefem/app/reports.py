@@ -155,7 +155,33 @@ def _kinks(b: Built, h: Histories, start: float | None, warnings: Warnings) -> d
     if not b.kind.resolves_layers:  # the rod resolves its layers
         _damper_offsets(b, kinks, h.kinks.kinks, warnings)
         _corners(b, kinks, h.kinks.kinks, warnings)
+        _kink_estimates(b, kinks, h.kinks.kinks, warnings)
     return kinks
+
+
+def _kink_estimates(b: Built, entries: dict, kinks, warnings: Warnings) -> None:
+    """Each kink's ``static_error_estimate`` (:func:`cablefem.junctions.kink_estimate`),
+    with a warning where it exceeds :data:`ERROR_THRESHOLD`."""
+    from cablefem.junctions import kink_estimate
+
+    worst = []
+    for k in kinks:
+        entry = entries.get(k.name)
+        if entry is None:
+            continue
+        est = kink_estimate(b.model, k, entry.get("static_delta", np.nan),
+                            entry.get("layer_length", np.nan))
+        if np.isfinite(est):
+            entry["static_error_estimate"] = est
+            if est > ERROR_THRESHOLD:
+                worst.append((est, k.name))
+    if worst:
+        est, name = max(worst)
+        warnings.add(f"kinks.{name}", f"{len(worst)} kink(s) with an estimated static moment "
+                     f"error above {100 * ERROR_THRESHOLD:g} % (max {100 * est:.2g} %): the "
+                     "layer is long against the spans next to it, or the cables there do "
+                     "not meet at the rod's node (static_error_estimate in summary.json; "
+                     "docs/theory.md §6.3)")
 
 
 def _corners(b: Built, entries: dict, kinks, warnings: Warnings) -> None:
