@@ -16,9 +16,13 @@ The matrix: the paper's cases A (parametric, in-plane) and B (the bending plane 
 inclined SI stay cable with clamps along the chord and a moving deck anchor; horizontal clamps
 on a 10 %-sag cable (anchor angles of about 20-25 degrees) at eps = 0.005, 0.03 and 0.08,
 the far anchor moving out of plane; a clamped-pinned cable; the stay cable as a network of two
-cable families in line (the network's clamps, hinges included; the rod takes single cables,
-so its reference is the single cable of the same stress-free length, and ``cablefem compare``
-matches the network's anchor ``p:0`` with the cable's ``p``).
+cable families in line (the network's clamps, hinges included; its reference is the single
+cable of the same stress-free length, and ``cablefem compare`` matches the network's anchor
+``p:0`` with the cable's ``p``). Networks (issue 34), against the network rod on the same
+case, every clamp and kink: the 2 x 2 saddle net of issue 34 (10 and 20 elements per bay),
+a 5 x 5 saddle net, the 2 x 2 net with a damper between its two x cables, and a fan of
+stays ending at a junction held by a hanger (the refined rod and the halved time step for
+the 2 x 2 net only).
 
     python benchmarks/bench_validation.py [--cases A,B,...] [--outer-correction hinge]
         [--t-end-scale 1.0] [--json out.json] [--keep DIR]
@@ -165,6 +169,108 @@ def _network_files(data: dict, folder: Path) -> dict:
     return rod
 
 
+def _roof_module():
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("make_roof", ROOT / "meshes" / "make_roof.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def _saddle(n: int = 2, k: int = 10, t_end: float = 15.0, start: float = 10.0,
+            damper: bool = False) -> dict:
+    """Issue 34's saddle net, n x n cables (meshes/make_roof.py, 40 m plan, 1 m saddle, k
+    elements per bay), EA = 2e8 N, EI = 2e3 N m², 10 kg/m, pretension 1e5 N, gravity,
+    clamped edges; 3 kN at 12 rad/s on the first crossing, 1 % Rayleigh at 12 and 17.16
+    rad/s; statistics from ``start``. ``damper``: a dashpot (5e3 N s/m, vertical) between
+    the two x cables at the middle of their middle bay (n = 2, k even)."""
+    d = tomllib.loads((DEMOS / "saddle_2x2.toml").read_text())
+    d["title"] = f"saddle net {n} x {n}, {k} elements per bay" + (", damper" if damper else "")
+    d["network"]["mesh"] = "net.msh"
+    d["dynamics"].update({"t_end": t_end, "statistics_start": start})
+
+    def files(data: dict, folder: Path):
+        import meshio
+        import numpy as np
+
+        m = _roof_module().roof(n, k, 40.0, 1.0, load_node=True)
+        if damper:  # the middle of the middle bay of each x cable (y = -20/3, +20/3)
+            pts = np.asarray(m.points)
+            ends = [int(np.argmin(np.hypot(pts[:, 0], pts[:, 1] - y))) for y in (-20 / 3, 20 / 3)]
+            line, vert = m.cells[0].data, m.cells[1].data
+            tags = [m.cell_data["gmsh:physical"][0], m.cell_data["gmsh:physical"][1]]
+            line = np.vstack([line, [ends]])
+            tags[0] = np.append(tags[0], 40)
+            field = dict(m.field_data, tie=np.array([40, 1]))
+            m = meshio.Mesh(pts, [("line", line), ("vertex", vert)],
+                            cell_data={"gmsh:physical": tags, "gmsh:geometrical": tags},
+                            field_data=field)
+        meshio.write(folder / "net.msh", m, file_format="gmsh22", binary=False)
+        return None  # the rod runs the same case
+
+    if damper:
+        d["dampers"] = [{"group": "tie", "coefficient": 5.0e3, "direction": [0.0, 0.0, 1.0]}]
+    d["_files"] = files
+    return d
+
+
+def _fan_junction(elements: int = 20) -> dict:
+    """Four stays from clamped deck anchors (x = ±15, ±35 m, z = 0) ending at a junction
+    node (0, 0, 40 m) held by a fifth cable from a clamped anchor 20 m above: every cable
+    ends at the junction (a pinned tie, no kink). EA = 2e8 N, EI = 2e3 N m², 10 kg/m,
+    stays pretensioned 2e5 N, the hanger the sum of their vertical pulls (the mesh is in
+    equilibrium without gravity); gravity, the outer deck anchors moving vertically at
+    3 rad/s (2 cm), 1 % Rayleigh at 3 and 10 rad/s, 20 s, statistics from 10 s."""
+    import numpy as np
+
+    head, top = np.array([0.0, 0.0, 40.0]), np.array([0.0, 0.0, 60.0])
+    decks = [np.array([x, 0.0, 0.0]) for x in (-35.0, -15.0, 15.0, 35.0)]
+    T = 2.0e5
+    hanger = float(sum(T * (head - p)[2] / np.linalg.norm(head - p) for p in decks))
+    d = {"title": "fan of four stays ending at a junction, held by a hanger",
+         "network": {"mesh": "net.msh"},
+         "sections": [{"name": "strand", "EA": 2.0e8, "EI": 2.0e3, "mass": 10.0}],
+         "cables": [{"group": f"stay{i}", "section": "strand", "pretension": T}
+                    for i in range(4)]
+         + [{"group": "hanger", "section": "strand", "pretension": hanger}],
+         "gravity": {"g": 9.81},
+         "anchors": [{"name": "deck_out", "motion": {"type": "harmonic",
+                                                     "amplitude": [0.0, 0.0, 0.02],
+                                                     "omega": 3.0}},
+                     {"name": "deck_in"}, {"name": "top"}],
+         "damping": {"ratio": 0.01, "frequencies": [3.0, 10.0]},
+         "dynamics": {"t_end": 20.0, "dt": 0.005, "fields_every": 200,
+                      "statistics_start": 10.0},
+         "modal": {"modes": 4}}
+
+    def files(data: dict, folder: Path):
+        import meshio
+
+        pts, cells, tags, end = [head], [], [], []
+        for i, p in enumerate(decks + [top]):  # each cable from the junction (node 0)
+            first = len(pts)
+            pts += [head + (p - head) * j / elements for j in range(1, elements + 1)]
+            ids = [0] + list(range(first, first + elements))
+            cells += [[ids[j], ids[j + 1]] for j in range(elements)]
+            tags += [i + 1] * elements
+            end.append(ids[-1])  # its anchor
+        field = {f"stay{i}": np.array([i + 1, 1]) for i in range(4)}
+        field.update({"hanger": np.array([5, 1]), "deck_out": np.array([10, 0]),
+                      "deck_in": np.array([11, 0]), "top": np.array([12, 0])})
+        vert = np.array([[end[0]], [end[3]], [end[1]], [end[2]], [end[4]]])
+        vtags = np.array([10, 10, 11, 11, 12])
+        tags = np.array(tags)
+        m = meshio.Mesh(np.array(pts), [("line", np.array(cells)), ("vertex", vert)],
+                        cell_data={"gmsh:physical": [tags, vtags],
+                                   "gmsh:geometrical": [tags, vtags]}, field_data=field)
+        meshio.write(folder / "net.msh", m, file_format="gmsh22", binary=False)
+        return None
+
+    d["_files"] = files
+    return d
+
+
 def _clamped_pinned() -> dict:
     d = _demo("paper_inplane.toml")
     d["title"] = "Case A with anchor q pinned"
@@ -183,7 +289,18 @@ CASES = {
     "sag08": ("10 % sag, horizontal clamps, eps 0.08", lambda: _sagging(0.08)),
     "clamped_pinned": ("case A, q pinned", _clamped_pinned),
     "network": ("the stay cable as a two-member network (its clamps)", _stay_network),
+    "net2x2": ("issue 34's 2 x 2 saddle net, 10 elements per bay", _saddle),
+    "net2x2_k20": ("the 2 x 2 saddle net, 20 elements per bay", lambda: _saddle(k=20)),
+    "net5x5": ("a 5 x 5 saddle net, 10 elements per bay (6 s)",
+               lambda: _saddle(5, 10, 6.0, 3.0)),
+    "net_damper": ("the 2 x 2 saddle net with a damper between its x cables",
+                   lambda: _saddle(damper=True)),
+    "fan_junction": ("four stays and a hanger ending at a junction", _fan_junction),
 }
+
+#: the network cases: the reference is the network rod on the same case (every clamp and
+#: kink compared); the refined rod and the halved time step only for these
+NETWORK_CONVERGENCE = ("net2x2",)
 
 
 def _run(case_file: Path, out: Path, *extra: str) -> dict:
@@ -223,6 +340,14 @@ def _digest(cmp: dict) -> dict:
             "history_error": e["history_error"]["value"],
             "rod_static_moment": e["static_moment"]["a"],
             "rod_steady_rms": (e.get("steady_rms") or {}).get("a")}
+    for name, e in (cmp.get("kinks") or {}).items():
+        out[f"kink {name}"] = {
+            "static_moment": _rel(e.get("static_moment")),
+            "steady_peak": _rel(e.get("steady_peak")),
+            "steady_rms": _rel(e.get("steady_rms")),
+            "history_error": (e.get("history_error") or {}).get("value"),
+            "rod_static_moment": (e.get("static_moment") or {}).get("a"),
+            "rod_steady_rms": (e.get("steady_rms") or {}).get("a")}
     out["first_frequency"] = _rel(cmp["first_frequency"]["omega"])
     return out
 
@@ -230,7 +355,10 @@ def _digest(cmp: dict) -> dict:
 def run_case(key: str, work: Path, correction: str | None, t_scale: float) -> dict:
     title, make = CASES[key]
     data = make()
+    files = data.pop("_files", None)
     data["dynamics"]["t_end"] = data["dynamics"]["t_end"] * t_scale
+    if "statistics_start" in data["dynamics"]:
+        data["dynamics"]["statistics_start"] *= t_scale
     folder = work / key
     folder.mkdir(parents=True, exist_ok=True)
     case_file = folder / "case.toml"
@@ -242,7 +370,9 @@ def run_case(key: str, work: Path, correction: str | None, t_scale: float) -> di
     half_file = folder / "case_half_dt.toml"
     half_file.write_text(to_toml(half))
     rod_file, rod_half_file = case_file, half_file
-    if "network" in data:  # the rod takes the single cable the network reduces to
+    if files is not None:  # a network: its mesh; the rod runs the same case
+        files(data, folder)
+    elif "network" in data:  # the rod takes the single cable the network reduces to
         rod = _network_files(data, folder)
         rod_half = json.loads(json.dumps(rod))
         rod_half["dynamics"] = half["dynamics"]
@@ -253,8 +383,9 @@ def run_case(key: str, work: Path, correction: str | None, t_scale: float) -> di
     runs = {f"string_{r or 'default'}": _run(case_file, folder / f"string_{r or 'default'}",
                                              *(["--outer-correction", r] if r else []))
             for r in routes}
-    runs.update({
-            "rod": _run(rod_file, folder / "rod", "--model", "beam"),
+    runs["rod"] = _run(rod_file, folder / "rod", "--model", "beam")
+    if files is None or key in NETWORK_CONVERGENCE:
+        runs.update({
             "rod_refined": _run(rod_file, folder / "rod_refined", "--model", "beam",
                                 "--refine", "2"),
             "rod_half_dt": _run(rod_half_file, folder / "rod_half_dt", "--model", "beam")})
@@ -272,7 +403,7 @@ def run_case(key: str, work: Path, correction: str | None, t_scale: float) -> di
                                                                   folder / f"cmp_{k}"))
                               for k in strings if k not in failed}
     for key, run in (("rod_refinement", "rod_refined"), ("rod_half_dt", "rod_half_dt")):
-        if run not in failed:
+        if run in runs and run not in failed:
             entry[key] = _digest(_compare(folder / "rod", folder / run, folder / f"cmp_{run}"))
     entry["wall_ratio_rod_over_string"] = {k[len("string_"):]: runs["rod"]["wall_s"]
                                             / runs[k]["wall_s"] for k in strings
@@ -301,8 +432,8 @@ def table(results: dict) -> str:
             for name, a in d.items():
                 if name == "first_frequency":
                     continue
-                conv = (f"{_pct(r[name]['steady_rms']) if r else 'failed'} / "
-                        f"{_pct(h[name]['steady_rms']) if h else 'failed'}")
+                conv = (f"{_pct(r[name]['steady_rms']) if r else '-'} / "
+                        f"{_pct(h[name]['steady_rms']) if h else '-'}")
                 hist = a["history_error"]
                 hist_text = "-" if hist is None or hist != hist else f"{100 * hist:.1f} %"
                 warned = "yes" if e["string_warnings"][f"string_{route}"] else "no"
