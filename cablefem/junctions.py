@@ -42,6 +42,7 @@ import numpy as np
 
 __all__ = ["JunctionCorners", "corner_offsets", "corners", "create_matrix", "add_residual",
            "add_jacobian", "junction_terms", "fixed_dofs", "junction_state", "kink_estimate",
+           "set_active", "give_up",
            "CAP_RATIO",
            "REUSE"]
 
@@ -56,6 +57,9 @@ _ITERATIONS = 16
 #: iterations (at most; fewer on long elements) the corner is converged to 1e-6 at
 #: h = 2.3 ℓ_r, to 1e-8 at h = 10 ℓ_r
 _EXTRAPOLATION = 0.5
+#: where ``ℓ_r`` exceeds this many caps (a nearly slack cable) the offset fades with the
+#: tension (``∝ T``) to none at zero tension
+SLACK_RATIO = 10.0
 #: the term's Jacobian is reused until a node moved by this share of the shortest element
 REUSE = 1e-4
 _STEP = 1e-30  # the complex step
@@ -94,11 +98,17 @@ def _corner(r, h, EA, EI, cap):
         d = ends - (N - o)[:, None, :]  # the chords from the corner
         L = np.sqrt(np.einsum("ijk,ijk->ij", d, d))
         T2 = EAn * (L / (h + ds[:, None]) - 1.0)  # the two elements' tensions
-        taut = (T2.real > 0.0).all(axis=1)
-        T = np.where(taut, 0.5 * T2.sum(axis=1), 1.0)
+        T2 = np.where(T2.real > 0.0, T2, 0.0)
+        T = 0.5 * T2.sum(axis=1)
+        taut = T.real > 0.0
+        T = np.where(taut, T, 1.0)
         beta = T / EA
         ell = np.sqrt(EI / T * (1.0 + beta))
-        ell = np.where(taut, np.where(ell.real > cap, cap, ell), 0.0)
+        # at most the cap; towards a slack cable (ℓ_r beyond SLACK_RATIO caps) it fades to
+        # zero with the tension, so that the offset is continuous where the cable goes slack
+        # (a jump from 0 to the cap there stalled statics' continuation from zero tension)
+        fade = np.where(ell.real > SLACK_RATIO * cap, (SLACK_RATIO * cap / ell) ** 2, 1.0)
+        ell = np.where(taut, np.where(ell.real > cap, cap * fade, ell), 0.0)
         s = np.einsum("ijk,ij->ik", d, 1.0 / L)  # a + b, the unit chords' sum
         # extrapolated: across the chords the map's derivative is about +q, q = ℓ_r (1/L0
         # + 1/L1)/2 ≤ 1/CAP_RATIO (a corner further out is sharper), so (F − q o)/(1 − q),
@@ -169,10 +179,13 @@ class JunctionCorners:
         self.X = np.asarray(X, float).reshape(-1, 3, 3)
         self.h = np.asarray(h, float).reshape(-1, 2)
         self.EA, self.EI = np.asarray(EA, float), np.asarray(EI, float)
+        self.EI0 = self.EI  # the section's (set_active scales EI for a continuation)
         self.cap = np.asarray(cap, float)
         self.names = list(names)
         self.tension_only = tension_only
         self.comm = comm
+        #: off: the term adds nothing (statics finds the plain string's equilibrium first)
+        self.active = True
         self._K = self._xK = None  # the last Jacobian and where it was made
         self._hmin = float(self.h.min()) if len(self.h) else 0.0
         self._flat = (3 * self.blocks[:, :, None] + np.arange(3, dtype=np.int32)
@@ -211,7 +224,7 @@ class JunctionCorners:
     def add_residual(self, arr: np.ndarray, u_local: np.ndarray) -> None:
         """Add the correction into ``arr``, a vector's local form (owned and ghost entries,
         before the ghosts are added to their owners)."""
-        if len(self):
+        if len(self) and self.active:
             np.add.at(arr, self._flat.ravel(), self.residual(u_local).ravel())
 
     def add_jacobian(self, A, u_local: np.ndarray, fixed: np.ndarray | None = None) -> None:
@@ -222,6 +235,11 @@ class JunctionCorners:
 
         A.assemblyBegin(PETSc.Mat.AssemblyType.FLUSH)
         A.assemblyEnd(PETSc.Mat.AssemblyType.FLUSH)
+        if not self.active:  # zeros: an assembled matrix drops the entries never set
+            zero = np.zeros((9, 9))
+            for rows in self.blocks:
+                A.setValuesBlockedLocal(rows, rows, zero, addv=PETSc.InsertMode.ADD)
+            return
         x = self.positions(u_local)
         # the term's Jacobian is a small part of the whole (~ℓ/h of the two elements'):
         # made again only when a node moved by more than REUSE of the shortest element
@@ -284,6 +302,30 @@ def create_matrix(model, form, mat_type: str | None = None):
         t.insert_pattern(pattern)
     pattern.assemble()
     return dcpp.la.petsc.create_matrix(mesh.comm, pattern, mat_type or "")
+
+
+def set_active(model, on: bool, share: float = 1.0) -> None:
+    """Switch the model's node terms on or off (statics solves the plain string first);
+    ``share``: the corners' layers at that share of their length (``EI`` times its
+    square), for a continuation."""
+    for t in model.node_terms:
+        t.active = on
+        t.EI = t.EI0 * share ** 2
+        t._K = None
+
+
+def give_up(model, why: str) -> None:
+    """Leave every kink at the node (the node terms off for the run), with a warning and
+    the kinks in ``model.junction_gaps`` (their offsets then count in full in the
+    estimates)."""
+    set_active(model, False)
+    names = sorted(model.corner_kinks)
+    model.junction_gaps = list(model.junction_gaps) + [(n, why) for n in names]
+    model.corner_kinks = frozenset()
+    model.warnings.append(("kinks", f"the {len(names)} kink(s) of the network are left at "
+                           f"the string's corner, not the rod's node: {why}; a first-order "
+                           "error, in the anchors' and kinks' estimates (docs/theory.md "
+                           "§6.3)"))
 
 
 def _local_array(model) -> np.ndarray:

@@ -235,6 +235,10 @@ class StaticProblem:
         #: the strategies tried on the way, said once in the final line (their Newton
         #: histories at debug level): Newton failing from the guess is part of the method
         self.route: list[str] = []
+        # a network's kink corners (cablefem.junctions) from the plain string's equilibrium:
+        # their offset jumps where a cable goes slack, which the continuation and the
+        # relaxation from an unstressed mesh do not pass
+        junctions.set_active(model, False)
         stages = model.static_stages  # a rod: soft-shear pre-solves
         if stages is not None:
             last = x.copy()
@@ -288,6 +292,8 @@ class StaticProblem:
                 copy_in(x, model.u)
                 if model.slack_elements() >= buckled[1]:
                     x = buckled[0]  # no better: the compressed state stands (warned below)
+        if model.node_terms:
+            total_its += self._corners(x)
         copy_in(x, model.u)
         if not np.all(np.isfinite(model.u.x.array)):
             raise StaticError("static solution contains NaN/inf")
@@ -406,6 +412,32 @@ class StaticProblem:
     RELAX_START = 4.0 * np.pi**2
     RELAX_DECAY = 4.0
     RELAX_STEPS = 200
+
+    def _corners(self, x: PETSc.Vec) -> int:
+        """Newton with the kinks' corners on, from the plain equilibrium ``x`` (updated);
+        StaticError naming them when it fails. Returns the iterations."""
+        junctions.set_active(self.model, True)
+        y = x.copy()
+        ok, its = _try(self.snes, y, self.history)
+        total = its
+        if not ok:  # the layers grown in steps (ℓ from a quarter of its size)
+            x.copy(y)
+            for share in (0.25, 0.5, 0.75, 1.0):
+                junctions.set_active(self.model, True, share)
+                ok, its = _try(self.snes, y, self.history)
+                total += its
+                if not ok:
+                    break
+            junctions.set_active(self.model, True)
+            if not ok:  # the plain equilibrium stands, said and estimated (not silent)
+                y.destroy()
+                junctions.give_up(self.model, "Newton did not converge with the corners "
+                                  f"from the plain string's equilibrium ({self.history.text()})")
+                return total
+            self._note("the kinks' corners grown in 4 steps")
+        y.copy(x)
+        y.destroy()
+        return total
 
     def _relax(self, x: PETSc.Vec, why: str) -> tuple[int, int]:
         """Statics by proximal steps (a pseudo-time of implicit Euler steps, overdamped):

@@ -236,3 +236,23 @@ def test_error_is_second_order_in_ell(mpi_tmp_path):
         errors.append(max(e))
     assert errors[0] < 2e-3
     assert errors[1] < 0.4 * errors[0]
+
+
+def test_corners_that_do_not_converge_are_said(mpi_tmp_path):
+    """A sagging cable drawn as a network (10 % sag, zero pretension, eps = 0.05, 10
+    elements: h = 2 ℓ) with a point load of 0.3 w l at mid-span (a 0.24 rad kink): Newton
+    with the corner at that kink does not converge from the plain equilibrium, even grown
+    in steps. The run goes on with the plain string there and says so: the kink among
+    ``junction_gaps`` with the reason, a warning, its offset in full in the estimates (it
+    stopped statics with a StaticError before)."""
+    from test_span_bending import arc_network
+
+    _, net = arc_network(mpi_tmp_path, 0.05 ** 2, 10, 0.3, span_bending=False)
+    res = run_case(net, mpi_tmp_path / "out", comm, dynamics=False, figures=False,
+                   progress=False)
+    s = res.summary
+    said = [w["message"] for w in s["warnings"] if "not at the rod's node" in w["message"]]
+    assert said and "did not converge" in said[0]
+    kink = s["kinks"]["mid:0/a+b"]
+    assert "corner_applied" not in kink  # left at the node
+    assert kink["static_error_estimate"] > 0.02  # the whole offset counts
