@@ -153,11 +153,14 @@ def _make_ts(model, dt: float, rho_inf: float, history: SNESHistory,
         rows.residual(F, U)
 
     def I2Jacobian(ts, t, U, V, A, shift_v, shift_a, J, P):
+        if newton.keep_jacobian(shift_v, shift_a):  # J and its factorisation kept
+            return
         model.shift_v.value = shift_v
         model.shift_a.value = shift_a
         # SNES evaluates the residual at the same state just before: model.u/v/a are current
         rows.jacobian(J)
 
+    newton = None  # the StepNewton, made once the options are read
     ts = PETSc.TS().create(model.comm)
     ts.setOptionsPrefix(prefix)
     ts.setType(PETSc.TS.Type.ALPHA2)
@@ -175,7 +178,8 @@ def _make_ts(model, dt: float, rho_inf: float, history: SNESHistory,
         J_mat.setOption(PETSc.Mat.Option.KEEP_NONZERO_PATTERN, True)
         ts.setI2Jacobian(I2Jacobian, J_mat)
         ts.setFromOptions()
-        newton = StepNewton(ts, prefix)  # predictor and stopping test (its options here)
+        # predictor, stopping test and Jacobian reuse (a fluid's, a seabed's Jacobian is dear)
+        newton = StepNewton(ts, prefix, bool(model.forms.medium_forms))
     ts.getSNES().setMonitor(history)
     return ts, (F_vec, J_mat, newton)
 
@@ -373,7 +377,7 @@ class DynamicProblem:
             sub = (t_next - t_start) / 4**self.level
             h = (t_next - t) / max(1, round((t_next - t) / sub))
             ts.setTimeStep(h)
-            self.newton.expect(h)
+            self.newton.expect(h, cut=failed)  # the retries of a failed step: PETSc alone
             number = ts.getStepNumber()
             changed = self._done_level is not None and self._done_level != self.level
             try:
