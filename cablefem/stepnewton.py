@@ -7,8 +7,11 @@ Here, on the steps of a run of equal steps:
 
 * *Predictor* (``-cable_newton_predictor velocity``, the default): the second-order
   Adams-Bashforth extrapolation ``x_{n+1} = x_n + h (3 v_n - v_{n-1})/2`` from the last two
-  step-start velocities (its error ``O(h^3)``, the order of generalised-α's own local error);
-  on the first step of a run of equal steps, ``x_n + h v_n``. ``constant``: PETSc's own.
+  step-start velocities (its error ``O(h^3)``, the order of generalised-α's own local error),
+  on a step when it came nearer to the last step's end than PETSc's ``x_n`` did (both are
+  compared after every step: two norms); otherwise, and on the first step of a run of equal
+  steps, ``x_n``. On a stiff cable whose velocity rings axially (``ρ∞ = 1``) the
+  extrapolation starts Newton farther than ``x_n``. ``constant``: always ``x_n``.
 * *Stopping test*: PETSc's default test, and also, from the first iteration on, the
   estimated error of the iterate against the step's displacement increment,
   ``|δx_k| |F_k| / |F_{k-1}| <= η |x_k - x_n|`` (``η``: ``-cable_newton_increment_rtol``,
