@@ -59,6 +59,11 @@ _ABS, _REL, _SNORM = 2, 3, 4
 _NAN, _DTOL = -4, -9
 
 
+def _same(a: float, b: float) -> bool:
+    """Equal to round-off: a step size, a shift computed from grid times."""
+    return abs(a - b) <= 1e-9 * max(abs(a), abs(b))
+
+
 class StepNewton:
     """The predictor, stopping test and Jacobian reuse of :mod:`cablefem.stepnewton` on
     ``ts``'s SNES. Reads its options (``<prefix>newton_predictor``,
@@ -128,7 +133,8 @@ class StepNewton:
         otherwise the caller assembles it, and it is kept from now on."""
         first = self.ts.getSNES().getIterationNumber() == 0
         fast = first or self.f_last <= CONTRACTION * self.f_before
-        if (fast and self.reuse > 0 and self.kept == (shift_v, shift_a)
+        if (fast and self.reuse > 0 and self.kept is not None
+                and _same(self.kept[0], shift_v) and _same(self.kept[1], shift_a)
                 and self.age + first <= self.reuse and self._own_step()):
             self.age += first
             return True
@@ -145,7 +151,9 @@ class StepNewton:
         X0, V0 = ts.getSolution2()
         t = ts.getTime()
         last = self.last
-        if last is not None and last[1] == h and abs(t - h - last[0]) <= 1e-9 * h:
+        # the same step size to round-off (h is a difference of grid times: its last digits
+        # change from step to step), and the last step's end is this one's start
+        if last is not None and _same(last[1], h) and abs(t - h - last[0]) <= 1e-9 * h:
             # the last step's end is this one's start: which predictor was nearer to it
             _, _, pred, start, v_prev = last
             pred.axpy(-1.0, X0)
