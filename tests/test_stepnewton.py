@@ -55,7 +55,7 @@ def test_case_b_fewer_newton_iterations():
     """Paper case B, its first second (200 steps of 0.005, the motion starting without a
     ramp): PETSc's own Newton needs 2.0 iterations a step (3.0 residuals, 2.0 Jacobians);
     started from the velocity predictor (error O(h^3)), one iteration mostly leaves an
-    error below η = 1e-7 of the step's increment: 1.35 measured (1.07 over the whole
+    error below η = 1e-7 of the step's increment: 1.35 measured (1.03 over the whole
     run), at most 1.5 here. The anchor forces move by 4e-5 of what halving the time step
     moves them; the bound, 1e-3, is η against generalised-α's own local error (ω h)^2/12 =
     2e-4 of the increment (ω h = 0.05), with a factor 2 for the accumulation."""
@@ -76,14 +76,14 @@ def test_mooring_with_friction_at_most_three_iterations():
     """demos/mooring.toml on 40 elements, its fairlead surging 2 m from a ramp of 1 s, 2 s
     of seabed friction, current and swell at dt = 0.02 s: PETSc's own Newton needs 3.9
     iterations a step (its last ones stir the residual's round-off floor of an axially
-    stiff line); the issue's aim is at most 3: 2.4 measured with a fresh Jacobian at every
+    stiff line); the issue's aim is at most 3: 2.15 measured with a fresh Jacobian at every
     iteration. By default a fluid's or seabed's Jacobian (four to five residuals' cost,
-    docs/benchmarks.md) is kept across steps: more, cheaper iterations (3.3 measured) with
-    fewer Jacobians than steps (0.58), less work than the plain Newton's in residual units
-    (a Jacobian counted as 4 residuals: 6.6 against 20.6). The fairlead force moves by
-    1e-4 of what halving the time step moves it; the bound, 1e-2, is η = 1e-7 of the
-    increment against the local error (ω h)^2/12 = 1.2e-5 of it at the surge (ω h =
-    0.012), with the same factor of about 2 as case B."""
+    docs/benchmarks.md) is kept across steps: more, cheaper iterations (3.1 measured) with
+    fewer Jacobians than steps (0.39), less work than the plain Newton's in residual units
+    (a Jacobian counted as 4 residuals: 5.6 against 20.6). The fairlead force moves by
+    7e-5 (fresh) and 2e-4 (kept) of what halving the time step moves it; the bound,
+    1e-2, is η = 1e-7 of the increment against the local error (ω h)^2/12 = 1.2e-5 of it
+    at the surge (ω h = 0.012), with the same factor of about 2 as case B."""
     case = _case("mooring.toml", **{r"^elements = 200": "elements = 40",
                                     r"^omega = 0\.6 .*$": "omega = 0.6\nramp = 1.0"})
     fresh, (its, _, _) = _history(case, 2.0, options={"newton_jacobian_reuse": 0})
