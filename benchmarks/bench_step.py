@@ -8,8 +8,10 @@ with the anchor forces at every step (what ``cablefem run`` does for ``anchors.c
 (``time.process_time``), the best of the repeats. The bare costs, best of 5 loops of
 ``--calls`` calls: the residual kernel on packed data (``dolfinx.cpp.fem.assemble_vector``),
 the coefficients' packing, the Jacobian kernel with PETSc's matrix assembly, and the
-Jacobian with an LU factorisation and solve. Newton iterations per step come from the
-integrator's counters.
+Jacobian with an LU factorisation and solve. Newton iterations, residuals and Jacobian
+assemblies per step come from the integrator's counters (over the whole run: warm-up and
+both loops). ``--option KEY=VALUE`` passes an option of the time integrator (without its
+``cable_`` prefix), e.g. ``--option newton_jacobian_reuse=0``.
 
     python benchmarks/bench_step.py                           # case B
     python benchmarks/bench_step.py demos/paper_inplane.toml --steps 3000
@@ -22,14 +24,16 @@ import json
 import time
 
 
-def per_step(model, dt: float, steps: int, repeat: int) -> dict:
+def per_step(model, dt: float, steps: int, repeat: int, options: dict | None = None) -> dict:
     from cablefem.dynamics import DynamicProblem
     from cablefem.statics import solve_static
 
-    with_forces, bare, newton = [], [], []
-    for _ in range(repeat):
-        solve_static(model)
-        with DynamicProblem(model, dt) as problem:
+    with_forces, bare, newton, counts = [], [], [], {}
+    solve_static(model)
+    for _ in range(repeat):  # each run from the static state
+        model.u.x.array[:] = model.u_static.x.array
+        model.v.x.array[:] = 0.0
+        with DynamicProblem(model, dt, petsc_options=options) as problem:
             problem.anchor_forces()
             for _ in range(20):
                 problem.step()
@@ -44,9 +48,12 @@ def per_step(model, dt: float, steps: int, repeat: int) -> dict:
             t2 = time.process_time()
             with_forces.append((t1 - t0) / steps)
             bare.append((t2 - t1) / steps)
-            newton.append(problem.stats.newton_iterations / problem.step_number)
+            n = problem.step_number
+            newton.append(problem.stats.newton_iterations / n)
+            counts = {"residuals_per_step": problem.newton.residuals / n,
+                      "jacobians_per_step": problem.newton.assemblies / n}
     return {"step_and_anchor_forces_us": 1e6 * min(with_forces),
-            "step_us": 1e6 * min(bare), "newton_iterations_per_step": newton[-1]}
+            "step_us": 1e6 * min(bare), "newton_iterations_per_step": newton[-1], **counts}
 
 
 def kernels(model, calls: int) -> dict:
@@ -101,7 +108,11 @@ def main() -> None:
     p.add_argument("--steps", type=int, default=1500)
     p.add_argument("--repeat", type=int, default=3)
     p.add_argument("--calls", type=int, default=2000)
+    p.add_argument("--option", action="append", default=[], metavar="KEY=VALUE",
+                   help="an option of the time integrator without its prefix, e.g. "
+                        "newton_jacobian_reuse=0 (repeatable)")
     args = p.parse_args()
+    options = dict(o.split("=", 1) for o in args.option)
     from mpi4py import MPI
 
     from cablefem.case import load_case
@@ -111,7 +122,8 @@ def main() -> None:
     model = model_from_case(MPI.COMM_WORLD, case)
     out = {"case": args.case,
            "dofs": model.bs * model.V.dofmap.index_map.size_global,
-           "per_step": per_step(model, case.dynamics.dt, args.steps, args.repeat),
+           "options": options,
+           "per_step": per_step(model, case.dynamics.dt, args.steps, args.repeat, options),
            "kernels": kernels(model, args.calls)}
     print(json.dumps(out, indent=1))
 

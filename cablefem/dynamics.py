@@ -55,6 +55,7 @@ from cablefem.petsc_utils import (
     linear_solver_options,
 )
 from cablefem.reactions import AnchorReactions
+from cablefem.stepnewton import StepNewton
 
 __all__ = ["Checkpoint", "DynamicProblem", "DynamicsError", "DynamicsStats", "Interrupted",
            "integrate", "initial_velocity", "grid_time"]
@@ -157,11 +158,14 @@ def _make_ts(model, dt: float, rho_inf: float, history: SNESHistory,
         rows.residual(F, U)
 
     def I2Jacobian(ts, t, U, V, A, shift_v, shift_a, J, P):
+        if newton.keep_jacobian(shift_v, shift_a):  # J and its factorisation kept
+            return
         model.shift_v.value = shift_v
         model.shift_a.value = shift_a
         # SNES evaluates the residual at the same state just before: model.u/v/a are current
         rows.jacobian(J)
 
+    newton = None  # the StepNewton, made once the options are read
     ts = PETSc.TS().create(model.comm)
     ts.setOptionsPrefix(prefix)
     ts.setType(PETSc.TS.Type.ALPHA2)
@@ -179,8 +183,10 @@ def _make_ts(model, dt: float, rho_inf: float, history: SNESHistory,
         J_mat.setOption(PETSc.Mat.Option.KEEP_NONZERO_PATTERN, True)
         ts.setI2Jacobian(I2Jacobian, J_mat)
         ts.setFromOptions()
+        # predictor, stopping test and Jacobian reuse (a fluid's, a seabed's Jacobian is dear)
+        newton = StepNewton(ts, prefix, bool(model.forms.medium_forms))
     ts.getSNES().setMonitor(history)
-    return ts, (F_vec, J_mat)
+    return ts, (F_vec, J_mat, newton)
 
 
 #: the TS's end time when none is given: PETSc's TSStep refuses to run without one
@@ -268,6 +274,7 @@ class DynamicProblem:
         self.history = SNESHistory()
         self.ts, self._work = _make_ts(model, dt, rho_inf, self.history, self.prefix,
                                        petsc_options)  # _work: F and J live as long as ts
+        self.newton = self._work[-1]
         self.ts.setMaxTime(_NO_END)  # PETSc steps only with an end; step(t_end) sets it
         self.reactions = AnchorReactions(model)
         self.hinges = model.hinges
@@ -311,6 +318,7 @@ class DynamicProblem:
         self.level, self.calm = int(ck.level), int(ck.calm)
         self._done_level = None
         self._initial_output = False  # the checkpoint's time was an output already
+        self.newton.reset()  # the predictor's history starts again, as in checkpoint()
         m.set_time(self.time)
         U = m.u.vector.copy()
         V = m.v.vector.copy()
@@ -327,6 +335,7 @@ class DynamicProblem:
         :class:`Checkpoint` holding this rank's state). The integrator re-estimates its
         acceleration from ``(u, v)`` at the next step, as a restored one does."""
         self.ts.restartStep()  # the next step re-estimates A from (u, v), as a resumed run
+        self.newton.reset()
         self._state_to_model()
         m = self.model
         return Checkpoint(self.time, self.step_number, self.level, self.calm,
@@ -373,6 +382,7 @@ class DynamicProblem:
             sub = (t_next - t_start) / 4**self.level
             h = (t_next - t) / max(1, round((t_next - t) / sub))
             ts.setTimeStep(h)
+            self.newton.expect(h, cut=failed)  # the retries of a failed step: PETSc alone
             number = ts.getStepNumber()
             changed = self._done_level is not None and self._done_level != self.level
             try:

@@ -1,0 +1,208 @@
+"""The time integrator's Newton solve at each step: its predictor, its stopping test and
+the reuse of its Jacobian (docs/theory.md §2, "Newton at each step").
+
+PETSc's ``alpha2`` starts Newton from the step's start displacement, ``x_{n+1} = x_n``, and
+its default test stops on the residual alone (``snes_rtol``, ``snes_atol``, ``snes_stol``).
+Here, on the steps of a run of equal steps:
+
+* *Predictor* (``-cable_newton_predictor velocity``, the default): the second-order
+  Adams-Bashforth extrapolation ``x_{n+1} = x_n + h (3 v_n - v_{n-1})/2`` from the last two
+  step-start velocities (its error ``O(h^3)``, the order of generalised-α's own local error),
+  on a step when it came nearer to the last step's end than PETSc's ``x_n`` did (both are
+  compared after every step: two norms); otherwise, and on the first step of a run of equal
+  steps, ``x_n``. On a stiff cable whose velocity rings axially (``ρ∞ = 1``) the
+  extrapolation starts Newton farther than ``x_n``. ``constant``: always ``x_n``.
+* *Stopping test*: PETSc's default test, and also, from the first iteration on, the
+  estimated error of the iterate against the step's displacement increment,
+  ``|δx_k| |F_k| / |F_{k-1}| <= η |x_k - x_n|`` (``η``: ``-cable_newton_increment_rtol``,
+  default :data:`INCREMENT_RTOL`; 0: the residual tests alone). ``|δx_k| |F_k|/|F_{k-1}|``
+  is the size of the next Newton correction at the observed contraction (an upper bound
+  once Newton converges quadratically).
+* *Jacobian reuse* (``-cable_newton_jacobian_reuse N``; 0: never): an iteration keeps the
+  Jacobian (and its factorisation) of an earlier step when it was assembled with the same
+  shifts (the same step size and parameters) at most ``N`` steps ago and, after a step's
+  first iteration, while Newton's residual still falls by :data:`CONTRACTION` per
+  iteration; otherwise it is assembled afresh. Default :data:`JACOBIAN_REUSE` for a model
+  with a fluid or a seabed, whose Jacobian costs four to five residuals (mooring demo:
+  1.1 ms against 0.26 ms), 0 without (the string's Jacobian costs about a residual; kept,
+  the extra iterations cost what it saves: paper case B 176 against 180 µs a step).
+
+On the steps PETSc takes inside a restart of ``alpha2`` (two backward Euler half steps that
+estimate the start acceleration, after ``TSRestartStep``), whose start is not ``x_n``, all
+three are PETSc's own.
+"""
+
+from __future__ import annotations
+
+from petsc4py import PETSc
+
+__all__ = ["INCREMENT_RTOL", "JACOBIAN_REUSE", "StepNewton"]
+
+#: η: Newton stops once its estimated error is below this fraction of the step's
+#: displacement increment. Generalised-α's local error is about (ω h)²/12 of the increment
+#: for a motion of frequency ω: 2e-4 for paper case B's second mode (ω h = 0.05), 1.2e-5
+#: for the mooring demo's surge (ω h = 0.012). Measured (docs/benchmarks.md, "Newton at each
+#: step"): the anchor forces move by 1.2e-7 (case B) and 8e-5 (mooring) of their dynamic
+#: range against the residual tests alone, while a halved time step moves them by 1.5e-2
+#: and 5e-2.
+INCREMENT_RTOL = 1.0e-7
+
+#: steps over which a Jacobian of the same shifts is kept for a step's first iteration
+JACOBIAN_REUSE = 10
+
+#: a kept Jacobian serves the next iteration while Newton's residual falls by this factor
+#: or more per iteration; otherwise it is assembled afresh
+CONTRACTION = 0.1
+
+#: PETSc's SNESConvergedReason values used here
+_ABS, _REL, _SNORM = 2, 3, 4
+_NAN, _DTOL = -4, -9
+
+
+def _same(a: float, b: float) -> bool:
+    """Equal to round-off: a step size, a shift computed from grid times."""
+    return abs(a - b) <= 1e-9 * max(abs(a), abs(b))
+
+
+class StepNewton:
+    """The predictor, stopping test and Jacobian reuse of :mod:`cablefem.stepnewton` on
+    ``ts``'s SNES. Reads its options (``<prefix>newton_predictor``,
+    ``<prefix>newton_increment_rtol``, ``<prefix>newton_jacobian_reuse``,
+    ``<prefix>snes_divergence_tolerance``): make it after ``ts.setFromOptions()``.
+    ``costly_jacobian``: the model's Jacobian costs several residuals (a fluid, a seabed):
+    reuse it by default.
+
+    :meth:`expect` is told each step's size before ``ts.step()``; the Jacobian callback
+    asks :meth:`keep_jacobian` before it assembles; :meth:`reset` forgets the velocity
+    history and the kept Jacobian (a checkpoint, a restore: the next step starts a new run
+    of equal steps, in the resumed run and in the uninterrupted one alike)."""
+
+    def __init__(self, ts: PETSc.TS, prefix: str, costly_jacobian: bool = False) -> None:
+        self.ts = ts
+        snes = ts.getSNES()
+        opts = PETSc.Options()
+        predictor = opts.getString(prefix + "newton_predictor", "velocity")
+        if predictor not in ("velocity", "constant"):
+            raise ValueError(f"-{prefix}newton_predictor must be 'velocity' or 'constant', "
+                             f"got {predictor!r}")
+        self.eta = opts.getReal(prefix + "newton_increment_rtol", INCREMENT_RTOL)
+        self.reuse = opts.getInt(prefix + "newton_jacobian_reuse",
+                                 JACOBIAN_REUSE if costly_jacobian else 0)
+        self.divtol = opts.getReal(prefix + "snes_divergence_tolerance", 1.0e4)
+        self.rtol, self.atol, self.stol, _ = snes.getTolerances()
+        self.h: float | None = None  # the step size of the step being taken
+        #: the last step's start time and size, its velocity predictor, its start x and v
+        self.last: tuple | None = None
+        self.velocity = False  # the velocity predictor serves this step
+        self.work: PETSc.Vec | None = None
+        self.own = False  # this solve is a step of the run (not a restart's half step)
+        self.f0 = self.f_prev = 0.0
+        self.f_before = self.f_last = 0.0  # the last two residual norms of the solve
+        self.kept: tuple[float, float] | None = None  # the shifts of the Jacobian in J
+        self.age = 0  # steps since it was assembled
+        self.assemblies = self.residuals = 0  # counts, for the statistics
+        if predictor == "velocity":
+            snes.setInitialGuess(self.guess)
+        snes.setConvergenceTest(self.test)
+
+    def expect(self, h: float, cut: bool = False) -> None:
+        """The next ``ts.step()`` takes a step of ``h``; ``cut``: a sub-step of a cut step
+        (after a failed Newton solve), solved by PETSc's own Newton alone."""
+        self.h = None if cut else h
+
+    def reset(self) -> None:
+        if self.last is not None:
+            for vec in self.last[2:]:
+                vec.destroy()
+        self.last = None
+        self.kept = None
+
+    def destroy(self) -> None:
+        self.reset()
+        if self.work is not None:
+            self.work.destroy()
+
+    def _own_step(self) -> bool:
+        h = self.ts.getTimeStep()
+        return self.h is not None and abs(h - self.h) <= 1e-12 * self.h
+
+    def keep_jacobian(self, shift_v: float, shift_a: float) -> bool:
+        """True when the Jacobian already in the matrix serves this call: assembled with
+        the same shifts at most ``reuse`` steps ago, and Newton contracted by at least
+        :data:`CONTRACTION` in the step's last iteration (always true at its first);
+        otherwise the caller assembles it, and it is kept from now on."""
+        first = self.ts.getSNES().getIterationNumber() == 0
+        fast = first or self.f_last <= CONTRACTION * self.f_before
+        if (fast and self.reuse > 0 and self.kept is not None
+                and _same(self.kept[0], shift_v) and _same(self.kept[1], shift_a)
+                and self.age + first <= self.reuse and self._own_step()):
+            self.age += first
+            return True
+        self.kept, self.age = (shift_v, shift_a), 0
+        self.assemblies += 1
+        return False
+
+    def guess(self, snes: PETSc.SNES, x: PETSc.Vec) -> None:
+        """The predictor into ``x`` (SNES calls it at the start of every solve, ``x`` then
+        holds PETSc's own, ``x_n``)."""
+        if not self._own_step():
+            return  # a restart's half step, a cut step's retry: PETSc's start
+        ts, h = self.ts, self.h
+        X0, V0 = ts.getSolution2()
+        t = ts.getTime()
+        last = self.last
+        # the same step size to round-off (h is a difference of grid times: its last digits
+        # change from step to step), and the last step's end is this one's start
+        if last is not None and _same(last[1], h) and abs(t - h - last[0]) <= 1e-9 * h:
+            # the last step's end is this one's start: which predictor was nearer to it
+            _, _, pred, start, v_prev = last
+            pred.axpy(-1.0, X0)
+            start.axpy(-1.0, X0)
+            self.velocity = pred.norm() < start.norm()
+            pred.waxpy(1.5 * h, V0, X0)
+            pred.axpy(-0.5 * h, v_prev)
+            have = True
+        else:
+            if last is not None:  # a new run of equal steps: PETSc's start, and compare
+                for vec in last[2:]:
+                    vec.destroy()
+            pred, start, v_prev = X0.duplicate(), X0.duplicate(), V0.duplicate()
+            pred.waxpy(h, V0, X0)  # the candidate of a first step, compared at the next
+            self.velocity, have = False, False
+        X0.copy(start)
+        V0.copy(v_prev)
+        self.last = (t, h, pred, start, v_prev)
+        if have and self.velocity:
+            pred.copy(x)
+
+    def test(self, snes: PETSc.SNES, it: int, norms) -> int:
+        """PETSc's default test, and the error against the step's increment."""
+        xnorm, ynorm, fnorm = norms
+        self.f_before, self.f_last = (fnorm, fnorm) if it == 0 else (self.f_last, fnorm)
+        self.residuals += 1  # SNES tests after each residual (basic line search)
+        if fnorm != fnorm:
+            self.kept = None
+            return _NAN
+        if it == 0:
+            self.own = self._own_step()
+            self.f0 = self.f_prev = fnorm
+            return _ABS if fnorm < self.atol else 0
+        f_prev, self.f_prev = self.f_prev, fnorm
+        if fnorm < self.atol:
+            return _ABS
+        if fnorm <= self.rtol * self.f0:
+            return _REL
+        if ynorm < self.stol * xnorm:
+            return _SNORM
+        if self.divtol > 0 and fnorm > self.divtol * self.f0:
+            self.kept = None
+            return _DTOL
+        if self.own and self.eta > 0 and f_prev > 0:
+            X0, _ = self.ts.getSolution2()
+            if self.work is None:
+                self.work = X0.duplicate()
+            self.work.waxpy(-1.0, X0, snes.getSolution())
+            # at the residual's round-off floor (no contraction left) the step itself
+            if ynorm * min(1.0, fnorm / f_prev) <= self.eta * self.work.norm():
+                return _SNORM  # the next step (the error left) small against the increment
+        return 0
