@@ -160,8 +160,9 @@ def _kinks(b: Built, h: Histories, start: float | None, warnings: Warnings) -> d
 
 
 def _kink_estimates(b: Built, entries: dict, kinks, warnings: Warnings) -> None:
-    """Each kink's ``static_error_estimate`` (:func:`cablefem.junctions.kink_estimate`),
-    with a warning where it exceeds :data:`ERROR_THRESHOLD`."""
+    """Each kink's ``static_error_estimate`` (:func:`cablefem.junctions.kink_estimate`,
+    times the layer's share of the static moment), with a warning where it exceeds
+    :data:`ERROR_THRESHOLD`."""
     from cablefem.junctions import kink_estimate
 
     worst = []
@@ -171,6 +172,11 @@ def _kink_estimates(b: Built, entries: dict, kinks, warnings: Warnings) -> None:
             continue
         est = kink_estimate(b.model, k, entry.get("static_delta", np.nan),
                             entry.get("layer_length", np.nan))
+        # the estimate is the layer's: weighted by its share of the reported moment (a
+        # kink straight at rest, a damper's, reports the string's own curvature only)
+        M, M_layer = entry.get("static_moment", np.nan), entry.get("static_moment_layer", 0.0)
+        if M > 0:
+            est = est * min(1.0, abs(M_layer) / M)
         if np.isfinite(est):
             entry["static_error_estimate"] = est
             if est > ERROR_THRESHOLD:
