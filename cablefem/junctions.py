@@ -371,24 +371,16 @@ def junction_terms(model) -> tuple:
     for hg in (model.hinges.items if model.hinges else ()):
         region |= {int(e) for e in hg.elements[:hg.touched]}
     line, geo = model.line, model.geometry
-    n_owned = model.V.dofmap.index_map.size_local
-    block = np.full(len(geo.points), -1, np.int64)
-    nodes = line.dof_nodes(model.V)
-    block[nodes] = np.arange(nodes.size)
-    owned = np.zeros(len(geo.points), bool)
-    owned[nodes[:n_owned]] = True
-    keep = []
+    block = _blocks(model)
     model.corner_kinks = set()
+    corrected = []
     for k in kinks:
         if region & set(k.cells):
             model.junction_gaps.append((k.name, "next to a virtual hinge's region"))
             continue
         model.corner_kinks.add(k.name)
-        if owned[k.node]:
-            if np.any(block[list(k.nodes)] < 0):
-                raise RuntimeError(f"kink {k.name}: its neighbours are not on the rank "
-                                   "that owns its node")
-            keep.append(k)
+        corrected.append(k)
+    keep = _mine(model, corrected, block)
     if model.comm.allreduce(len(keep), op=_sum()) == 0:
         return ()
     term = _term(model, keep, block)
@@ -402,6 +394,28 @@ def junction_terms(model) -> tuple:
                            np.array([cell_of[list(k.cells)] for k in seen],
                                     np.int64).reshape(-1, 2))
     return (term,)
+
+
+def _blocks(model) -> np.ndarray:
+    """The local dof block of every reference node (-1: not on this rank)."""
+    nodes = model.line.dof_nodes(model.V)
+    block = np.full(len(model.geometry.points), -1, np.int64)
+    block[nodes] = np.arange(nodes.size)
+    return block
+
+
+def _mine(model, kinks, block) -> list:
+    """The kinks this rank computes (collective): each on the lowest rank that holds its
+    three nodes (owned or ghosts; the node's owner need not: dolfinx ghosts the cells
+    next to a rank's own cells, not to its own vertices). RuntimeError on every rank when
+    none does."""
+    here = np.array([bool(np.all(block[list(k.nodes)] >= 0)) for k in kinks], bool)
+    every = np.array(model.comm.allgather(here)).reshape(model.comm.size, len(kinks))
+    if len(kinks) and not every.any(axis=0).all():
+        k = kinks[int(np.argmin(every.any(axis=0)))]
+        raise RuntimeError(f"kink {k.name}: no rank holds its node and both neighbours")
+    first = np.argmax(every, axis=0) if len(kinks) else np.zeros(0, int)
+    return [k for k, r in zip(kinks, first) if r == model.comm.rank]
 
 
 def _term(model, kinks, block) -> JunctionCorners:
@@ -427,14 +441,8 @@ def junction_state(model) -> None:
         model.junction_offsets = {}
         return
     kinks = network_kinks(model, which="all", record=False)
-    line, geo = model.line, model.geometry
-    n_owned = model.V.dofmap.index_map.size_local
-    nodes = line.dof_nodes(model.V)
-    block = np.full(len(geo.points), -1, np.int64)
-    block[nodes] = np.arange(nodes.size)
-    owned = np.zeros(len(geo.points), bool)
-    owned[nodes[:n_owned]] = True
-    mine = [k for k in kinks if owned[k.node] and np.all(block[list(k.nodes)] >= 0)]
+    block = _blocks(model)
+    mine = _mine(model, kinks, block)
     out = []
     if mine:
         t = _term(model, mine, block)
