@@ -32,7 +32,8 @@ is not corrected.
 The term is assembled outside UFL (it couples a cable's two elements through the node,
 which one cell integral cannot): :class:`JunctionCorners` adds its residual and Jacobian
 (derived by complex-step differentiation of the residual, exact to round-off) to the
-vectors and matrices the solvers assemble, on the rank that owns the node, and its blocks
+vectors and matrices the solvers assemble, on the lowest rank that holds its three
+nodes, and its blocks
 to the matrices' sparsity (:func:`create_matrix`).
 """
 
