@@ -41,7 +41,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["JunctionCorners", "corner_offsets", "corners", "create_matrix", "add_residual",
+__all__ = ["JunctionCorners", "corners", "create_matrix", "add_residual",
            "add_jacobian", "junction_terms", "fixed_dofs", "junction_state", "kink_estimate",
            "set_active", "give_up",
            "CAP_RATIO",
@@ -79,9 +79,11 @@ def _tension(length, h, EA, tension_only: bool):
 
 
 def _corner(r, h, EA, EI, cap):
-    """``(o, δs)``: the offset :func:`corner_offsets` and the stress-free length each of
-    the two elements gains when it runs to the corner instead of the layer's virtual hinge
-    (its hinge removes ``σ_h``; the corner path is longer by ``h/cos φ``)."""
+    """``(o, δs)``: the rod node's offset from the string corner, ``o = N − C``, for the
+    kinks' positions ``r`` (n, 3, 3: before, node, after; complex for the complex step),
+    ``ℓ_r`` at most ``cap``, and the stress-free length each of the two elements gains
+    when it runs to the corner instead of the layer's virtual hinge (its hinge removes
+    ``σ_h``; the corner path is longer by ``h/cos φ``)."""
     # the chords from the corner itself and the tension of the lengthened elements: o and
     # δs from the node's chords, then from the corner and lengths they give, to a fixed
     # point. The node's chords alone make o low by a relative ℓ_r/h (10 % on the saddle
@@ -137,15 +139,6 @@ def corners(r, h, EA, EI):
     out = np.array(r, float, copy=True)
     out[:, 1] -= o
     return out, h + ds[:, None]
-
-
-def corner_offsets(r, h, EA, EI, cap):
-    """The rod node's offset from the string corner, ``o = N − C`` (n, 3), for the kinks'
-    positions ``r`` (n, 3, 3: the node before, the node, the node after), the elements'
-    stress-free lengths ``h`` (n, 2), axial stiffness ``EA`` (n,) and bending stiffness
-    ``EI`` (n,), ``ℓ_r`` at most ``cap`` (n,). Zero where an element is slack. Complex
-    inputs (complex step) are differentiated through."""
-    return _corner(r, h, EA, EI, cap)[0]
 
 
 def _residual(x, h, EA, EI, cap, tension_only, corrected: bool = True):
@@ -280,9 +273,6 @@ class JunctionCorners:
         for b in self.blocks:
             pattern.insert(b, b)
 
-    def offsets(self, r: np.ndarray, rows) -> np.ndarray:
-        """(n, 3) the offsets ``o`` of the items ``rows`` at positions ``r``."""
-        return corner_offsets(r, self.h[rows], self.EA[rows], self.EI[rows], self.cap[rows])
 
 
 def create_matrix(model, form, mat_type: str | None = None):
