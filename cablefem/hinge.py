@@ -97,6 +97,7 @@ longer than REGION_FRACTION of half the cable or of its chain to a junction) rai
 from __future__ import annotations
 
 import logging
+import math
 
 import numpy as np
 from mpi4py import MPI
@@ -380,8 +381,9 @@ class VirtualHinges:
         docs). (The anchor force and the first element's tension differ by the layer's
         weight, about 1e-3 of them: nothing next to the range's factors 4 and 2.)"""
         out = {}
-        for hg in self.items:
-            T = float(np.linalg.norm(np.asarray(forces[hg.index][:3], float)))
+        for hg in self.items:  # called for every output row: the norm without NumPy's
+            f = forces[hg.index]  # per-call overhead (the same sqrt of the same sum)
+            T = math.sqrt(float(f[0]) ** 2 + float(f[1]) ** 2 + float(f[2]) ** 2)
             started = hg.T_static > 0.0  # before start_dynamics: the statics' own law
             out[hg.anchor.name] = started and not (FLOOR * hg.T_static <= T
                                                    <= CEILING * hg.T_static)

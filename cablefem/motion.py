@@ -147,6 +147,10 @@ class _RampedMotion:
     ``_u0``, ``_v0``, ``_a0`` and its ``ramp`` duration (:func:`ramp_factors`)."""
 
     def _eval(self, kind: str, t: float) -> np.ndarray:
+        if self.ramp <= 0.0 or t >= self.ramp:  # r = 1, r' = r'' = 0: the motion itself
+            # (what _ramped gives there, bit for bit; called several times a time step)
+            return (self._u0 if kind == "displacement" else
+                    self._v0 if kind == "velocity" else self._a0)(t)
         return _ramped(kind, self.ramp, t, lambda: self._u0(t), lambda: self._v0(t),
                        lambda: self._a0(t))
 
