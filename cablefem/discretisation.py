@@ -14,7 +14,8 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = ["p1_frequency_ratio", "alpha_frequency_ratio", "effective_element",
-           "frequency_error", "model_frequency_error"]
+           "frequency_error", "model_frequency_error",
+           "network_frequency_error", "mode_mesh_error"]
 
 
 def p1_frequency_ratio(theta) -> np.ndarray:
@@ -108,3 +109,49 @@ def model_frequency_error(model, static, omega: float, time_step: bool = False
         D = fluid.diameter_on(case.section)
         mass = mass + fluid.ca_normal * fluid.density * np.pi * D * D / 4
     return frequency_error(omega, static.min_tension, mass, effective_element(stations))
+
+
+def network_frequency_error(model, static, omega: float, shape) -> float | None:
+    """The mesh's relative frequency error of a network's mode at ``omega`` with mode shape
+    ``shape`` (a Function of the model's space): each cable element's
+    ``p1_frequency_ratio(k h) - 1`` at its own wavenumber ``k = omega sqrt(m / T)`` (its
+    static tension ``T``, its mass per length ``m`` with a fluid's added mass, ``h`` its
+    stress-free length), weighted by the mode's kinetic energy in the element
+    (``m h (|φ_a|² + |φ_b|² + φ_a·φ_b)/3``, the consistent mass): a Rayleigh quotient's
+    error is the energy-weighted mean of the elements' (docs/theory.md §5.2). The
+    damper's cells and slack elements carry no wave of the string and are left out.
+    Collective; None for a model that is not a network, or without a tensioned element."""
+    if not getattr(model, "is_network", False) or static is None:
+        return None
+    n = model.mesh.topology.index_map(1).size_local
+    cable = np.asarray(model.cable_cells(), bool)[:n]
+    T = np.asarray(model.tension_field().x.array[:n], float)
+    m = np.asarray(model.m.x.array[:n], float).copy()
+    fluid = getattr(model.case, "fluid", None)
+    if fluid is not None:  # the added mass normal to the cable moves with it
+        D = model.section_field("D", fluid.diameter_on).x.array[:n]
+        m = m + fluid.ca_normal * fluid.density * np.pi * D * D / 4
+    x = model.mesh.geometry.x
+    g = model.mesh.geometry.dofmap.array.reshape(-1, 2)[:n]
+    h = np.asarray(model.c.x.array[:n], float) * np.linalg.norm(x[g[:, 1]] - x[g[:, 0]],
+                                                                axis=1)
+    dofs = model.V.dofmap.list.array.reshape(-1, 2)[:n]
+    phi = np.asarray(shape.x.array, float).reshape(-1, model.bs)[:, :3]
+    pa, pb = phi[dofs[:, 0]], phi[dofs[:, 1]]
+    w = m * h * (np.sum(pa * pa, 1) + np.sum(pb * pb, 1) + np.sum(pa * pb, 1)) / 3
+    ok = cable & (T > 0) & (m > 0) & (h > 0)
+    err = np.zeros(n)
+    err[ok] = p1_frequency_ratio(omega * np.sqrt(m[ok] / T[ok]) * h[ok]) - 1
+    num, den = model.comm.allreduce(np.array([np.sum(w[ok] * err[ok]), np.sum(w[ok])]))
+    return float(num / den) if den > 0 else None
+
+
+def mode_mesh_error(model, static, modal, i: int) -> float | None:
+    """The mesh's relative frequency error of mode ``i`` of ``modal`` (a
+    :class:`cablefem.modal.ModalResult`): :func:`model_frequency_error` for a single
+    string, :func:`network_frequency_error` with the mode's shape for a network (collective
+    there); None where neither applies (a rod)."""
+    w = float(modal.omegas[i])
+    if getattr(model, "is_network", False):
+        return network_frequency_error(model, static, w, modal.shapes[i])
+    return model_frequency_error(model, static, w)

@@ -20,9 +20,10 @@ from cablefem.app.output import Histories, RunOutput
 from cablefem.app.report import modal_damping_ratios
 from cablefem.app.stages import Built, Modes, Statics
 from cablefem.case import CaseError
-from cablefem.discretisation import model_frequency_error
+from cablefem.discretisation import mode_mesh_error, model_frequency_error
 from cablefem.dynamics import DynamicsError, DynamicsStats, Interrupted, integrate
 from cablefem.errors import RunError
+from cablefem.history_error import Spectrum
 from cablefem.io.checkpoint import case_digest, read_checkpoint, write_checkpoint
 from cablefem.io.faults import kill_point
 from cablefem.moments import AnchorMoments, resonance
@@ -82,6 +83,30 @@ class Resonance:
     entries (empty without modes, excitation, or for the rod)."""
 
     entries: dict = field(default_factory=dict)
+    #: the modes' frequencies, errors and damping for the histories' estimate (None:
+    #: no mode with an error estimate, or the rod)
+    spectrum: Spectrum | None = None
+    #: the anchors' moment columns from their forces (cablefem.moments.AnchorMoments)
+    columns: AnchorMoments | None = None
+
+
+def history_spectrum(b: Built, md: Modes) -> Spectrum | None:
+    """The modes' frequencies, relative frequency errors (the modal table's
+    ``error_estimate``, which holds the mesh's) and damping ratios
+    (:func:`modal_damping_ratios`), for :mod:`cablefem.history_error`; None without modes
+    or their estimates (the rod resolves its own). The time step's period error is left
+    out, as from the rows' estimate (:mod:`cablefem.discretisation`): every run at that
+    step shares it, and halving ``dynamics.dt`` measures it."""
+    modal, case = md.result, b.case
+    if modal is None or b.kind.resolves_layers or not md.entries or case.dynamics is None:
+        return None
+    est = [e.get("error_estimate") for e in md.entries]
+    if any(x is None for x in est):
+        return None
+    omegas = np.asarray(modal.omegas, float)
+    order = np.argsort(omegas)
+    return Spectrum(omegas[order], np.abs(np.asarray(est, float))[order],
+                    np.nan_to_num(modal_damping_ratios(case, modal), nan=0.0)[order])
 
 
 def resonance_estimate(b: Built, st: Statics, md: Modes, columns: AnchorMoments,
@@ -89,7 +114,7 @@ def resonance_estimate(b: Built, st: Statics, md: Modes, columns: AnchorMoments,
     """Let the error estimate of ``columns`` grow near a resonance of the excitation
     ``omega`` with the modes ``md`` (:meth:`cablefem.moments.AnchorMoments.set_resonance`)
     and report the factor and the frequency errors it amplifies."""
-    out = Resonance()
+    out = Resonance(spectrum=history_spectrum(b, md), columns=columns)
     modal, model, case = md.result, b.model, b.case
     if not (modal is not None and omega and not b.kind.resolves_layers):
         return out
@@ -104,7 +129,8 @@ def resonance_estimate(b: Built, st: Statics, md: Modes, columns: AnchorMoments,
     # one the response locks its phase to the excitation: theory.md §5.2); the time
     # step's beside it
     parametric = w_r is not None and abs(omega / (2 * w_r) - 1) < abs(omega / w_r - 1)
-    disc = None if w_r is None else model_frequency_error(model, st.result, w_r)
+    disc = None if w_r is None else mode_mesh_error(
+        model, st.result, modal, int(np.argmin(np.abs(np.asarray(modal.omegas) - w_r))))
     if w_r is not None:
         e["error_resonance_kind"] = "parametric" if parametric else "primary"
     if disc is not None:

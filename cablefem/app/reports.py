@@ -9,6 +9,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from cablefem.app.historycheck import history_estimates
 from cablefem.app.integration import Dynamics, Resonance
 from cablefem.app.output import Histories
 from cablefem.app.report import (
@@ -91,6 +92,7 @@ def report(b: Built, st: Statics, res: Resonance, static_entries: dict, dyn: Dyn
         out.warnings.add("kinks", f"{len(gaps)} node(s) where a cable kinks have no kink "
                          f"moment (e.g. node {k}, {where!r}: {why}): give each cable "
                          "through such a node its own group, of one section (docs/kinks.md)")
+    history_estimates(b, frag, res, h, start)
     warn_drifts(frag, warn)
     return out
 
