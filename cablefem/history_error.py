@@ -1,29 +1,27 @@
-"""The error a moment history gets from the string's frequency errors (docs/theory.md §5.3).
+"""The error a moment history gets from the string's frequency errors (docs/theory.md §5.4).
 
-The string's modes are off by a small relative error ``δ_k`` (its mesh, the time step, the
-outer problem's neglected terms: the modal table's ``error_estimate`` and the time step's
-period error). A response that follows the load quasi-statically hardly feels it; two
-parts of a history do:
+The string's modes are off by a small relative error ``δ_k`` (its mesh, the outer
+problem's neglected terms: the modal table's ``error_estimate``; the time step's, which
+every run at that step shares, is left out as from the rows' estimate). A response that
+follows the load quasi-statically hardly feels it; two parts of a history do:
 
-* *a line near a resonance*. The response at a frequency ``ν`` of the excitation (its
-  harmonics ``Ω/2``, ``Ω``, ``2Ω``, ``3Ω``: a cable's geometric nonlinearity and the
-  moment's own dependence on the force put them in the moment) changes by ``F δ_k`` of
-  itself, ``F = 1/sqrt(d² + ζ_k²)`` with ``d = |ν/ω_k - 1|`` the detuning from mode
-  ``k`` (:func:`cablefem.moments.resonance`'s factor, here for every line). A harmonic
-  ``2Ω`` next to a mode is a superharmonic resonance: the per-row estimate, which looks
-  at ``Ω`` and ``Ω/2`` only, does not see it;
-* *the free vibration*: what the history holds beside the lines (the start's transient,
-  which decays as ``exp(-ζ ω t)``, or, under a random excitation, all of the response).
-  At frequency ``ω`` its phase drifts by ``δ(ω) ω τ`` from the exact one, ``τ`` the time
-  since the vibration started: the run's time for a transient, at most ``1/(2 ζ ω)`` (the
-  response's memory) under a random excitation. A component of RMS ``a`` whose phase is
-  off by ``φ`` differs from the exact one by ``2 a sin(φ/2)`` in RMS.
+* *a line near a resonance*. The response at a harmonic ``ν`` of the excitation (``Ω/2``
+  to ``6Ω``: a cable's geometric nonlinearity puts them in) changes by
+  ``H(ν; ω_k (1 + δ_k)) / H(ν; ω_k)`` with ``H = 1/(ω² - ν² + 2iζων)``: by
+  ``δ/sqrt(δ² + ζ²)`` of itself at exact tuning. A harmonic ``2Ω`` next to a mode is a
+  superharmonic resonance: the rows' estimate, which looks at ``Ω`` and ``Ω/2``, does not
+  see it;
+* *the free vibration*: what the response holds beside the lines (the start's transient,
+  which decays as ``exp(-ζωt)``, or, under a random excitation, all of it). At frequency
+  ``ω`` its phase drifts by ``δ(ω) ω τ``, ``τ`` the time since it started: the run's time
+  for a transient, at most ``1/(2ζω)`` (the response's memory) under a random excitation.
 
-:func:`history_error` fits the lines over the statistics window by least squares, takes
-the rest as the free vibration (its power spectrum), and sums the parts' squares: the
-estimated RMS of the history's error over the window, relative to the history's RMS (the
-validation's "history error", docs/verification.md), from the frequency errors alone (the
-layer's own error is the rows' ``error_estimate``).
+:func:`history_error` works on the anchor force (the response): it fits the lines over the
+statistics window by least squares, changes each by its ratio, turns the phase of the
+rest's spectrum (frequencies next to a line go with the line: its build-up and beating are
+locked to the excitation), and compares the moment of the changed force with the moment
+(the moment's own nonlinear dependence on the force, harmonics included, taken exactly):
+the estimated RMS error of the moment over the window, relative to its RMS.
 """
 
 from __future__ import annotations
