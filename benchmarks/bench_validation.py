@@ -312,8 +312,15 @@ def _run(case_file: Path, out: Path, *extra: str) -> dict:
     summary = {}
     if (out / "summary.json").is_file():
         summary = json.loads((out / "summary.json").read_text())
+    # each clamp's and kink's history_error_estimate (docs/theory.md §5.4), beside the
+    # measured history error in the table
+    estimates = {n: a["history_error_estimate"] for n, a in summary.get("anchors", {}).items()
+                 if "history_error_estimate" in a}
+    estimates.update({f"kink {n}": k["history_error_estimate"]
+                      for n, k in (summary.get("kinks") or {}).items()
+                      if "history_error_estimate" in k})
     return {"exit": res.returncode, "wall_s": wall, "stderr": res.stderr[-2000:],
-            "warnings": summary.get("warnings", [])}
+            "warnings": summary.get("warnings", []), "history_estimates": estimates}
 
 
 def _compare(ref: Path, other: Path, out: Path) -> dict:
@@ -394,7 +401,8 @@ def run_case(key: str, work: Path, correction: str | None, t_scale: float,
     entry = {"title": title, "runs": {k: {kk: v[kk] for kk in ("exit", "wall_s")}
                                       for k, v in runs.items()},
              "string_warnings": {k: [w.get("message") for w in runs[k]["warnings"]]
-                                 for k in strings}}
+                                 for k in strings},
+             "string_history_estimates": {k: runs[k]["history_estimates"] for k in strings}}
     failed = [k for k, v in runs.items() if v["exit"] != 0]
     if failed:  # said in the table; what did run is still compared
         entry["failed"] = {k: runs[k]["stderr"] for k in failed}
@@ -417,8 +425,9 @@ def _pct(x) -> str:
 
 
 def table(results: dict) -> str:
-    rows = ["| case | route | anchor | static | peak | RMS | history | omega1 | rod: refine / "
-            "dt/2 (RMS) | warned |", "|---|---|---|---|---|---|---|---|---|---|"]
+    rows = ["| case | route | anchor | static | peak | RMS | history | history estimate | "
+            "omega1 | rod: refine / dt/2 (RMS) | warned |",
+            "|---|---|---|---|---|---|---|---|---|---|---|"]
     for key, e in results.items():
         if "string_vs_rod" not in e:
             rows.append(f"| {key} | - | - | failed: {', '.join(e.get('failed', {}))} "
@@ -438,17 +447,19 @@ def table(results: dict) -> str:
                 if abs(a.get("rod_static_moment") or 0.0) < 1e-9 * scale:
                     # a clamp along its cable's line of force (a hanger): no moment in
                     # either model, the relative differences of round-off say nothing
-                    rows.append(f"| {key} | {route} | {name} | zero in both ||||||||")
+                    rows.append(f"| {key} | {route} | {name} | zero in both |||||||||")
                     continue
                 conv = (f"{_pct(r[name]['steady_rms']) if r else '-'} / "
                         f"{_pct(h[name]['steady_rms']) if h else '-'}")
                 hist = a["history_error"]
                 hist_text = "-" if hist is None or hist != hist else f"{100 * hist:.1f} %"
                 warned = "yes" if e["string_warnings"][f"string_{route}"] else "no"
+                est = e.get("string_history_estimates", {}).get(f"string_{route}", {}).get(name)
+                est_text = "-" if est is None else f"{100 * est:.1f} %"
                 rows.append(f"| {key} | {route} | {name} | {_pct(a['static_moment'])} | "
                             f"{_pct(a['steady_peak'])} | {_pct(a['steady_rms'])} | "
-                            f"{hist_text} | {_pct(d['first_frequency'])} | {conv} | "
-                            f"{warned} |")
+                            f"{hist_text} | {est_text} | {_pct(d['first_frequency'])} | "
+                            f"{conv} | {warned} |")
     return "\n".join(rows)
 
 
