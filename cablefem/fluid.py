@@ -85,13 +85,16 @@ def submerged_weight(fluid, mass: float, g: float, diameter: float | None = None
     return mass * g - (fluid.density * g * A if fluid.buoyancy else 0.0)
 
 
-def _profile_factor(profile, z):
-    """UFL: the profile's factor at elevation ``z`` (:class:`cablefem.flow.Profile`)."""
+def _profile_factor(profile, z, const):
+    """UFL: the profile's factor at elevation ``z`` (:class:`cablefem.flow.Profile`);
+    ``const(x)``: a Constant of value x."""
     if profile is None:
         return 1.0
     if profile.kind == "power":
         height = ufl.max_value(z - profile.ground, POWER_FLOOR * profile.reference)
-        return (height / profile.reference) ** profile.exponent
+        # the exponent a Constant: FFCx 0.5 writes a power of a literal exponent out at
+        # each use (three components of the current, their derivatives), of a Constant once
+        return (height / profile.reference) ** const(profile.exponent)
     f = float(profile.factors[0])
     for z0, z1, slope in profile.segments():
         f = f + float(slope) * (ufl.min_value(ufl.max_value(z, float(z0)), float(z1))
@@ -240,7 +243,7 @@ def add_fluid_terms(model) -> None:
     up = fem.Constant(mesh, np.asarray(motion.up, dtype=PETSc.ScalarType))
     z = ufl.dot(up, ufl.SpatialCoordinate(mesh) + u)  # elevation of the current position
     uf = fem.Constant(mesh, np.asarray(fl.current, dtype=PETSc.ScalarType)) \
-        * _profile_factor(fl.profile, z)
+        * _profile_factor(fl.profile, z, const)
     wet = 1.0
     if fl.surface is not None:
         wet = ufl.conditional(ufl.lt(z, fl.surface), 1.0, 0.0)
