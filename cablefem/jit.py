@@ -1,7 +1,8 @@
 """Just-in-time compilation of forms and elements (FFCx), quietly.
 
 FFCx compiles every UFL form and finite element to C the first time it is used and caches
-the result; :func:`quiet_compiler` keeps the C compiler's messages off the console meanwhile.
+the result; :func:`quiet_compiler` keeps the C compiler's messages off the console meanwhile,
+and :func:`mixed_rules` lets FFCx 0.5 compile a kernel whose terms use different Gauss rules.
 """
 
 from __future__ import annotations
@@ -26,7 +27,9 @@ def quiet_compiler():
     logger's filters see only the records logged on it, not those of other loggers passed
     up to its handlers), and a :class:`logging.NullHandler` keeps ``logging.info`` from
     installing a handler when there is none. The root's level, filters and handlers are
-    restored afterwards, so a user's own logging set-up is untouched."""
+    restored afterwards, so a user's own logging set-up is untouched. FFCx is first made
+    able to compile kernels of several Gauss rules (:func:`mixed_rules`)."""
+    mixed_rules()  # every kernel may hold terms of different Gauss rules
     root = logging.getLogger()
     level = root.level
     null = logging.NullHandler()
