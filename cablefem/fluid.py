@@ -53,9 +53,10 @@ __all__ = ["DELTA_V", "QUADRATURE_DEGREE", "medium_dx", "add_fluid_terms", "subm
 #: regularisation of |v| in the drag (m/s): far below any relevant relative velocity,
 #: the drag at |v| = 10 DELTA_V is within 0.5 % of the exact quadratic law
 DELTA_V = 1.0e-4
-#: the Gauss rule of the fluid's terms (its degree; None: UFL's estimate, 12 for the drag,
-#: 7 points, shared with every term without a rule of its own): docs/fluid.md, "Quadrature"
-QUADRATURE_DEGREE: int | None = 3
+#: the Gauss rule of the fluid's terms, its degree: 5, 3 points (None: UFL's estimate, 12
+#: for the drag, 7 points, shared with every term without a rule of its own): docs/fluid.md,
+#: "Quadrature"
+QUADRATURE_DEGREE: int | None = 5
 
 
 def medium_dx(degree: int | None):

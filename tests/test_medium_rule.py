@@ -45,7 +45,7 @@ def _rules(form) -> set:
 
 def test_each_term_keeps_its_rule_and_the_kernel_is_the_sum_of_its_parts():
     """The dynamic residual and its Jacobian, one kernel each with the drag on its rule
-    (2 points), the seabed on its own (7 points) and the string's terms on theirs, equal the
+    (3 points), the seabed on its own (7 points) and the string's terms on theirs, equal the
     sums of every term's form compiled alone, at a state of random displacements,
     velocities and accelerations: to round-off (1e-13 of the largest entry: a different
     order of the same sums). FFCx 0.5 alone fails to compile the first kernel (its cell
@@ -102,7 +102,7 @@ def _statics(elements: int, degree) -> tuple[float, float]:
 
 @pytest.mark.parametrize("elements", [30])
 def test_the_drags_rule_moves_the_statics_by_little_of_the_mesh_error(elements):
-    """The fairlead tension and the touchdown with the drag on 2 Gauss points against
+    """The fairlead tension and the touchdown with the drag on 3 Gauss points against
     UFL's 7 (degree 12): the change is below a tenth of the mesh's own error, estimated as
     the change from h to h/2 (the O(h^2) string: 4/3 of it is the error at h; a tenth of
     the change leaves the answer's error within 1.1 times the mesh's)."""
