@@ -34,6 +34,7 @@ from cablefem.motion import ramp_factors
 from cablefem.timetables import Spline, check_table, read_csv
 
 __all__ = ["Profile", "AiryWave", "VelocitySeries", "wave_number", "wave_kinematics",
+           "WaveField",
            "read_velocity_csv", "flow_problems", "POWER_FLOOR", "jonswap", "jonswap_waves"]
 
 #: the power-law profile is held below this fraction of its reference height (the law's
@@ -222,17 +223,58 @@ def jonswap_waves(hs: float, tp: float, direction, gamma: float = 3.3,
             for a, wi, ph in zip(amp, w, phases) if a > 0]
 
 
-def _depth_ratios(k: float, zeta: np.ndarray, depth: float | None):
-    """cosh(k(ζ + h))/sinh(k h) and sinh(k(ζ + h))/sinh(k h), written so that they neither
-    overflow for deep water nor lose accuracy (exponentials of non-positive arguments)."""
-    if depth is None or k * depth > 30.0:  # tanh(30) = 1 to 1e-26: deep water
-        e = np.exp(k * zeta)
-        return e, e
-    z = np.maximum(zeta, -depth)  # below the seabed: the bottom's kinematics
-    a = np.exp(k * z)
-    b = np.exp(-k * (z + 2.0 * depth))
-    den = 1.0 - math.exp(-2.0 * k * depth)
-    return (a + b) / den, (a - b) / den
+class WaveField:
+    """The sum of Airy ``waves`` (:class:`AiryWave`) on water of ``depth`` (None: deep),
+    the mean surface at elevation ``surface`` along the unit vector ``up`` (against
+    gravity), built up over ``ramp`` seconds (:func:`cablefem.motion.ramp_factors`). The
+    wave numbers, amplitudes and directions are found once; :meth:`at` evaluates every
+    component at once (arrays of points by components), what a time step needs once per
+    new time."""
+
+    def __init__(self, waves, up, surface: float, depth: float | None, g: float,
+                 ramp: float = 0.0) -> None:
+        self.up = np.asarray(up, dtype=float)
+        self.surface, self.depth, self.ramp = surface, depth, float(ramp)
+        waves = list(waves)
+        self.omega = np.array([w.omega for w in waves], dtype=float)
+        self.k = np.array([wave_number(w.omega, g, depth) for w in waves], dtype=float)
+        self.amp = np.array([0.5 * w.height * w.omega for w in waves], dtype=float)
+        self.phase = np.array([w.phase for w in waves], dtype=float)
+        self.D = np.array([np.asarray(w.direction, dtype=float) for w in waves],
+                          dtype=float).reshape(-1, 3)
+        self.Dk = self.D.T * self.k  # (3, components): θ = x·D k − (ω t − φ)
+        # cosh(k(ζ + h))/sinh(k h) and sinh(k(ζ + h))/sinh(k h) from exponentials of
+        # non-positive arguments (no overflow in deep water, no loss of accuracy), the
+        # amplitude ½ H ω folded in; in deep water (no depth) both e^{kζ}
+        self.amp_den = self.amp
+        if depth is not None:
+            self.amp_den = self.amp / (1.0 - np.exp(-2.0 * self.k * depth))
+            self.two_kh = 2.0 * self.k * depth
+
+    def _depth_ratios(self, zeta: np.ndarray):
+        """The two depth ratios at elevations ``zeta`` below the surface, times ½ H ω."""
+        if self.depth is None:
+            e = np.exp(np.multiply.outer(zeta, self.k)) * self.amp  # (points, components)
+            return e, e
+        kz = np.multiply.outer(np.maximum(zeta, -self.depth), self.k)  # below the seabed:
+        a, b = np.exp(kz), np.exp(-kz - self.two_kh)  # the bottom's kinematics
+        return (a + b) * self.amp_den, (a - b) * self.amp_den
+
+    def at(self, points: np.ndarray, t: float):
+        """``(velocity, acceleration)``, each (n, 3), at ``points`` (n, 3) at time ``t``."""
+        points = np.asarray(points, dtype=float).reshape(-1, 3)
+        r, dr, _ = ramp_factors(t, self.ramp)
+        if (r == 0.0 and dr == 0.0) or self.k.size == 0:
+            return np.zeros_like(points), np.zeros_like(points)
+        ach, ash = self._depth_ratios(np.minimum(points @ self.up - self.surface, 0.0))
+        theta = points @ self.Dk - (self.omega * t - self.phase)
+        c, s = np.cos(theta), np.sin(theta)
+        hc, hs, vs, vc = ach * c, ach * s, ash * s, ash * c
+        u = hc @ self.D + np.multiply.outer(vs.sum(axis=1), self.up)
+        du = (hs * self.omega) @ self.D - np.multiply.outer(vc @ self.omega, self.up)
+        if self.ramp == 0.0 or r == 1.0 and dr == 0.0:  # built up
+            return u, du
+        return r * u, r * du + dr * u
 
 
 def wave_kinematics(waves, points: np.ndarray, t: float, up: np.ndarray, surface: float,
@@ -240,7 +282,8 @@ def wave_kinematics(waves, points: np.ndarray, t: float, up: np.ndarray, surface
     """Velocity and acceleration (each (n, 3)) of the sum of ``waves`` at ``points`` (n, 3)
     at time ``t``; ``up`` is the unit vector against gravity, ``surface`` the mean surface's
     elevation along it. ``ramp`` > 0 (s) builds the waves up smoothly from rest
-    (:func:`cablefem.motion.ramp_factors`: ``r u`` and ``r u̇ + ṙ u``).
+    (:func:`cablefem.motion.ramp_factors`: ``r u`` and ``r u̇ + ṙ u``). A time stepper
+    keeps a :class:`WaveField` instead (the wave numbers found once).
 
     Args:
         waves: The :class:`AiryWave` components.
@@ -255,26 +298,7 @@ def wave_kinematics(waves, points: np.ndarray, t: float, up: np.ndarray, surface
     Returns:
         ``(velocity, acceleration)``, each (n, 3).
     """
-    points = np.asarray(points, dtype=float).reshape(-1, 3)
-    up = np.asarray(up, dtype=float)
-    vel = np.zeros_like(points)
-    acc = np.zeros_like(points)
-    r, dr, _ = ramp_factors(t, ramp)
-    if r == 0.0 and dr == 0.0:
-        return vel, acc
-    zeta = np.minimum(points @ up - surface, 0.0)
-    for w in waves:
-        d = np.asarray(w.direction, dtype=float)
-        k = wave_number(w.omega, g, depth)
-        ch, sh = _depth_ratios(k, zeta, depth)
-        theta = k * (points @ d) - w.omega * t + w.phase
-        a = 0.5 * w.height * w.omega
-        c, s = np.cos(theta), np.sin(theta)
-        u = a * (np.outer(ch * c, d) + np.outer(sh * s, up))
-        du = a * w.omega * (np.outer(ch * s, d) - np.outer(sh * c, up))
-        vel += r * u
-        acc += r * du + dr * u
-    return vel, acc
+    return WaveField(waves, up, surface, depth, g, ramp).at(points, t)
 
 
 @dataclass(frozen=True, eq=False)

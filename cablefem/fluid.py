@@ -41,17 +41,32 @@ from dolfinx import fem
 from petsc4py import PETSc
 
 from cablefem import forms
-from cablefem.flow import POWER_FLOOR, wave_kinematics
+from cablefem.flow import POWER_FLOOR, WaveField
+from cablefem.jit import mixed_rules
 from cablefem.terms import Term
 from cablefem.turbulence import TurbulentField, wind_frame
 from cablefem.water import water_depth_of
 
-__all__ = ["DELTA_V", "add_fluid_terms", "submerged_weight", "water_depth", "FluidMotion",
-           "steady_flow"]
+__all__ = ["DELTA_V", "QUADRATURE_DEGREE", "medium_dx", "add_fluid_terms", "submerged_weight",
+           "water_depth", "FluidMotion", "steady_flow"]
 
 #: regularisation of |v| in the drag (m/s): far below any relevant relative velocity,
 #: the drag at |v| = 10 DELTA_V is within 0.5 % of the exact quadratic law
 DELTA_V = 1.0e-4
+#: the Gauss rule of the fluid's terms, its degree: 5, 3 points (None: UFL's estimate, 12
+#: for the drag, 7 points, shared with every term without a rule of its own): docs/fluid.md,
+#: "Quadrature"
+QUADRATURE_DEGREE: int | None = 5
+
+
+def medium_dx(degree: int | None):
+    """The cell measure of a term of the medium, integrated with the Gauss rule of
+    ``degree`` (None, or an FFCx that cannot compile kernels of several rules
+    (:func:`cablefem.jit.mixed_rules`): UFL's estimate, shared with every term without a
+    rule of its own)."""
+    if degree is None or not mixed_rules():
+        return ufl.dx
+    return ufl.dx(metadata={"quadrature_degree": degree})
 
 
 def _norm(x):
@@ -71,13 +86,16 @@ def submerged_weight(fluid, mass: float, g: float, diameter: float | None = None
     return mass * g - (fluid.density * g * A if fluid.buoyancy else 0.0)
 
 
-def _profile_factor(profile, z):
-    """UFL: the profile's factor at elevation ``z`` (:class:`cablefem.flow.Profile`)."""
+def _profile_factor(profile, z, const):
+    """UFL: the profile's factor at elevation ``z`` (:class:`cablefem.flow.Profile`);
+    ``const(x)``: a Constant of value x."""
     if profile is None:
         return 1.0
     if profile.kind == "power":
         height = ufl.max_value(z - profile.ground, POWER_FLOOR * profile.reference)
-        return (height / profile.reference) ** profile.exponent
+        # the exponent a Constant: FFCx 0.5 writes a power of a literal exponent out at
+        # each use (three components of the current, their derivatives), of a Constant once
+        return (height / profile.reference) ** const(profile.exponent)
     f = float(profile.factors[0])
     for z0, z1, slope in profile.segments():
         f = f + float(slope) * (ufl.min_value(ufl.max_value(z, float(z0)), float(z1))
@@ -111,6 +129,8 @@ class FluidMotion:
             self.wave_v = fem.Function(model.V, name="wave_velocity")
             self.wave_a = fem.Function(model.V, name="wave_acceleration")
             self.X = model.V.tabulate_dof_coordinates()
+            self.waves = WaveField(fl.waves, self.up, fl.surface, self.depth, self.g,
+                                   self.ramp)
         self.turb_v = self.turb_a = None
         if fl.turbulence is not None:
             self._init_turbulence(model)
@@ -155,8 +175,7 @@ class FluidMotion:
         if self.wave_v is not None:
             bs = self.model.bs
             x = self.X + self.model.u.x.array.reshape(-1, bs)[:, :3]
-            vel, acc = wave_kinematics(fl.waves, x, t, self.up, fl.surface, self.depth,
-                                       self.g, self.ramp)
+            vel, acc = self.waves.at(x, t)
             self.wave_v.x.array.reshape(-1, bs)[:, :3] = vel
             self.wave_a.x.array.reshape(-1, bs)[:, :3] = acc
         if self.turb_v is not None:
@@ -206,6 +225,7 @@ def add_fluid_terms(model) -> None:
     def const(x):  # Constants: a zero coefficient keeps its term (and the code is reused)
         return fem.Constant(mesh, PETSc.ScalarType(x))
 
+    dx = medium_dx(QUADRATURE_DEGREE)
     rho = const(fl.density)
     # the diameter of each cable's section (a network's DG0 field: zero on a damper's
     # cells, which the fluid does not see; a single cable's: a Constant)
@@ -224,15 +244,15 @@ def add_fluid_terms(model) -> None:
     up = fem.Constant(mesh, np.asarray(motion.up, dtype=PETSc.ScalarType))
     z = ufl.dot(up, ufl.SpatialCoordinate(mesh) + u)  # elevation of the current position
     uf = fem.Constant(mesh, np.asarray(fl.current, dtype=PETSc.ScalarType)) \
-        * _profile_factor(fl.profile, z)
+        * _profile_factor(fl.profile, z, const)
     wet = 1.0
     if fl.surface is not None:
         wet = ufl.conditional(ufl.lt(z, fl.surface), 1.0, 0.0)
     # the current's drag is an extra load of statics: the load continuation ramps it
-    static = -wet * model.load_factor * ufl.inner(_drag(rho, k, t, uf), du) * lam * ufl.dx
+    static = -wet * model.load_factor * ufl.inner(_drag(rho, k, t, uf), du) * lam * dx
     if fl.buoyancy:  # ramped with the weight where statics ramps it (a network)
         ramp = model.load_factor if model.ramp_weight else 1.0
-        static += ramp * ufl.inner(wet * rho * A * model.gravity, du) * lam * ufl.dx
+        static += ramp * ufl.inner(wet * rho * A * model.gravity, du) * lam * dx
     model.forms.add(Term("fluid_static", static, "static", medium=True))
     u_fluid = factor * uf + motion.velocity()
     drag_change = _drag(rho, k, t, u_fluid - v) - _drag(rho, k, t, uf)
@@ -241,7 +261,7 @@ def add_fluid_terms(model) -> None:
     afn = af - ufl.dot(af, t) * t
     at = ufl.dot(a - af, t) * t  # along the cable, relative to the fluid
     dynamic = wet * (-ufl.inner(drag_change, du) + k.ma * ufl.inner(an, du)
-                     - k.mi * ufl.inner(afn, du) + k.mt * ufl.inner(at, du)) * lam * ufl.dx
+                     - k.mi * ufl.inner(afn, du) + k.mt * ufl.inner(at, du)) * lam * dx
 
     def set_time(time: float) -> None:
         factor.value = fl.time.value(time)

@@ -32,6 +32,7 @@ from dolfinx import fem
 from petsc4py import PETSc
 from scipy.optimize import brentq
 
+from cablefem.fluid import medium_dx
 from cablefem.terms import Term
 
 __all__ = ["PENETRATION_BLEND", "GroundedCatenary", "add_seabed_terms", "network_contact",
@@ -40,6 +41,9 @@ __all__ = ["PENETRATION_BLEND", "GroundedCatenary", "add_seabed_terms", "network
 
 #: the smoothing length of the contact law as a fraction of the static penetration w/k
 PENETRATION_BLEND = 0.1
+#: the Gauss rule of the seabed's terms (its degree; None: UFL's estimate, shared with
+#: every term without a rule of its own): 7 points, docs/seabed.md
+QUADRATURE_DEGREE: int | None = 12
 #: the least strain of the statics' initial guess (GroundedCatenary.position)
 GUESS_STRAIN = 1.0e-3
 
@@ -136,6 +140,7 @@ def add_seabed_terms(model, w: float) -> None:
     def const(x):
         return fem.Constant(mesh, PETSc.ScalarType(x))
 
+    dx = medium_dx(QUADRATURE_DEGREE)
     k, c, mu = const(sb.stiffness), const(sb.damping), const(sb.friction)
     b = const(PENETRATION_BLEND * max(w, 1e-300) / sb.stiffness)
     v0 = const(sb.friction_velocity)
@@ -146,13 +151,13 @@ def add_seabed_terms(model, w: float) -> None:
                              ufl.conditional(ufl.gt(p, 0.0), p * p / (2 * b), 0.0))
     # per stress-free length of cable (a network's damper cells: none)
     cc = model.c * model.section_field("on_cable", lambda sec: 1.0)
-    model.forms.add(Term("seabed", -k * smooth * ufl.dot(up, du) * cc * ufl.dx, "static",
+    model.forms.add(Term("seabed", -k * smooth * ufl.dot(up, du) * cc * dx, "static",
                          medium=True))
     touching = ufl.conditional(ufl.gt(p, 0.0), 1.0, 0.0)
     vn = ufl.dot(v, up)
     vh = v - vn * up
     f = -c * touching * vn * up - mu * k * smooth * vh / ufl.sqrt(ufl.dot(vh, vh) + v0 * v0)
-    model.forms.add(Term("seabed_dynamic", -ufl.inner(f, du) * cc * ufl.dx, "dynamic",
+    model.forms.add(Term("seabed_dynamic", -ufl.inner(f, du) * cc * dx, "dynamic",
                          linearised=lambda: without_friction(mu), medium=True))
 
 
@@ -273,9 +278,10 @@ def touchdown(model, forces=None) -> dict | None:
         st = model.geometry.stations
         on = pen > 0.0
         if np.any(on):
-            # grounded length: each element's share in contact (linear in penetration)
-            grounded = sum((st[i + 1] - st[i]) * _grounded_share(pen[i], pen[i + 1])
-                           for i in range(st.size - 1))
+            # grounded length: each element's share in contact (linear in penetration),
+            # summed in order (a cumulative sum: the same digits as a loop)
+            grounded = np.cumsum(np.diff(st) * _grounded_shares(pen[:-1], pen[1:]))[-1] \
+                if st.size > 1 else 0.0
             # towards the fairlead (the higher end): the last node in contact, and where
             # the penetration crosses zero between it and the next node
             up_end = -1 if r[-1] @ up >= r[0] @ up else 0
@@ -293,6 +299,13 @@ def touchdown(model, forces=None) -> dict | None:
                 out.update(rigid_touchdown(model.case, r, st, forces, model.anchors,
                                            model.submerged_weight, up))
     return model.comm.bcast(out, root=0)
+
+
+def _grounded_shares(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """:func:`_grounded_share` of every element at once (end penetrations ``a``, ``b``)."""
+    with np.errstate(invalid="ignore", divide="ignore"):
+        part = np.maximum(a, b) / (np.abs(a) + np.abs(b))
+    return np.where((a > 0) & (b > 0), 1.0, np.where((a > 0) | (b > 0), part, 0.0))
 
 
 def _grounded_share(a: float, b: float) -> float:

@@ -18,12 +18,14 @@ from cablefem.flow import (
     POWER_FLOOR,
     AiryWave,
     Profile,
+    WaveField,
     jonswap,
     jonswap_waves,
     wave_kinematics,
     wave_number,
 )
 from cablefem.modal import solve_modes
+from cablefem.motion import ramp_factors
 from cablefem.statics import solve_static
 
 comm = MPI.COMM_WORLD
@@ -128,6 +130,47 @@ def test_deep_water_is_the_limit_of_finite_depth():
     finite = wave_kinematics([WAVE], pts, 1.3, UP, 0.0, 2000.0, G)
     for a, b in zip(deep, finite):
         assert np.allclose(a, b, rtol=1e-12, atol=1e-15)
+
+
+@pytest.mark.parametrize("depth", [None, 30.0, 2000.0])
+def test_the_wave_field_sums_its_components_at_once(depth):
+    """WaveField (every component at once, its wave numbers found once) against the Airy
+    formulas written out component by component with cosh and sinh, a JONSWAP sea of 60
+    components and two crossing waves, at points below the seabed, in the water and above
+    the surface (held at the surface), during and after the build-up: to round-off (1e-12
+    of the largest value; cosh/sinh of k h <= 700 and the field's exponentials agree to a
+    few units of the last place)."""
+    waves = jonswap_waves(3.0, 8.0, [1.0, 0.0, 0.0]) + [
+        AiryWave(0.5, 4.0, np.array([0.6, 0.8, 0.0]), 1.1), WAVE]
+    rng = np.random.default_rng(3)
+    pts = rng.uniform([-50.0, -20.0, -40.0], [50.0, 20.0, 2.0], (64, 3))
+    field = WaveField(waves, UP, 0.0, depth, G, ramp=5.0)
+    h = 1e300 if depth is None else depth
+    for t in (2.0, 11.0):
+        r, dr, _ = ramp_factors(t, 5.0)
+        vel, acc = np.zeros_like(pts), np.zeros_like(pts)
+        zeta = np.minimum(pts[:, 2], 0.0)
+        for w in waves:
+            k = wave_number(w.omega, G, depth)
+            zc = np.maximum(zeta, -h)
+            if depth is None or k * h > 700:
+                ch = sh = np.exp(k * zeta)
+            else:
+                ch, sh = np.cosh(k * (zc + h)) / np.sinh(k * h), np.sinh(k * (zc + h)) / \
+                    np.sinh(k * h)
+            th = k * (pts @ w.direction) - w.omega * t + w.phase
+            a = 0.5 * w.height * w.omega
+            u = a * ((ch * np.cos(th))[:, None] * w.direction
+                     + (sh * np.sin(th))[:, None] * UP)
+            du = a * w.omega * ((ch * np.sin(th))[:, None] * w.direction
+                                - (sh * np.cos(th))[:, None] * UP)
+            vel += r * u
+            acc += r * du + dr * u
+        got = field.at(pts, t)
+        for mine, ref in zip(got, (vel, acc)):
+            np.testing.assert_allclose(mine, ref, rtol=0, atol=1e-12 * np.max(np.abs(ref)))
+        for mine, ref in zip(got, wave_kinematics(waves, pts, t, UP, 0.0, depth, G, 5.0)):
+            np.testing.assert_array_equal(mine, ref)
 
 
 def test_profiles():
