@@ -81,17 +81,50 @@ class AnchorReactions:
         #: a term's mass changes with the state or time (a fluid's added mass is normal to
         #: the cable; a term's time law): the mass matrices are assembled at each evaluation
         self._mass_moves = model.forms.mass_moves
+        #: the anchors' owned rows: the constrained mass matrix is the unconstrained one
+        #: with these rows and columns zeroed and 1 on the diagonal (one assembly a time)
+        n_owned = model.V.dofmap.index_map.size_local
+        rows = np.concatenate([a.flat_dofs for a in model.anchors] + [np.zeros(0)])
+        self._bc_rows = rows[rows < model.bs * n_owned].astype(PETSc.IntType)
+        self._derive = self._mass_moves and self._derived_is_assembled()
+
+    def _derived_is_assembled(self) -> bool:
+        """Whether :meth:`_derive_constrained` gives the constrained mass matrix assembled
+        with the model's conditions exactly (checked once: the conditions are the anchors'
+        rows); otherwise both are assembled at every evaluation (collective)."""
+        M = self.M.duplicate(copy=True)
+        self._derive_constrained()
+        M.axpy(-1.0, self.M)
+        same = M.norm(PETSc.NormType.NORM_INFINITY) == 0.0
+        M.destroy()
+        if not same:  # the assembled one again
+            m = self.model
+            self.M.zeroEntries()
+            fpetsc.assemble_matrix(self.M, m.m_form, m.bcs, diagonal=1.0)
+            self.M.assemble()
+        return same
+
+    def _derive_constrained(self) -> None:
+        """``M`` from ``M_full``: the anchors' rows and columns zeroed, 1 on the diagonal
+        (what the assembly with the conditions gives: the other entries are the same
+        sums)."""
+        self.M_full.copy(self.M, structure=PETSc.Mat.Structure.SAME_NONZERO_PATTERN)
+        self.M.zeroRowsColumnsLocal(self._bc_rows, diag=1.0)
 
     def _assemble_mass(self) -> None:
-        """The mass matrices at the current state (in place; the KSP refactors)."""
+        """The mass matrices at the current state (in place; the KSP refactors): the
+        unconstrained one assembled, the constrained one derived from it where that was
+        found exact, assembled too otherwise."""
         m = self.model
-        for A, bcs, diagonal in ((self.M, m.bcs, 1.0), (self.M_full, [], None)):
-            A.zeroEntries()
-            if diagonal is None:
-                fpetsc.assemble_matrix(A, m.m_form)
-            else:
-                fpetsc.assemble_matrix(A, m.m_form, bcs, diagonal=diagonal)
-            A.assemble()
+        self.M_full.zeroEntries()
+        fpetsc.assemble_matrix(self.M_full, m.m_form)
+        self.M_full.assemble()
+        if self._derive:
+            self._derive_constrained()
+            return
+        self.M.zeroEntries()
+        fpetsc.assemble_matrix(self.M, m.m_form, m.bcs, diagonal=1.0)
+        self.M.assemble()
 
     def _assemble(self) -> None:
         """The unconstrained residual into ``self.R`` (dolfinx's kernel called directly, as
