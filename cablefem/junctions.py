@@ -201,19 +201,26 @@ class JunctionCorners:
         return _residual(x, *args) - _residual(x, *args, corrected=False)
 
     def jacobian(self, u_local: np.ndarray) -> np.ndarray:
-        """(n, 9, 9) the derivative of :meth:`residual` (complex step over the nine
-        coordinates, in one batch: exact to round-off)."""
+        """(n, 9, 9) the derivative of :meth:`residual` (complex step, in one batch:
+        exact to round-off). The residual depends on the three nodes' differences only (a
+        rigid translation of a kink moves nothing), so the node's three columns are minus
+        the sum of its neighbours': six complex steps, not nine."""
         x = self.positions(u_local)
         n = len(x)
         if not n:
             return np.zeros((0, 9, 9))
-        xs = np.repeat(x.reshape(n, 1, 9), 9, axis=1).astype(complex)  # (n, 9 dirs, 9)
-        xs[:, np.arange(9), np.arange(9)] += 1j * _STEP
-        xs = xs.reshape(9 * n, 3, 3)
-        rep = (lambda a: np.repeat(a, 9, axis=0))
+        dirs = np.r_[0:3, 6:9]  # the neighbours' coordinates
+        xs = np.repeat(x.reshape(n, 1, 9), 6, axis=1).astype(complex)  # (n, 6 dirs, 9)
+        xs[:, np.arange(6), dirs] += 1j * _STEP
+        xs = xs.reshape(6 * n, 3, 3)
+        rep = (lambda a: np.repeat(a, 6, axis=0))
         args = (rep(self.h), rep(self.EA), rep(self.EI), rep(self.cap), self.tension_only)
-        col = _residual(xs, *args) - _residual(xs, *args, corrected=False)
-        return np.ascontiguousarray(np.transpose(col.imag.reshape(n, 9, 9) / _STEP, (0, 2, 1)))
+        col = (_residual(xs, *args) - _residual(xs, *args, corrected=False)).imag / _STEP
+        col = col.reshape(n, 6, 9)
+        K = np.empty((n, 9, 9))
+        K[:, :, dirs] = np.transpose(col, (0, 2, 1))
+        K[:, :, 3:6] = -(K[:, :, 0:3] + K[:, :, 6:9])
+        return K
 
     def add_residual(self, arr: np.ndarray, u_local: np.ndarray) -> None:
         """Add the correction into ``arr``, a vector's local form (owned and ghost entries,
