@@ -225,8 +225,10 @@ class JunctionCorners:
     def add_residual(self, arr: np.ndarray, u_local: np.ndarray) -> None:
         """Add the correction into ``arr``, a vector's local form (owned and ghost entries,
         before the ghosts are added to their owners)."""
-        if len(self) and self.active:
-            np.add.at(arr, self._flat.ravel(), self.residual(u_local).ravel())
+        if len(self) and self.active:  # kinks share nodes (a crossing): summed, as
+            # np.add.at does, by one bincount (np.add.at: 3.4 ms for the roof's 3200 kinks)
+            arr += np.bincount(self._flat.ravel(), self.residual(u_local).ravel(),
+                               minlength=arr.size)[:arr.size]
 
     def add_jacobian(self, A, u_local: np.ndarray, fixed: np.ndarray | None = None) -> None:
         """Add the correction's Jacobian into ``A`` (local indices, ADD; flushed before).
