@@ -49,7 +49,13 @@ def linear_solver_options(n_dofs: int, comm_size: int = 1, reuse: bool = True
     2-core machine): serial AIJ + LU lagged 20, 0.28; BAIJ + LU lagged 10, 0.15; on 2 ranks
     MUMPS, 0.6; BAIJ + redundant LU lagged 10, 0.13-0.16. Rejected on these axially stiff,
     anisotropic systems: algebraic multigrid (GAMG, BoomerAMG: 10-25 times slower),
-    block-Jacobi/ILU and additive Schwarz (hundreds of GMRES iterations on 2 ranks),
+    block-Jacobi/ILU and additive Schwarz (hundreds of GMRES iterations on 2 ranks); again
+    on 2026-11-26 with the kink corners, the Jacobian kept over steps and GMRES to
+    :data:`KSP_RTOL` (1.7 GMRES iterations per Newton iteration with the redundant LU):
+    block Jacobi with an LU per rank 229, additive Schwarz with LU sub-solves and an overlap
+    of 4 (8) elements 47 (38), MUMPS 0.49 s of CPU a step against 0.32 s (rank 0, a shared
+    machine; the axial wave crosses
+    the roof within a step: docs/networks.md),
     PCFIELDSPLIT with a Schur complement on the partition interface (0.28 s per step on 2
     ranks: forming the Schur complement costs 300 triangular solves), MUMPS with METIS or
     SCOTCH orderings (0.6-0.75 s). Override with ``-cable_mat_type``, ``-cable_ksp_type``,
