@@ -183,8 +183,10 @@ def _make_ts(model, dt: float, rho_inf: float, history: SNESHistory,
         J_mat.setOption(PETSc.Mat.Option.KEEP_NONZERO_PATTERN, True)
         ts.setI2Jacobian(I2Jacobian, J_mat)
         ts.setFromOptions()
-        # predictor, stopping test and Jacobian reuse (a fluid's, a seabed's Jacobian is dear)
-        newton = StepNewton(ts, prefix, bool(model.forms.medium_forms))
+        # predictor, stopping test and Jacobian reuse (a fluid's, a seabed's Jacobian is
+        # dear, and so is the kink corners' complex-step one: docs/benchmarks.md, "Networks
+        # on 2 ranks")
+        newton = StepNewton(ts, prefix, bool(model.forms.medium_forms or model.node_terms))
     ts.getSNES().setMonitor(history)
     return ts, (F_vec, J_mat, newton)
 

@@ -11,10 +11,12 @@ from dolfinx import fem
 from dolfinx.fem import petsc as fpetsc
 from petsc4py import PETSc
 
+from cablefem.stepnewton import INCREMENT_RTOL
+
 __all__ = ["default_options", "case_options", "assemble_residual", "assemble_jacobian",
            "assemble_residual_rows", "assemble_jacobian_rows",
            "SNESHistory",
-           "lu_options", "linear_solver_options", "copy_in", "RowsAssembler",
+           "lu_options", "linear_solver_options", "KSP_RTOL", "copy_in", "RowsAssembler",
            "jacobian_columns"]
 
 INSERT, ADD = PETSc.InsertMode.INSERT, PETSc.InsertMode.ADD
@@ -23,6 +25,14 @@ FORWARD, REVERSE = PETSc.ScatterMode.FORWARD, PETSc.ScatterMode.REVERSE
 
 #: above this many degrees of freedom the time integrator reuses its factorisations
 LARGE_ABOVE = 20_000
+
+#: GMRES's relative tolerance on the lagged-LU route: a tenth of Newton's increment test
+#: (:data:`cablefem.stepnewton.INCREMENT_RTOL`). The linear solve only has to make Newton's
+#: correction good to well below the error Newton itself accepts; the true residual and
+#: the increment are tested by Newton (a correction error of ``κ rtol``, κ ~ 1e3 for the
+#: dynamic matrix, slows its contraction by ~1e-5 per iteration). 1e-12 before: 5.3 GMRES
+#: iterations per Newton iteration on the 94 000-dof roof, 3.4 with this.
+KSP_RTOL = 0.1 * INCREMENT_RTOL
 
 
 def linear_solver_options(n_dofs: int, comm_size: int = 1, reuse: bool = True
@@ -39,7 +49,13 @@ def linear_solver_options(n_dofs: int, comm_size: int = 1, reuse: bool = True
     2-core machine): serial AIJ + LU lagged 20, 0.28; BAIJ + LU lagged 10, 0.15; on 2 ranks
     MUMPS, 0.6; BAIJ + redundant LU lagged 10, 0.13-0.16. Rejected on these axially stiff,
     anisotropic systems: algebraic multigrid (GAMG, BoomerAMG: 10-25 times slower),
-    block-Jacobi/ILU and additive Schwarz (hundreds of GMRES iterations on 2 ranks),
+    block-Jacobi/ILU and additive Schwarz (hundreds of GMRES iterations on 2 ranks); again
+    on 2026-11-26 with the kink corners, the Jacobian kept over steps and GMRES to
+    :data:`KSP_RTOL` (1.7 GMRES iterations per Newton iteration with the redundant LU):
+    block Jacobi with an LU per rank 229, additive Schwarz with LU sub-solves and an overlap
+    of 4 (8) elements 47 (38), MUMPS 0.49 s of CPU a step against 0.32 s (rank 0, a shared
+    machine; the axial wave crosses
+    the roof within a step: docs/networks.md),
     PCFIELDSPLIT with a Schur complement on the partition interface (0.28 s per step on 2
     ranks: forming the Schur complement costs 300 triangular solves), MUMPS with METIS or
     SCOTCH orderings (0.6-0.75 s). Override with ``-cable_mat_type``, ``-cable_ksp_type``,
@@ -51,22 +67,29 @@ def linear_solver_options(n_dofs: int, comm_size: int = 1, reuse: bool = True
     """
     opts: dict[str, object] = {"mat_type": "baij", **lu_options(comm_size)}
     if n_dofs > LARGE_ABOVE and reuse:
-        opts.update(ksp_type="gmres", ksp_rtol=1e-12, ksp_max_it=500,
+        opts.update(ksp_type="gmres", ksp_rtol=KSP_RTOL, ksp_max_it=500,
                     snes_lag_preconditioner=10, snes_lag_preconditioner_persists="true")
     return opts
 
 
 def lu_options(comm_size: int = 1) -> dict[str, str]:
-    """A direct solver: PETSc's own LU; in parallel every rank factors the whole system
-    (``pc_type redundant``). On the cable systems seen here (1D cells, nested-dissection
-    ordering, little fill) that is 2.5 to 4 times faster on 2 ranks than MUMPS (measured from
-    6e3 to 1e5 dofs: MUMPS's factorisation ~100 ms and solve ~30 ms at 1e5 dofs against 40
-    and 4 ms). The cost: each rank holds the whole factorisation. ``-cable_pc_type lu
-    -cable_pc_factor_mat_solver_type mumps`` (and ``static_``/``modal_``/``mass_``
-    prefixes) selects MUMPS."""
+    """A direct solver: PETSc's own LU with the approximate minimum degree ordering
+    (``amd``); in parallel every rank factors the whole system (``pc_type redundant``). On
+    the cable systems seen here (1D cells, little fill) that is 2.5 to 4 times faster on 2
+    ranks than MUMPS (measured from 6e3 to 1e5 dofs: MUMPS's factorisation ~100 ms and solve
+    ~30 ms at 1e5 dofs against 40 and 4 ms). The cost: each rank holds the whole
+    factorisation. ``-cable_pc_type lu -cable_pc_factor_mat_solver_type mumps`` (and
+    ``static_``/``modal_``/``mass_`` prefixes) selects MUMPS.
+
+    The ordering, measured on the 94 000-dof roof's dynamic matrix (BAIJ, 2026-11-26,
+    numeric factorisation / triangular solve, ms): nested dissection (PETSc's default) 144
+    / 5.5, one-way dissection 168 / 7.1, quotient minimum degree 58 / 3.5, reverse
+    Cuthill-McKee 1010 / 34, ``amd`` 33 / 3.0; its statics 10.0 s of CPU with nested
+    dissection, 6.5 s with ``amd``, the same anchor forces to 1e-16."""
     if comm_size == 1:
-        return {"ksp_type": "preonly", "pc_type": "lu"}
-    return {"ksp_type": "preonly", "pc_type": "redundant", "redundant_pc_type": "lu"}
+        return {"ksp_type": "preonly", "pc_type": "lu", "pc_factor_mat_ordering_type": "amd"}
+    return {"ksp_type": "preonly", "pc_type": "redundant", "redundant_pc_type": "lu",
+            "redundant_pc_factor_mat_ordering_type": "amd"}
 
 
 class default_options:

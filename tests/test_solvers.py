@@ -27,6 +27,10 @@ def test_automatic_choice(n_dofs, size):
     assert o["pc_type"] == ("lu" if size == 1 else "redundant")
     assert o["ksp_type"] == ("gmres" if n_dofs > LARGE_ABOVE else "preonly")
     assert ("snes_lag_preconditioner" in o) == (n_dofs > LARGE_ABOVE)
+    if n_dofs > LARGE_ABOVE:  # tied to Newton's increment test, a tenth of it (1e-12 before)
+        from cablefem.stepnewton import INCREMENT_RTOL
+
+        assert o["ksp_rtol"] == pytest.approx(0.1 * INCREMENT_RTOL)
 
 
 def _history(make_case, options):
@@ -56,3 +60,75 @@ def test_overrides_give_the_same_forces(make_case):
     assert np.abs(ref).max() > 20.0  # the history is the tension's, not zeros
     np.testing.assert_allclose(aij, ref, rtol=0, atol=1e-9 * 25.0)
     np.testing.assert_allclose(lagged, ref, rtol=0, atol=1e-9 * 25.0)
+
+
+def _roof_net(path):
+    """A 2 x 2 saddle net (meshes/make_roof.py, 4 elements per bay, 40 m plan, 1 m saddle),
+    written by rank 0 into a folder every rank sees."""
+    import importlib.util
+    from pathlib import Path
+
+    import meshio
+
+    if MPI.COMM_WORLD.rank == 0:
+        root = Path(__file__).resolve().parents[1]
+        spec = importlib.util.spec_from_file_location("make_roof",
+                                                      root / "meshes" / "make_roof.py")
+        mod = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(mod)
+        meshio.write(path, mod.roof(2, 4, 40.0, 1.0), file_format="gmsh22", binary=False)
+    MPI.COMM_WORLD.Barrier()
+    return path
+
+
+def _net_history(case, comm, options):
+    from cablefem.dynamics import DynamicProblem
+    from cablefem.network import NetworkModel
+
+    model = NetworkModel(comm, case)
+    assert model.node_terms  # the kink corners: their Jacobian is the costly part
+    solve_static(model)
+    forces = []
+    with DynamicProblem(model, 0.005, petsc_options=options) as problem:
+        forces.append(problem.anchor_forces().copy())
+        for _ in range(40):
+            problem.step()
+            forces.append(problem.anchor_forces().copy())
+        newton = problem.ts.getSNESIterations()
+        assemblies = problem.newton.assemblies
+    return np.array(forces), newton, assemblies
+
+
+def test_network_route_equals_the_direct_solve(mpi_tmp_path):
+    """A saddle net with its kink corners under a harmonic uplift, 40 steps: the route of
+    large networks (GMRES to KSP_RTOL on an LU lagged over 10 Jacobians) with the
+    Jacobian kept over steps (the default with kink corners), on all ranks (partitioned
+    under mpirun), gives the anchor forces of a fresh Jacobian and a direct solve at every
+    Newton iteration on one rank. Both stop Newton once its estimated error is below
+    INCREMENT_RTOL of the step's displacement increment; a force error of that share of
+    each step's force change, summed over the steps, bounds the difference (x 2: both
+    runs; x 10: the test is an estimate of the error, not a bound). The default reuses the
+    Jacobian: fewer assemblies than Newton iterations (one per iteration before)."""
+    from cablefem.case import parse_case
+    from cablefem.petsc_utils import KSP_RTOL
+    from cablefem.stepnewton import INCREMENT_RTOL
+
+    mesh = _roof_net(mpi_tmp_path / "roof.msh")
+    case = parse_case({
+        "title": "roof", "network": {"mesh": str(mesh)},
+        "sections": [{"name": "s", "EA": 2e8, "EI": 2e3, "mass": 10.0}],
+        "cables": [{"group": "cables_x", "section": "s", "pretension": 1e5},
+                   {"group": "cables_y", "section": "s", "pretension": 1e5}],
+        "gravity": {"g": 9.81}, "anchors": [{"name": "anchors_x"}, {"name": "anchors_y"}],
+        "loads": [{"value": [0.0, 0.0, 1500.0], "time": {"type": "harmonic", "omega": 8.0}}],
+        "solver": {"span_bending": False}})
+    direct, _, _ = _net_history(case, MPI.COMM_SELF,
+                                {"newton_jacobian_reuse": 0, "ksp_type": "preonly"})
+    route, newton, assemblies = _net_history(
+        case, MPI.COMM_WORLD, {**LAGGED, "ksp_rtol": KSP_RTOL})
+    assert assemblies < newton  # the Jacobian kept over steps
+    variation = np.abs(np.diff(direct, axis=0)).sum(axis=0)
+    assert variation.max() > 1e3  # the load moves the anchor forces (N)
+    bound = 10 * 2 * INCREMENT_RTOL * variation + 1e-9 * np.abs(direct).max()
+    print("max |route - direct| / bound:", np.max(np.abs(route - direct) / bound))
+    assert np.all(np.abs(route - direct) <= bound)
