@@ -10,7 +10,7 @@ from dolfinx.fem import petsc as fpetsc
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from cablefem.petsc_utils import case_options, default_options, lu_options
+from cablefem.petsc_utils import case_options, default_options, lu_options, model_dofs
 
 __all__ = ["initial_velocity"]
 
@@ -61,7 +61,8 @@ def initial_velocity(model, V: PETSc.Vec, t: float = 0.0, quasi_static: bool = T
     prefix = model.prefix + "static_"
     ksp.setOptionsPrefix(prefix)
     ksp.setOperators(K)
-    with default_options(prefix, lu_options(model.comm.size), case_options(model, "static")):
+    with default_options(prefix, lu_options(model.comm.size, model_dofs(model)),
+                         case_options(model, "static")):
         ksp.setFromOptions()
     x = V.duplicate()
     ksp.solve(b, x)

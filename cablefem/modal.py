@@ -32,7 +32,7 @@ from dolfinx.fem import petsc as fpetsc
 from slepc4py import SLEPc
 
 from cablefem import junctions
-from cablefem.petsc_utils import case_options, default_options, lu_options
+from cablefem.petsc_utils import case_options, default_options, lu_options, model_dofs
 from cablefem.units import unit
 
 __all__ = ["ModalProblem", "ModalResult", "solve_modes", "classify_mode", "free_dofs"]
@@ -187,7 +187,8 @@ class ModalProblem:
                 for f, x in zip((model.v, model.a), saved):
                     f.x.array[:] = x
         defaults = {"st_type": "sinvert", "eps_target": 0.0, "eps_tol": 1e-12,
-                    **{"st_" + k: v for k, v in lu_options(model.comm.size).items()}}
+                    **{"st_" + k: v
+                       for k, v in lu_options(model.comm.size, model_dofs(model)).items()}}
         eps = SLEPc.EPS().create(model.comm)
         eps.setOptionsPrefix(self.prefix)
         eps.setOperators(self.K, self.M)
@@ -249,7 +250,8 @@ class ModalProblem:
         pep.setTarget(0.0)
         pep.setWhichEigenpairs(SLEPc.PEP.Which.TARGET_MAGNITUDE)
         defaults = {"st_type": "sinvert", "pep_tol": 1e-12,
-                    **{"st_" + k: v for k, v in lu_options(model.comm.size).items()}}
+                    **{"st_" + k: v
+                       for k, v in lu_options(model.comm.size, model_dofs(model)).items()}}
         with default_options(self.prefix + "pep_", defaults, {}):
             pep.setFromOptions()
         pep.solve()

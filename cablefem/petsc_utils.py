@@ -16,7 +16,8 @@ from cablefem.stepnewton import INCREMENT_RTOL
 __all__ = ["default_options", "case_options", "assemble_residual", "assemble_jacobian",
            "assemble_residual_rows", "assemble_jacobian_rows",
            "SNESHistory",
-           "lu_options", "linear_solver_options", "KSP_RTOL", "copy_in", "RowsAssembler",
+           "lu_options", "model_dofs", "linear_solver_options", "KSP_RTOL", "copy_in",
+           "RowsAssembler",
            "jacobian_columns"]
 
 INSERT, ADD = PETSc.InsertMode.INSERT, PETSc.InsertMode.ADD
@@ -65,16 +66,23 @@ def linear_solver_options(n_dofs: int, comm_size: int = 1, reuse: bool = True
     (``GA`` = 1e5 T) makes GMRES on a stale factorisation crawl: the 5 x 5 saddle net's rod
     (34 425 dofs) took more than 6 s a step with the reused LU, 0.8 s with a fresh one.
     """
-    opts: dict[str, object] = {"mat_type": "baij", **lu_options(comm_size)}
+    opts: dict[str, object] = {"mat_type": "baij", **lu_options(comm_size, n_dofs)}
     if n_dofs > LARGE_ABOVE and reuse:
         opts.update(ksp_type="gmres", ksp_rtol=KSP_RTOL, ksp_max_it=500,
                     snes_lag_preconditioner=10, snes_lag_preconditioner_persists="true")
     return opts
 
 
-def lu_options(comm_size: int = 1) -> dict[str, str]:
-    """A direct solver: PETSc's own LU with the approximate minimum degree ordering
-    (``amd``); in parallel every rank factors the whole system (``pc_type redundant``). On
+def model_dofs(model) -> int:
+    """The model's number of unknowns over all ranks (what :func:`lu_options` sizes by)."""
+    return model.bs * model.V.dofmap.index_map.size_global
+
+
+def lu_options(comm_size: int = 1, n_dofs: int | None = None) -> dict[str, str]:
+    """A direct solver: PETSc's own LU, above :data:`LARGE_ABOVE` degrees of freedom
+    (``n_dofs``) with the approximate minimum degree ordering (``amd``), below with PETSc's
+    default (nested dissection); in parallel every rank factors the whole system
+    (``pc_type redundant``). On
     the cable systems seen here (1D cells, little fill) that is 2.5 to 4 times faster on 2
     ranks than MUMPS (measured from 6e3 to 1e5 dofs: MUMPS's factorisation ~100 ms and solve
     ~30 ms at 1e5 dofs against 40 and 4 ms). The cost: each rank holds the whole
@@ -85,11 +93,20 @@ def lu_options(comm_size: int = 1) -> dict[str, str]:
     numeric factorisation / triangular solve, ms): nested dissection (PETSc's default) 144
     / 5.5, one-way dissection 168 / 7.1, quotient minimum degree 58 / 3.5, reverse
     Cuthill-McKee 1010 / 34, ``amd`` 33 / 3.0; its statics 10.0 s of CPU with nested
-    dissection, 6.5 s with ``amd``, the same anchor forces to 1e-16."""
+    dissection, 6.5 s with ``amd``, the same anchor forces to 1e-16. Not below: PETSc's LU
+    does not pivot, and with ``amd`` a 30-element mooring line jerked onto its seabed
+    (``tests/test_seabed.py``, the bouncing line) stalled Newton at |F| = 3e8 where nested
+    dissection goes through; the small systems gain nothing measurable from it."""
+    amd = n_dofs is not None and n_dofs > LARGE_ABOVE
     if comm_size == 1:
-        return {"ksp_type": "preonly", "pc_type": "lu", "pc_factor_mat_ordering_type": "amd"}
-    return {"ksp_type": "preonly", "pc_type": "redundant", "redundant_pc_type": "lu",
-            "redundant_pc_factor_mat_ordering_type": "amd"}
+        opts = {"ksp_type": "preonly", "pc_type": "lu"}
+        if amd:
+            opts["pc_factor_mat_ordering_type"] = "amd"
+        return opts
+    opts = {"ksp_type": "preonly", "pc_type": "redundant", "redundant_pc_type": "lu"}
+    if amd:
+        opts["redundant_pc_factor_mat_ordering_type"] = "amd"
+    return opts
 
 
 class default_options:

@@ -30,6 +30,7 @@ from cablefem.petsc_utils import (
     case_options,
     default_options,
     lu_options,
+    model_dofs,
 )
 
 __all__ = ["AnchorReactions"]
@@ -73,7 +74,7 @@ class AnchorReactions:
         self.ksp = PETSc.KSP().create(model.comm)
         self.ksp.setOptionsPrefix(prefix)
         self.ksp.setOperators(self.M)
-        with default_options(prefix, lu_options(model.comm.size),
+        with default_options(prefix, lu_options(model.comm.size, model_dofs(model)),
                              case_options(model, "mass")):
             self.ksp.setFromOptions()
         self.rhs = self.R.duplicate()

@@ -34,6 +34,7 @@ from cablefem.petsc_utils import (
     copy_in,
     default_options,
     lu_options,
+    model_dofs,
 )
 from cablefem.reactions import AnchorReactions
 from cablefem.units import unit
@@ -69,7 +70,7 @@ def _make_snes(model, history: SNESHistory, bilateral: bool = False, prefix: str
                 "snes_atol": max(1e-10 * model.force_scale,
                                  10.0 * model.residual_floor(displaced=True)),
                 "snes_stol": 1e-14,
-                **lu_options(model.comm.size), **model.static_options,
+                **lu_options(model.comm.size, model_dofs(model)), **model.static_options,
                 **extra}
     f_form = model.f_static_bilateral if bilateral else model.f_static
     j_form = model.j_static_bilateral if bilateral else model.j_static
