@@ -204,6 +204,9 @@ def test_touchdown_history_follows_a_slow_surge(mpi_tmp_path):
     assert td["times_off_the_seabed"] == 0
 
 
+# a long run (its jerk cuts the step; 39 s on 2 ranks): the seabed's parallel paths are
+# the other tests' here (the touchdown history, the dynamic runs)
+@pytest.mark.single_rank
 def test_a_line_bouncing_off_the_seabed_warns(mpi_tmp_path):
     """A 2 m surge started over 0.5 s (the ramp's jerk) makes the lying line bounce on the
     contact's stiffness (sqrt(k/m) dt = 141 rad/s x 0.05 s = 7: not resolved): at some
