@@ -15,7 +15,7 @@ import numpy as np
 
 __all__ = ["p1_frequency_ratio", "alpha_frequency_ratio", "effective_element",
            "frequency_error", "model_frequency_error",
-           "network_frequency_error", "mode_mesh_error"]
+           "network_frequency_error", "mode_mesh_error", "mode_mesh_errors"]
 
 
 def p1_frequency_ratio(theta) -> np.ndarray:
@@ -111,18 +111,10 @@ def model_frequency_error(model, static, omega: float, time_step: bool = False
     return frequency_error(omega, static.min_tension, mass, effective_element(stations))
 
 
-def network_frequency_error(model, static, omega: float, shape) -> float | None:
-    """The mesh's relative frequency error of a network's mode at ``omega`` with mode shape
-    ``shape`` (a Function of the model's space): each cable element's
-    ``p1_frequency_ratio(k h) - 1`` at its own wavenumber ``k = omega sqrt(m / T)`` (its
-    static tension ``T``, its mass per length ``m`` with a fluid's added mass, ``h`` its
-    stress-free length), weighted by the mode's kinetic energy in the element
-    (``m h (|φ_a|² + |φ_b|² + φ_a·φ_b)/3``, the consistent mass): a Rayleigh quotient's
-    error is the energy-weighted mean of the elements' (docs/theory.md §5.2). The
-    damper's cells and slack elements carry no wave of the string and are left out.
-    Collective; None for a model that is not a network, or without a tensioned element."""
-    if not getattr(model, "is_network", False) or static is None:
-        return None
+def _network_elements(model):
+    """What :func:`network_frequency_error` needs of a network's owned elements, whatever
+    the mode: the cells' vertex dofs, mass per length (a fluid's added mass in), static
+    tension, stress-free length and which carry a string's wave (a cable's, tensioned)."""
     n = model.mesh.topology.index_map(1).size_local
     cable = np.asarray(model.cable_cells(), bool)[:n]
     T = np.asarray(model.tension_field().x.array[:n], float)
@@ -136,14 +128,43 @@ def network_frequency_error(model, static, omega: float, shape) -> float | None:
     h = np.asarray(model.c.x.array[:n], float) * np.linalg.norm(x[g[:, 1]] - x[g[:, 0]],
                                                                 axis=1)
     dofs = model.V.dofmap.list.array.reshape(-1, 2)[:n]
+    ok = cable & (T > 0) & (m > 0) & (h > 0)
+    return dofs, m, T, h, ok
+
+
+def network_frequency_error(model, static, omega: float, shape, elements=None
+                            ) -> float | None:
+    """The mesh's relative frequency error of a network's mode at ``omega`` with mode shape
+    ``shape`` (a Function of the model's space): each cable element's
+    ``p1_frequency_ratio(k h) - 1`` at its own wavenumber ``k = omega sqrt(m / T)`` (its
+    static tension ``T``, its mass per length ``m`` with a fluid's added mass, ``h`` its
+    stress-free length), weighted by the mode's kinetic energy in the element
+    (``m h (|φ_a|² + |φ_b|² + φ_a·φ_b)/3``, the consistent mass): a Rayleigh quotient's
+    error is the energy-weighted mean of the elements' (docs/theory.md §5.2). The
+    damper's cells and slack elements carry no wave of the string and are left out.
+    ``elements``: :func:`_network_elements` of the model, when the caller has them (they
+    do not depend on the mode). Collective; None for a model that is not a network, or
+    without a tensioned element."""
+    if not getattr(model, "is_network", False) or static is None:
+        return None
+    dofs, m, T, h, ok = _network_elements(model) if elements is None else elements
     phi = np.asarray(shape.x.array, float).reshape(-1, model.bs)[:, :3]
     pa, pb = phi[dofs[:, 0]], phi[dofs[:, 1]]
     w = m * h * (np.sum(pa * pa, 1) + np.sum(pb * pb, 1) + np.sum(pa * pb, 1)) / 3
-    ok = cable & (T > 0) & (m > 0) & (h > 0)
-    err = np.zeros(n)
+    err = np.zeros(m.size)
     err[ok] = p1_frequency_ratio(omega * np.sqrt(m[ok] / T[ok]) * h[ok]) - 1
     num, den = model.comm.allreduce(np.array([np.sum(w[ok] * err[ok]), np.sum(w[ok])]))
     return float(num / den) if den > 0 else None
+
+
+def mode_mesh_errors(model, static, modal) -> list[float | None]:
+    """:func:`mode_mesh_error` of every mode of ``modal``, a network's element data
+    gathered once (collective for a network)."""
+    elements = _network_elements(model) if getattr(model, "is_network", False) and \
+        static is not None else None
+    return [network_frequency_error(model, static, float(w), sh, elements)
+            if elements is not None else model_frequency_error(model, static, float(w))
+            for w, sh in zip(modal.omegas, modal.shapes)]
 
 
 def mode_mesh_error(model, static, modal, i: int) -> float | None:

@@ -119,13 +119,13 @@ def excitation(case) -> tuple[list[float], bool]:
     return sorted(set(lines)), random
 
 
-def _uniform(t: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The samples on a uniform grid of as many points (an output grid is uniform but for
-    the last row of a run that stops between its steps)."""
+def _uniform(t: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The rows ``F`` (per column) on a uniform grid of as many points (an output grid is
+    uniform but for the last row of a run that stops between its steps)."""
     grid = np.linspace(t[0], t[-1], t.size)
     if np.allclose(np.diff(t), grid[1] - grid[0], rtol=1e-6, atol=0.0):
-        return t, v
-    return grid, np.interp(grid, t, v)
+        return t, F
+    return grid, np.column_stack([np.interp(grid, t, F[:, k]) for k in range(F.shape[1])])
 
 
 def _lines(lines: list[float], span: float, nyquist: float, half: bool = False
@@ -238,10 +238,7 @@ def history_error(times, forces, moment_of, lines: list[float], random: bool,
         return None
     if (t[-1] - t[0]) * spectrum.omegas[0] < 2.0 * math.pi:
         return None  # less than a period of the lowest mode: no spectrum to speak of
-    grid, _ = _uniform(t, t)
-    if grid is not t:
-        F = np.column_stack([np.interp(grid, t, F[:, k]) for k in range(3)])
-        t = grid
+    t, F = _uniform(t, F)
     M = np.asarray(moment_of(t, F), float)
     rms = float(np.sqrt(np.nanmean(M * M)))
     if not rms > 0:

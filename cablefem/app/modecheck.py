@@ -21,7 +21,7 @@ from __future__ import annotations
 import numpy as np
 
 from cablefem import asymptotics
-from cablefem.discretisation import mode_mesh_error
+from cablefem.discretisation import mode_mesh_errors
 
 #: Largest ``k ell`` of a mode inside the method's range: there the layer's decay length
 #: for the mode, ``ell / sqrt(1 + (k ell)^2)``, is within 11 % of the static one the string
@@ -57,9 +57,10 @@ def mode_validity(summary: dict, model, static, modal, warn, threshold: float,
     e1 = min(len(clamps), 2) * max((c[3] for c in clamps), default=0.0)
     e_outer = e1 if outer_order == 0 else e1 * e1
     bad, meshes = [], {}
+    mesh_errors = mode_mesh_errors(model, static, modal)  # collective for a network
     for i, (entry, w) in enumerate(zip(summary["modes"], modal.omegas)):
         kl = max((w * np.sqrt(m * EI) / T for T, EI, m, _ in clamps), default=0.0)
-        mesh = abs(mode_mesh_error(model, static, modal, i) or 0.0)
+        mesh = abs(mesh_errors[i] or 0.0)
         est = e_outer + e1 * kl * kl / 2 + abs(entry.get("span_bending_shift", 0.0)) + mesh
         entry["error_estimate"] = float(est)
         meshes[i + 1] = mesh
