@@ -86,21 +86,32 @@ class StringComposite:
         """Points, curvature and moment of the field at ``t`` in the current state
         (collective; None on ranks other than 0); ``layers``: each clamped anchor's moment
         columns at ``t`` (one row)."""
+        return self.finish(self.state(t, forces), layers)
+
+    def state(self, t: float, forces: np.ndarray) -> dict:
+        """What the field at ``t`` takes from the current state (collective; the nodal
+        arrays on rank 0 only): :meth:`finish` makes the field from it and the clamped
+        layers, later if need be (the output computes the layers in batches of rows)."""
         m = self.model
+        return {"t": t, "r": _nodal_positions(m), "a": m.gather_nodal(m.a),
+                "kinks": self.kink_layers(t)}
+
+    def finish(self, state: dict, layers: dict) -> tuple:
+        """The field of :meth:`state` with the clamped anchors' ``layers`` at its time (one
+        row each); pure NumPy (None on ranks other than 0)."""
+        m = self.model
+        if m.comm.rank != 0:
+            return None, None, None
         s_a = [m.geometry.stations[c.node] for c in self.clamped]
-        r = _nodal_positions(m)
-        a = m.gather_nodal(m.a)
-        kinks = self.kink_layers(t)
-        pos = kap = None
-        if m.comm.rank == 0:
-            get = lambda k: np.array([layers[c.name][k][0] for c in self.clamped])  # noqa
-            deltas = np.where(get("slack"), np.nan, get("delta"))
-            normals = np.nan_to_num(get("normal")).reshape(-1, 3)
-            pos, kap = composite_field(m.geometry.stations, r, a, self.EA, self.EI, self.m,
-                                       section_load(self.columns, m.case, t), self.stations,
-                                       s_a, deltas, get("layer_length"), normals,
-                                       m.tension_only, kinks=kinks)
-        return pos, kap, None if kap is None else self.EI * kap
+        get = lambda k: np.array([layers[c.name][k][0] for c in self.clamped])  # noqa
+        deltas = np.where(get("slack"), np.nan, get("delta"))
+        normals = np.nan_to_num(get("normal")).reshape(-1, 3)
+        pos, kap = composite_field(m.geometry.stations, state["r"], state["a"], self.EA,
+                                   self.EI, self.m,
+                                   section_load(self.columns, m.case, state["t"]),
+                                   self.stations, s_a, deltas, get("layer_length"), normals,
+                                   m.tension_only, kinks=state["kinks"])
+        return pos, kap, self.EI * kap
 
 
 class NetworkSegments:
@@ -133,10 +144,36 @@ class NetworkSegments:
 
     def at(self, t: float, forces: np.ndarray, layers: dict) -> tuple:
         """Points, curvature and moment along every segment at ``t`` (collective)."""
-        return tuple(self._segments(t, forces, layers))
+        return self.finish(self.state(t, forces), layers)
+
+    def state(self, t: float, forces: np.ndarray) -> dict:
+        """What the field at ``t`` takes from the current state (collective): the clamped
+        anchors' forces and the kinks' segments (see :meth:`StringComposite.state`)."""
+        pts, kap, mom = [], [], []
+        if self.kink_moments is not None:
+            self._kink_segments(t, pts, kap, mom, True)
+        return {"t": t, "forces": np.array(forces, float), "kinks": (pts, kap, mom)}
+
+    def finish(self, state: dict, layers: dict) -> tuple:
+        """The segments of :meth:`state` with the clamped anchors' ``layers`` (pure NumPy)."""
+        pts, kap, mom = self._anchor_segments(state["t"], state["forces"], layers)
+        kpts, kkap, kmom = state["kinks"]
+        return (np.concatenate(pts + kpts), np.concatenate(kap + kkap),
+                np.concatenate(mom + kmom))
 
     def _segments(self, t: float, forces: np.ndarray, layers: dict | None):
         """Points (and with ``layers``, curvature and moment) along each segment at ``t``."""
+        pts, kap, mom = self._anchor_segments(t, forces, layers)
+        if self.kink_moments is not None:
+            self._kink_segments(t, pts, kap, mom, layers is not None)
+        out = [np.concatenate(pts)]
+        if layers is not None:
+            out += [np.concatenate(kap), np.concatenate(mom)]
+        return out
+
+    def _anchor_segments(self, t: float, forces: np.ndarray, layers: dict | None):
+        """Each clamped anchor's segment: its points (and with ``layers`` its curvature and
+        moment) at ``t``."""
         idx = {a.name: i for i, a in enumerate(self.model.anchors)}
         pts, kap, mom = [], [], []
         for c, sig in zip(self.clamped, self.sigmas):
@@ -154,12 +191,7 @@ class NetworkSegments:
                                                   )[:, None] * np.nan_to_num(lay["normal"][0])
             kap.append(k)
             mom.append(c.section.EI * k)
-        if self.kink_moments is not None:
-            self._kink_segments(t, pts, kap, mom, layers is not None)
-        out = [np.concatenate(pts)]
-        if layers is not None:
-            out += [np.concatenate(kap), np.concatenate(mom)]
-        return out
+        return pts, kap, mom
 
     def _kink_segments(self, t: float, pts: list, kap: list, mom: list,
                        fields: bool) -> None:

@@ -59,6 +59,8 @@ class RunOutput:
     batches) and, at field times, the string fields and the composite moment field."""
 
     FLUSH_ROWS = 256
+    #: the waiting composite fields' states are kept up to this size, then written
+    WAITING_BYTES = 64 * 2**20
 
     def __init__(self, model: CableModel, outdir: Path, columns: AnchorMoments, kind: str,
                  static_forces: np.ndarray, resume_after: float | None = None,
@@ -99,6 +101,9 @@ class RunOutput:
         self._pending = 0  # rows recorded, not yet written
         self._last: dict = {}  # the moment columns of the last written block, per anchor
         self._last_time = None  # and its last time
+        #: composite fields waiting for their row's layers: (row index, field state)
+        self._waiting: list[tuple[int, dict]] = []
+        self._waiting_bytes = 0
         self.last_fields_time = None
         self.moments = None
         #: the composite moment field (None: nothing clamped or kinked, or a rod)
@@ -195,24 +200,44 @@ class RunOutput:
         self._last_time = self.times[-1]
         self.csv.write(table)
         self._pending = 0
+        first = len(self.times) - n  # the block's first row
+        for row, state in self._waiting:  # the composite fields that waited for this block
+            j = row - first
+            self._write_moments(state, {c.name: {k: v[j:j + 1] for k, v in
+                                                 self._last[c.name].items()}
+                                        for c in self.clamped})
+        self._waiting, self._waiting_bytes = [], 0
 
     def fields(self, t: float, forces: np.ndarray) -> None:
-        """Write the string fields and the composite moment field at ``t`` (collective)."""
+        """Write the string fields at ``t`` and the composite moment field (collective).
+        When ``t``'s row is pending, the composite field waits for the row's layers, which
+        the next :meth:`flush` computes with its batch (its state is kept till then)."""
         self.string.write(t)
         self.last_fields_time = t
         if self.moments is None:  # nothing clamped or kinked; a beam's is in string.xdmf
             return
-        if self._pending and self.times[-1] == t:
-            self.flush()  # this time's row: its layers are those of the field
-        idx = self._index
+        state = self.composite.state(t, forces)
+        if self._pending and self.times[-1] == t:  # its layers come with the batch
+            self._waiting.append((len(self.times) - 1, state))
+            self._waiting_bytes += sum(v.nbytes for v in state.values()
+                                       if isinstance(v, np.ndarray))
+            if self._waiting_bytes > self.WAITING_BYTES:
+                self.flush()
+            return
+        if self._waiting:  # the frames in time order
+            self.flush()
         if self._last_time == t and self._last:
             layers = {c.name: {k: v[-1:] for k, v in self._last[c.name].items()}
                       for c in self.clamped}
         else:  # a time without a row (a failed step's state)
+            idx = self._index
             layers = {c.name: self._moments(c, np.array([t]), forces[idx[c.name]][None, :])
                       for c in self.clamped}
-        pos, kap, mom = self.composite.at(t, forces, layers)
-        self.moments.write(t, pos, kap, mom, self.composite.stations)
+        self._write_moments(state, layers)
+
+    def _write_moments(self, state: dict, layers: dict) -> None:
+        pos, kap, mom = self.composite.finish(state, layers)
+        self.moments.write(state["t"], pos, kap, mom, self.composite.stations)
 
     def checkpoint(self) -> dict:
         """Make every output complete and listed as it is now (at checkpoints); the number
