@@ -109,6 +109,15 @@ class AnchorBC:
             val = full
         return np.asarray(val)[self._layout()[1]]
 
+    def prescribed_from(self, value: np.ndarray) -> np.ndarray:
+        """:meth:`prescribed`'s values for a velocity or acceleration ``value`` (3,) the
+        caller already has."""
+        if self.bs > 3:
+            full = np.zeros(self.bs)
+            full[:3] = value
+            value = full
+        return np.asarray(value)[self._layout()[1]]
+
     def displacement(self, t: float) -> np.ndarray:
         """Prescribed displacement of the anchor node from its reference position, m."""
         d = self.position - self.reference

@@ -88,6 +88,7 @@ class AnchorReactions:
         rows = np.concatenate([a.flat_dofs for a in model.anchors] + [np.zeros(0)])
         self._bc_rows = rows[rows < model.bs * n_owned].astype(PETSc.IntType)
         self._derive = self._mass_moves and self._derived_is_assembled()
+        self._zero_rows = self._zero_rows_is_set_bc()
 
     def _derived_is_assembled(self) -> bool:
         """Whether :meth:`_derive_constrained` gives the constrained mass matrix assembled
@@ -144,20 +145,46 @@ class AnchorReactions:
             add_residual(self.model, loc.array_w)
         self.R.ghostUpdate(addv=ADD, mode=REVERSE)
 
+    def _zero_rows_is_set_bc(self) -> bool:
+        """Whether zeroing :attr:`_bc_rows` of an owned array is what ``set_bc(b, bcs,
+        scale=0)`` does (checked once on a vector of ones: the conditions are the anchors'
+        rows); otherwise dolfinx's ``set_bc`` is called at every evaluation."""
+        with self.rhs.localForm() as loc:
+            loc.set(1.0)
+        fpetsc.set_bc(self.rhs, self.model.bcs, scale=0.0)
+        zero = np.flatnonzero(self.rhs.array_r == 0.0)
+        return zero.size == self._bc_rows.size and np.array_equal(zero,
+                                                                 np.sort(self._bc_rows))
+
     def equilibrium_acceleration(self, t: float) -> None:
         """Set ``model.a`` to the acceleration that satisfies the equations of motion at
         ``t`` for the current ``model.u`` and ``model.v`` (anchors: prescribed)."""
+        self._equilibrium(t, self._anchor_accelerations(t))
+        self.R.scale(-1.0)  # what it left there before: -F(u, v, a_b)
+
+    def _anchor_accelerations(self, t: float) -> list:
+        """Each anchor's prescribed acceleration at ``t`` (None: without motion)."""
+        return [anc.acceleration(t) if anc.motion is not None else None
+                for anc in self.model.anchors]
+
+    def _equilibrium(self, t: float, acc: list) -> None:
+        """:meth:`equilibrium_acceleration` with the anchors' accelerations ``acc``,
+        leaving ``F(u, v, a_b)`` in ``self.R`` and the correction ``δa`` in ``self.da``."""
         m = self.model
         if self._mass_moves:
             self._assemble_mass()
-        m.a.x.array[:] = 0.0
-        for anc in m.anchors:
-            if anc.dofs.size and anc.motion is not None:  # the others: zero, set above
-                m.a.x.array[anc.flat_dofs] = anc.prescribed("acceleration", t)
+        arr = m.a.x.array
+        arr[:] = 0.0
+        for anc, a in zip(m.anchors, acc):
+            if anc.dofs.size and a is not None:  # the others: zero, set above
+                arr[anc.flat_dofs] = anc.prescribed_from(a)
         self._assemble()
-        self.R.scale(-1.0)
-        self.R.copy(self.rhs)
-        fpetsc.set_bc(self.rhs, m.bcs, scale=0.0)  # zero rows: anchors keep a_b
+        rhs = self.rhs.array_w
+        np.negative(self.R.array_r, out=rhs)
+        if self._zero_rows:
+            rhs[self._bc_rows] = 0.0  # zero rows: anchors keep a_b
+        else:
+            fpetsc.set_bc(self.rhs, m.bcs, scale=0.0)
         self.ksp.solve(self.rhs, self.da)
         if self.ksp.getConvergedReason() < 0:
             raise RuntimeError(f"mass-matrix solve failed at t={t:g} "
@@ -178,9 +205,10 @@ class AnchorReactions:
         """
         m = self.model
         if dynamic:
-            self.equilibrium_acceleration(t)  # leaves -F(u, v, a_b) in self.R
+            acc = self._anchor_accelerations(t)
+            self._equilibrium(t, acc)  # leaves F(u, v, a_b) in self.R
             self.M_full.mult(self.da, self.Mda)
-            self.R.axpby(1.0, -1.0, self.Mda)  # R = M da - (-F) = F(u, v, a)
+            self.R.axpy(1.0, self.Mda)  # R = F(u, v, a_b) + M da = F(u, v, a)
             arr = self.R.array_r
         else:
             m.a.x.array[:] = 0.0
@@ -192,8 +220,8 @@ class AnchorReactions:
             anc = m.anchors[i]
             np.negative(arr[row: row + 3], out=local[i, :3])
             if m.hinges:  # the layer's weight and inertia: the force at the real anchor
-                acc = anc.acceleration(t) if dynamic else np.zeros(3)
-                local[i, :3] += m.hinges.layer_force(i, acc)
+                a = acc[i] if dynamic else None
+                local[i, :3] += m.hinges.layer_force(i, np.zeros(3) if a is None else a)
             if m.is_beam:  # a rod: its rotation rows' reaction -> the moment (rod.py)
                 off = row + anc.rot_offset
                 local[i, 3:] = -(anc.moment_map @ arr[off: off + 3])
