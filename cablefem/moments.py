@@ -28,6 +28,7 @@ import numpy as np
 
 from cablefem import asymptotics
 from cablefem.io.anchorcsv import ANCHOR_COLUMNS, MOMENT_COLUMNS, OPTIONAL_MOMENT_COLUMNS
+from cablefem.motion import accelerations, factors
 
 __all__ = ["ANCHOR_COLUMNS", "MOMENT_COLUMNS", "OPTIONAL_MOMENT_COLUMNS", "MAX_ANCHOR_ANGLE",
            "ERROR_THRESHOLD", "anchor_moments", "error_estimate",
@@ -308,10 +309,7 @@ class ClampedAnchor:
 
     def acceleration(self, times: np.ndarray) -> np.ndarray:
         """(n, 3) acceleration of the anchor at ``times``, m/s²."""
-        if self.motion is None:
-            return np.zeros((np.size(times), 3))
-        return np.array([np.asarray(self.motion.acceleration(t), float) for t in times]
-                        ).reshape(-1, 3)
+        return accelerations(self.motion, times)
 
 
 class AnchorMoments:
@@ -407,6 +405,22 @@ class AnchorMoments:
             f = f + self.buoyancy * (np.pi * diameter**2 / 4)
         return f
 
+    def loads_at(self, times: np.ndarray, mass: float, diameter: float | None = None
+                 ) -> np.ndarray:
+        """(n, 3) :meth:`load_at` at each of ``times``, the same numbers."""
+        times = np.asarray(times, float).reshape(-1)
+        f = np.tile(self.load_at(0.0, mass, diameter) if not self.loads
+                    else mass * self.gravity, (times.size, 1))
+        if not self.loads:
+            return f
+        for value, tf in self.loads:
+            f = f + np.asarray(value)[None, :] * factors(tf, times)[:, None]
+        if self.buoyancy is not None:
+            if diameter is None:
+                raise ValueError("load_at: the buoyancy needs the cable's diameter")
+            f = f + self.buoyancy * (np.pi * diameter**2 / 4)
+        return f
+
     def anchor_load(self, name: str, t: float) -> np.ndarray:
         """(3,) :meth:`load_at` on clamped anchor ``name``'s section at ``t``, N/m."""
         a = self._by_name[name]
@@ -417,7 +431,7 @@ class AnchorMoments:
         forces (n, 3) at ``times`` (n,)."""
         a = self._by_name[name]
         times = np.atleast_1d(np.asarray(times, float))
-        load = np.array([self.load_at(t, a.mass, a.diameter) for t in times]).reshape(-1, 3)
+        load = self.loads_at(times, a.mass, a.diameter)
         return anchor_moments(np.asarray(forces, float)[:, :3], a.direction, a.EI, a.EA,
                               a.mass, a.acceleration(times), load,
                               self.length if a.length is None else a.length, self.omega,

@@ -38,7 +38,7 @@ from cablefem.timetables import Spline, check_table, read_csv
 __all__ = [
     "Motion", "HarmonicMotion", "EllipseMotion", "TableMotion", "TimeFunction",
     "read_motion_csv", "read_factor_csv", "ramp_factors", "default_ramp",
-    "DEFAULT_RAMP_PERIODS",
+    "DEFAULT_RAMP_PERIODS", "accelerations", "factors",
 ]
 
 #: default ramp of harmonic and elliptic anchor motions in a case file: this many periods of
@@ -166,6 +166,25 @@ class _RampedMotion:
         """Acceleration (m/s^2), shape (3,)."""
         return self._eval("acceleration", t)
 
+    def accelerations(self, times: np.ndarray) -> np.ndarray:
+        """(n, 3) :meth:`acceleration` at each of ``times``, the same numbers (the motion
+        after its ramp in one array expression; the ramp's rows one by one)."""
+        times = np.asarray(times, float).reshape(-1)
+        out = np.empty((times.size, 3))
+        after = times >= self.ramp if self.ramp > 0.0 else np.ones(times.size, bool)
+        if after.any():
+            out[after] = self._a0_many(times[after])
+        for i in np.flatnonzero(~after):
+            out[i] = self.acceleration(float(times[i]))
+        return out
+
+
+def _sines(x: np.ndarray, fn) -> np.ndarray:
+    """``fn`` (``math.sin`` or ``math.cos``) of each of ``x``: the scalar function, as the
+    single-time methods call it, so the arrays hold the same numbers to the last bit
+    (NumPy's vectorised sine rounds differently)."""
+    return np.fromiter((fn(v) for v in x.ravel()), float, x.size).reshape(x.shape)
+
 
 @dataclass(frozen=True, eq=False)
 class HarmonicMotion(_RampedMotion):
@@ -201,6 +220,9 @@ class HarmonicMotion(_RampedMotion):
 
     def _a0(self, t: float) -> np.ndarray:
         return -self.amplitude * self.omega**2 * np.sin(self.omega * t + self.phase)
+
+    def _a0_many(self, times: np.ndarray) -> np.ndarray:
+        return np.array([self._a0(t) for t in times]).reshape(-1, 3)
 
     def describe(self) -> dict:
         """JSON-serialisable description."""
@@ -250,6 +272,11 @@ class EllipseMotion(_RampedMotion):
     def _a0(self, t: float) -> np.ndarray:
         wt = self.omega * t
         return -self.omega**2 * (self.axis_sin * math.sin(wt) + self.axis_cos * math.cos(wt))
+
+    def _a0_many(self, times: np.ndarray) -> np.ndarray:
+        wt = self.omega * times
+        return -self.omega**2 * (self.axis_sin[None, :] * _sines(wt, math.sin)[:, None]
+                                 + self.axis_cos[None, :] * _sines(wt, math.cos)[:, None])
 
     def describe(self) -> dict:
         """JSON-serialisable description."""
@@ -360,6 +387,15 @@ class TimeFunction:
         """C2 cubic spline (not-a-knot) through ``(times, factors)``, constant outside."""
         return cls("table", times=times, factors=factors, source=source, hold=hold)
 
+    def values_at(self, times: np.ndarray) -> np.ndarray:
+        """:meth:`value` at each of ``times``, the same numbers."""
+        times = np.asarray(times, float).reshape(-1)
+        if self.kind == "harmonic":
+            return _sines(self.omega * times + self.phase, math.sin)
+        if self.kind == "table":
+            return np.array([self.value(float(t)) for t in times])
+        return np.ones(times.size)
+
     def value(self, t: float) -> float:
         """The factor at time ``t`` (s)."""
         if self.kind == "harmonic":
@@ -416,3 +452,25 @@ def read_factor_csv(path: str | os.PathLike, key: str = "file") -> TimeFunction:
     """
     times, factors = read_csv(path, ("time", "factor"), key)
     return TimeFunction.table(times, factors[:, 0], source=str(path))
+
+
+def accelerations(motion, times) -> np.ndarray:
+    """(n, 3) acceleration of ``motion`` (a :class:`Motion`; None: at rest) at each of
+    ``times``: its ``accelerations`` when it has one, else ``acceleration`` time by time."""
+    times = np.asarray(times, float).reshape(-1)
+    if motion is None:
+        return np.zeros((times.size, 3))
+    many = getattr(motion, "accelerations", None)
+    if many is not None:
+        return np.asarray(many(times), float).reshape(-1, 3)
+    return np.array([np.asarray(motion.acceleration(float(t)), float) for t in times]
+                    ).reshape(-1, 3)
+
+
+def factors(law, times) -> np.ndarray:
+    """A load's time law ``law`` (a :class:`TimeFunction` or an object with ``value(t)``)
+    at each of ``times``."""
+    many = getattr(law, "values_at", None)
+    if many is not None:
+        return np.asarray(many(times), float)
+    return np.array([float(law.value(float(t))) for t in np.asarray(times).reshape(-1)])
