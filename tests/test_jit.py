@@ -1,0 +1,47 @@
+"""The JIT layer (cablefem.jit): a form FFCx has cached is loaded by its file name, without
+listing the cache folder (which holds thousands of files once a few models were built)."""
+
+import importlib._bootstrap_external as bootstrap
+
+import numpy as np
+import pytest
+import ufl
+from dolfinx import fem, mesh
+from mpi4py import MPI
+
+from cablefem.jit import direct_cache_lookup, quiet_compiler
+
+SCALE = 1.375  # a kernel of this test alone
+
+
+def _ufl_form(domain, scale):
+    V = fem.FunctionSpace(domain, ("Lagrange", 1))
+    c = fem.Constant(domain, 2.5)
+    u, v = ufl.TrialFunction(V), ufl.TestFunction(V)
+    return c * ufl.inner(ufl.grad(u), ufl.grad(v)) * ufl.dx + scale * u * v * ufl.dx
+
+
+@pytest.mark.skipif(not direct_cache_lookup(), reason="only FFCx 0.5's lookup is replaced")
+def test_a_cached_form_loads_without_listing_the_cache(monkeypatch):
+    a = _ufl_form(mesh.create_unit_interval(MPI.COMM_WORLD, 4), SCALE)
+    with quiet_compiler():
+        first = fem.form(a)  # compiled: a new kernel
+    listed = []
+    real = bootstrap._os.listdir
+
+    def listdir(path=None):
+        listed.append(path)
+        return real(path) if path is not None else real()
+
+    monkeypatch.setattr(bootstrap._os, "listdir", listdir)
+    with quiet_compiler():
+        again = fem.form(a)  # the same form: in the cache now
+    monkeypatch.undo()
+    assert listed == []  # FFCx's own lookup lists the cache folder at every form
+    # the same kernel: the matrices agree to the last bit
+    A1 = fem.petsc.assemble_matrix(first)
+    A2 = fem.petsc.assemble_matrix(again)
+    A1.assemble()
+    A2.assemble()
+    assert np.array_equal(A1.convert("dense").getDenseArray(),
+                          A2.convert("dense").getDenseArray())
