@@ -488,3 +488,41 @@ def test_small_motion_of_a_stiff_cable_converges(mpi_tmp_path, network):
         peak = np.max(np.abs(hist[0]))
         assert peak > 1e-5
         assert np.max(np.abs(np.array(hist[1]) - hist[0])) < 1e-9 * peak
+
+
+class _PoisonedTS:
+    """A time integrator whose step leaves a NaN (``what="nan"``) or an infinity in the
+    velocity of one rank's first owned entry: what no converged step may hand on."""
+
+    def __init__(self, ts, what: str):
+        self._ts, self._what = ts, what
+
+    def step(self):
+        self._ts.step()
+        if self._ts.comm.rank == 0:
+            _, V = self._ts.getSolution2()
+            with V as arr:
+                arr[0] = np.nan if self._what == "nan" else -np.inf
+
+    def __getattr__(self, name):
+        return getattr(self._ts, name)
+
+
+@pytest.mark.parametrize("what", ["nan", "inf"])
+def test_a_non_finite_state_stops_the_run_on_every_rank(make_case, what):
+    """The check after every step sees a NaN or an infinity on any rank, and every rank
+    raises (a collective check: a rank alone raising would leave the others waiting)."""
+    from cablefem.cable import CableModel
+    from cablefem.dynamics import DynamicProblem
+    from cablefem.errors import DynamicsError
+    from cablefem.statics import solve_static
+
+    case = make_case(dynamics={"t_end": 0.05, "dt": 0.005})
+    model = CableModel(MPI.COMM_WORLD, case)
+    solve_static(model)
+    with DynamicProblem(model, 0.005) as problem:
+        problem.step()  # a finite step passes
+        problem.ts = _PoisonedTS(problem.ts, what)
+        with pytest.raises(DynamicsError, match="non-finite state"):
+            problem.step()
+        problem.ts = problem.ts._ts
