@@ -147,7 +147,7 @@ def _make_ts(model, dt: float, rho_inf: float, history: SNESHistory,
         extra = (lambda arr: junctions.add_residual(model, arr),
                  lambda A: junctions.add_jacobian(model, A))
     rows = RowsAssembler(model.f_dynamic, model.j_dynamic, model.bcs, bc_rows, kappa,
-                         model.comm, extra)
+                         model.comm, extra, (model.u, model.v, model.a))
     serial = model.comm.size == 1
     u, v, a = model.u, model.v, model.a
 
@@ -156,7 +156,7 @@ def _make_ts(model, dt: float, rho_inf: float, history: SNESHistory,
         copy_in(U, u, serial)
         copy_in(V, v, serial)
         copy_in(A, a, serial)
-        rows.residual(F, U)
+        rows.residual(F, U, t)
 
     def I2Jacobian(ts, t, U, V, A, shift_v, shift_a, J, P):
         if newton.keep_jacobian(shift_v, shift_a):  # J and its factorisation kept
@@ -189,7 +189,7 @@ def _make_ts(model, dt: float, rho_inf: float, history: SNESHistory,
         # on 2 ranks")
         newton = StepNewton(ts, prefix, bool(model.forms.medium_forms or model.node_terms))
     ts.getSNES().setMonitor(history)
-    return ts, (F_vec, J_mat, newton)
+    return ts, (F_vec, J_mat, newton), rows
 
 
 #: the TS's end time when none is given: PETSc's TSStep refuses to run without one
@@ -275,8 +275,8 @@ class DynamicProblem:
         self.stats = stats if stats is not None else DynamicsStats()
         self.prefix = model.prefix if petsc_options_prefix is None else petsc_options_prefix
         self.history = SNESHistory()
-        self.ts, self._work = _make_ts(model, dt, rho_inf, self.history, self.prefix,
-                                       petsc_options)  # _work: F and J live as long as ts
+        self.ts, self._work, self._rows = _make_ts(model, dt, rho_inf, self.history, self.prefix,
+                                                   petsc_options)  # _work: F, J live as long as ts
         self.newton = self._work[-1]
         self.ts.setMaxTime(_NO_END)  # PETSc steps only with an end; step(t_end) sets it
         self.reactions = AnchorReactions(model)
@@ -387,6 +387,7 @@ class DynamicProblem:
             ts.setTimeStep(h)
             self.newton.expect(h, cut=failed)  # the retries of a failed step: PETSc alone
             number = ts.getStepNumber()
+            self._rows.forget()  # the step's first residual packs every coefficient
             changed = self._done_level is not None and self._done_level != self.level
             try:
                 with BackwardEuler(ts, changed):

@@ -225,7 +225,7 @@ class RowsAssembler:
     ``kappa`` on the Jacobian's diagonal)."""
 
     def __init__(self, F: fem.FormMetaClass, J: fem.FormMetaClass, bcs, rows: np.ndarray,
-                 kappa: float, comm, extra=None) -> None:
+                 kappa: float, comm, extra=None, state=()) -> None:
         #: ``extra``: (residual(array), jacobian(A)) of terms assembled outside UFL, or None
         self.extra = extra
         self.F, self.J, self.bcs = F, J, list(bcs)
@@ -233,13 +233,36 @@ class RowsAssembler:
         self.serial = comm.size == 1
         self.cols = jacobian_columns(F, J)
         self.packed: dict | None = None  # the residual's packed coefficients, last call
+        #: where the ``state`` Functions' values sit in the packed coefficients
+        #: (:func:`state_gather`; None: always packed whole)
+        self.gather = state_gather(F, state) if state else None
+        self._packed_at = None  # the time of the last whole packing (see residual)
 
-    def residual(self, b: PETSc.Vec, x: PETSc.Vec) -> None:
+    def forget(self) -> None:
+        """The next :meth:`residual` packs every coefficient (a new step: anything may have
+        changed since)."""
+        self._packed_at = None
+
+    def _coefficients(self, time):
+        """The packed coefficients: at the ``time`` of the last whole packing (not None),
+        only the state Functions' values copied in, the same numbers; else all packed."""
+        if time is not None and time == self._packed_at and self.gather is not None:
+            for key, items in self.gather.items():
+                flat = self.packed[key].reshape(-1)
+                for pos, f, src in items:
+                    flat[pos] = f.x.array[src]
+            return self.packed
+        self.packed = dcpp.fem.pack_coefficients(self.F)
+        self._packed_at = time
+        return self.packed
+
+    def residual(self, b: PETSc.Vec, x: PETSc.Vec, time: float | None = None) -> None:
         """The residual into ``b`` at the state the form's coefficients hold; the Dirichlet
-        rows ``kappa (x - g)``."""
+        rows ``kappa (x - g)``. ``time``: the caller's time; a second call at the same time
+        (Newton's next iteration, after no :meth:`forget`) repacks only the state
+        Functions (only they change between the iterations of a step)."""
         F = self.F
-        consts, coeffs = dcpp.fem.pack_constants(F), dcpp.fem.pack_coefficients(F)
-        self.packed = coeffs
+        consts, coeffs = dcpp.fem.pack_constants(F), self._coefficients(time)
         if self.serial:  # one rank: no ghosts, the vector's array is its local form
             arr = b.array_w
             arr[:] = 0.0
@@ -275,6 +298,49 @@ class RowsAssembler:
             self.extra[1](A)
         A.assemble()
         A.zeroRowsLocal(self.rows, diag=self.kappa)
+
+
+def state_gather(F: fem.FormMetaClass, functions) -> dict | None:
+    """Where each of ``functions`` (coefficients of ``F``) sits in ``F``'s packed
+    coefficients: ``{key: [(flat positions, function, indices into its local array)]}``,
+    such that copying ``f.x.array[indices]`` to those positions of a packed array gives
+    what packing afresh gives when only these functions changed; None when that does not
+    hold (checked with random values; the values are restored). Found by packing each
+    function's local indices."""
+    coeffs = list(F.coefficients)  # dolfinx's C++ Functions
+    if not functions or any(all(getattr(f, "_cpp_object", f) is not c for c in coeffs)
+                            for f in functions):
+        return None
+    arrays = [c.x.array for c in coeffs]
+    saved = [a.copy() for a in arrays]
+    try:
+        out: dict = {}
+        for f in functions:
+            for a in arrays:
+                a[:] = -1.0
+            f.x.array[:] = np.arange(f.x.array.size, dtype=float)
+            for key, packed in dcpp.fem.pack_coefficients(F).items():
+                flat = packed.reshape(-1)
+                pos = np.flatnonzero(flat >= 0.0)
+                out.setdefault(key, []).append((pos, f, flat[pos].astype(np.int64)))
+        rng = np.random.default_rng(1)
+        for a in arrays:
+            a[:] = rng.standard_normal(a.size)
+        stale = {k: v.copy() for k, v in dcpp.fem.pack_coefficients(F).items()}
+        for f in functions:
+            f.x.array[:] = rng.standard_normal(f.x.array.size)
+        fresh = dcpp.fem.pack_coefficients(F)
+        for key, items in out.items():
+            flat = stale[key].reshape(-1)
+            for pos, f, src in items:
+                flat[pos] = f.x.array[src]
+        if set(stale) != set(fresh) or not all(np.array_equal(stale[k], fresh[k])
+                                                for k in fresh):
+            return None
+        return out
+    finally:
+        for a, s in zip(arrays, saved):
+            a[:] = s
 
 
 def jacobian_columns(F: fem.FormMetaClass, J: fem.FormMetaClass) -> dict | None:

@@ -39,7 +39,7 @@ def _history(make_case, options):
     model = CableModel(MPI.COMM_WORLD, case)
     solve_static(model)
     model.u.x.array[:] = model.u_static.x.array
-    ts, (_, J, _) = _make_ts(model, 0.005, 0.9, SNESHistory())  # F, J, the StepNewton
+    ts, (_, J, _), _ = _make_ts(model, 0.005, 0.9, SNESHistory())  # F, J, StepNewton; rows
     mat_type, pc = J.getType(), ts.getSNES().getKSP().getPC().getType()
     ts.destroy()
     hist = np.array([f.copy() for _, f in integrate(model, 0.2, 0.005, 0.9, 5)])
