@@ -11,7 +11,6 @@ import numpy as np
 from cablefem.app.report import steady_state_stats
 from cablefem.io import anchorcsv
 from cablefem.kinks import KINK_COLUMNS, KinkMoments, rod_kink_moments
-from cablefem.rod_network import network_rod_kink_moments
 
 __all__ = ["KinkOutput", "KinkHistory"]
 
@@ -44,6 +43,8 @@ class KinkOutput:
         cols = self.moments.measure(t)
         if self.beam:  # the rod resolves the kink: its own moment at the node
             cols = {k: np.full(len(self.kinks), np.nan) for k in cols}
+            from cablefem.rod_network import network_rod_kink_moments  # a network rod's only
+
             cols["moment"] = (network_rod_kink_moments(self.model, self.kinks)
                               if self.model.is_network else
                               rod_kink_moments(self.model, self.kinks))
