@@ -12,7 +12,11 @@ from __future__ import annotations
 
 import importlib
 
+from cablefem import startup
+
 __version__ = "0.2.0.dev0"
+
+startup.install()  # UFL's and FFCx's version lookups without pkg_resources' scan
 
 #: public name -> module that defines it (loaded on first access, PEP 562)
 _API = {

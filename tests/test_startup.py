@@ -1,0 +1,50 @@
+"""cablefem's lighter start (cablefem.startup): UFL and FFCx read their versions without
+importing pkg_resources, and pkg_resources is the real one for everybody else. Checked in
+fresh interpreters (this process has imported everything already)."""
+
+import subprocess
+import sys
+
+import pytest
+
+pytestmark = pytest.mark.serial  # subprocesses of one interpreter each, not an MPI job
+
+
+def _run(code: str) -> str:
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True)
+    return out.stdout.strip()
+
+
+def test_fenics_versions_without_pkg_resources():
+    out = _run(
+        "import sys, importlib.metadata as md\n"
+        "import cablefem.cable, ufl, ffcx\n"
+        "real = 'pkg_resources' in sys.modules\n"
+        "print(real, ufl.__version__ == md.version('fenics-ufl'),"
+        " ffcx.__version__ == md.version('fenics-ffcx'))")
+    # the real module never imported; the versions are the distributions' own
+    assert out == "False True True"
+
+
+def test_anything_else_gets_the_real_pkg_resources():
+    out = _run(
+        "import cablefem, sys\n"
+        "import pkg_resources\n"  # before UFL and FFCx: the stand-in
+        "stand_in = type(pkg_resources).__name__ == '_StandIn'\n"
+        "ws = pkg_resources.working_set\n"  # an attribute of the real module: loaded
+        "dist = pkg_resources.get_distribution('numpy')\n"
+        "loc = dist.location\n"  # a distribution's other attribute: the real one's
+        "real = sys.modules['pkg_resources']\n"
+        "print(stand_in, type(real).__name__, hasattr(real, 'WorkingSet'), bool(loc))")
+    assert out == "True module True True"
+
+
+def test_an_unknown_distribution_raises_pkg_resources_own_error():
+    out = _run(
+        "import cablefem, pkg_resources\n"
+        "try:\n"
+        "    pkg_resources.get_distribution('no-such-distribution-cablefem')\n"
+        "except Exception as err:\n"
+        "    print(type(err).__name__)")
+    assert out == "DistributionNotFound"
