@@ -187,8 +187,8 @@ def _make_ts(model, dt: float, rho_inf: float, history: SNESHistory,
         # predictor, stopping test and Jacobian reuse (a fluid's, a seabed's Jacobian is
         # dear, and so is the kink corners' complex-step one: docs/benchmarks.md, "Networks
         # on 2 ranks")
-        newton = StepNewton(ts, prefix, bool(model.forms.medium_forms or model.node_terms))
-    ts.getSNES().setMonitor(history)
+        newton = StepNewton(ts, prefix, bool(model.forms.medium_forms or model.node_terms),
+                            history)  # the norms kept by its test: no monitor callback
     return ts, (F_vec, J_mat, newton), rows
 
 

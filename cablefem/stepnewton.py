@@ -74,15 +74,20 @@ class StepNewton:
     ``<prefix>snes_divergence_tolerance``): make it after ``ts.setFromOptions()``.
     ``costly_jacobian``: the model's Jacobian costs several residuals (a fluid, a seabed,
     a network's kink corners):
-    reuse it by default.
+    reuse it by default. ``history``: called with every residual norm (a
+    :class:`cablefem.petsc_utils.SNESHistory`).
 
     :meth:`expect` is told each step's size before ``ts.step()``; the Jacobian callback
     asks :meth:`keep_jacobian` before it assembles; :meth:`reset` forgets the velocity
     history and the kept Jacobian (a checkpoint, a restore: the next step starts a new run
     of equal steps, in the resumed run and in the uninterrupted one alike)."""
 
-    def __init__(self, ts: PETSc.TS, prefix: str, costly_jacobian: bool = False) -> None:
+    def __init__(self, ts: PETSc.TS, prefix: str, costly_jacobian: bool = False,
+                 history=None) -> None:
         self.ts = ts
+        #: called ``history(snes, it, fnorm)`` at every residual, as a SNES monitor would
+        #: be (the test sees every residual norm: one Python call fewer per iteration)
+        self.history = history
         snes = ts.getSNES()
         opts = PETSc.Options()
         predictor = opts.getString(prefix + "newton_predictor", "velocity")
@@ -182,6 +187,8 @@ class StepNewton:
     def test(self, snes: PETSc.SNES, it: int, norms) -> int:
         """PETSc's default test, and the error against the step's increment."""
         xnorm, ynorm, fnorm = norms
+        if self.history is not None:
+            self.history(snes, it, fnorm)
         self.f_before, self.f_last = (fnorm, fnorm) if it == 0 else (self.f_last, fnorm)
         self.residuals += 1  # SNES tests after each residual (basic line search)
         if fnorm != fnorm:
