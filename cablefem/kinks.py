@@ -41,10 +41,12 @@ the rod's mesh is graded towards kinks as towards clamps), the two sides average
 
 from __future__ import annotations
 
+import copy
 from dataclasses import dataclass
 from types import SimpleNamespace
 
 import numpy as np
+from mpi4py import MPI
 
 from cablefem import asymptotics
 from cablefem.junctions import corners
@@ -291,7 +293,11 @@ class KinkMoments:
         out = np.zeros(self.nodes.shape + (3,))
         mine = self._local >= 0
         out[mine] = vals[self._local[mine]]
-        return m.comm.allreduce(out)
+        if m.comm.size == 1:
+            return out
+        total = np.empty_like(out)
+        m.comm.Allreduce(out, total, op=MPI.SUM)  # the owner's values, zeros elsewhere
+        return total
 
     def positions(self) -> np.ndarray:
         """(n_kinks, 3, 3) current positions of each kink's three nodes, on every rank."""
@@ -304,11 +310,43 @@ class KinkMoments:
         the caller has them (:meth:`positions`)."""
         if not self.kinks:
             return self.columns(np.zeros((0, 3, 3)))
+        return self.columns(**self.state(t, r))
+
+    def state(self, t: float = 0.0, r: np.ndarray | None = None) -> dict[str, np.ndarray]:
+        """What :meth:`columns` takes of the model's current state at time ``t``:
+        ``r``, ``a``, ``v`` at each kink's three nodes, the distributed ``load`` and the
+        ``medium`` forces (collective; the same on every rank)."""
         load = np.array([self._loads.load_at(t, m, d) for m, d in zip(self.m, self.D)]
                         ).reshape(-1, 3)
         r = self.positions() if r is None else r
-        return self.columns(r, self._nodal(self.model.a), load, self._nodal(self.model.v),
-                            self.medium_forces())
+        if self.damping[0] == "rayleigh_k0" and self._static is None:
+            self._static = (self._nodal(self.model.u_static)  # collective, once: here
+                            + self.model.geometry.points[self.nodes])
+        return {"r": r, "a": self._nodal(self.model.a), "load": load,
+                "v": self._nodal(self.model.v), "medium": self.medium_forces()}
+
+    def columns_of(self, states: list[dict]) -> dict[str, np.ndarray]:
+        """:meth:`columns` of several :meth:`state` at once, ``(len(states), n_kinks)``
+        each: one vectorised evaluation of every kink at every time (the kinks' numbers
+        repeated for each time), not one per time. Pure NumPy."""
+        R, n = len(states), len(self.kinks)
+        if R == 0 or n == 0:
+            return {k: v.reshape(R, n) for k, v in self.columns(np.zeros((0, 3, 3))).items()}
+        many = copy.copy(self)  # this object with its per-kink numbers repeated R times
+        many.kinks = self.kinks * R
+        for name in ("EI", "EA", "m", "spacing", "corner"):
+            val = getattr(self, name)
+            if val is not None:
+                setattr(many, name, np.tile(val, R))
+        many.h = np.tile(self.h, (R, 1))
+        if self._static is not None:
+            many._static = np.tile(self._static, (R, 1, 1))
+        args = {}
+        for key in ("r", "a", "load", "v", "medium"):
+            vals = [st[key] for st in states]
+            args[key] = None if vals[0] is None else np.concatenate(vals)
+        cols = many.columns(**args)
+        return {k: v.reshape((R, n) + v.shape[1:]) for k, v in cols.items()}
 
     def medium_forces(self) -> np.ndarray | None:
         """(n_kinks, 3) the force the fluid and the seabed put on each kink's two half

@@ -728,3 +728,28 @@ def test_a_small_anchor_motion_is_applied_from_the_first_step():
             worst = max(worst, float(np.abs(got - anchor.prescribed("displacement", t)).max()))
     worst = comm.allreduce(worst, op=MPI.MAX)
     assert worst < 1e-3 * 1e-8, worst
+
+
+@pytest.mark.parametrize("damping", ["rayleigh", "rayleigh_k0"])
+def test_a_block_of_kink_rows_is_the_rows_one_by_one(damping):
+    """``kinks.csv`` computes its rows in blocks (KinkMoments.columns_of): every column of
+    every time equals the one-time measure to the last bit (the same elementwise
+    operations), on a damped taut cable under a harmonic point load, over 20 outputs."""
+    from cablefem.dynamics import integrate
+
+    d = taut(200.0, elements=20)
+    d["point_loads"][0]["time"] = {"type": "harmonic", "omega": 40.0}
+    d["damping"] = {"model": damping, "beta": 2e-3, "alpha": 2.0}
+    model = CableModel(comm, parse_case(d))
+    solve_static(model)
+    km = KinkMoments(model, omega=40.0)
+    states, single = [], []
+    for t, _ in integrate(model, 0.1, 0.005, 0.9, 1):
+        states.append(km.state(t))
+        single.append(km.measure(t))
+    block = km.columns_of(states)
+    assert len(states) == 21
+    for key, col in block.items():
+        assert col.shape[:2] == (21, 1)
+        for j, one in enumerate(single):
+            assert np.array_equal(col[j], one[key], equal_nan=True), (key, j)

@@ -13,6 +13,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+from mpi4py import MPI
 
 from cablefem.app.statistics import FRACTION, window_start
 from cablefem.io import anchorcsv, dampercsv
@@ -49,6 +50,13 @@ class DamperOutput:
             self._us = model.gather_nodal(model.u_static)
         else:
             self._forms, self._f = _compile(model)
+            # each damper node's owned dof block on this rank (-1: another rank's)
+            where = np.full(len(model.geometry.points), -1, np.int64)
+            where[model.line.owned_nodes] = np.arange(model.line.owned_nodes.size)
+            self._owner = where[np.asarray(model.damper_nodes, np.int64)]
+            self._mine = self._owner >= 0
+            self._local = np.zeros((2, len(model.damper_nodes), 3))
+            self._both = np.zeros_like(self._local)
         if outdir is None:  # measure only
             return
         self.csv = anchorcsv.open_series(model.comm, outdir / "dampers.csv", DAMPER_COLUMNS,
@@ -68,7 +76,8 @@ class DamperOutput:
     def measure(self) -> dict[str, np.ndarray] | None:
         """The columns (but time and name) of every damper at the model's current state,
         (n_dampers,) each, on every rank (collective)."""
-        from dolfinx import fem, la
+        from dolfinx import cpp as dcpp
+        from dolfinx import la
 
         model = self.model
         if model.is_network:
@@ -76,15 +85,25 @@ class DamperOutput:
             cols = (_link_columns(self.dampers, self.links, model.geometry.points, u, v,
                                   self._us) if model.comm.rank == 0 else None)
             return model.comm.bcast(cols, root=0)
-        both = []
-        for form in self._forms:  # the velocity, then the stroke, at the dampers' nodes
-            vec = fem.assemble_vector(form)
-            vec.scatter_reverse(la.ScatterMode.add)
-            self._f.x.array[:] = vec.array
-            nodal = model.gather_nodal(self._f)
-            both.append(None if nodal is None else nodal[list(model.damper_nodes)])
-        cols = _columns(self.dampers, *both) if model.comm.rank == 0 else None
-        return model.comm.bcast(cols, root=0)
+        # the velocity, then the stroke, at the dampers' nodes: each form assembled into
+        # the field's array (dolfinx's kernel, the sums of assemble_vector), its ghosts
+        # added to their owners, and the owners' values of the dampers' nodes summed
+        # over the ranks (one small all-reduce)
+        f = self._f
+        local, both = self._local, self._both
+        local[:] = 0.0
+        for j, form in enumerate(self._forms):
+            f.x.array[:] = 0.0
+            dcpp.fem.assemble_vector(f.x.array, form, dcpp.fem.pack_constants(form),
+                                     dcpp.fem.pack_coefficients(form))
+            f.x.scatter_reverse(la.ScatterMode.add)
+            vals = f.x.array.reshape(-1, model.bs)[:, :3]
+            local[j, self._mine] = vals[self._owner[self._mine]]
+        if model.comm.size == 1:
+            both[:] = local
+        else:
+            model.comm.Allreduce(local, both, op=MPI.SUM)
+        return _columns(self.dampers, both[0].copy(), both[1].copy())
 
     def add(self, t: float) -> None:
         if not self.dampers:

@@ -63,22 +63,35 @@ class KinkOutput:
                 self.rows[name][c].append(float(row[c]) if row[c] else np.nan)
 
     def add(self, t: float) -> None:
+        """Record the kinks at ``t`` (collective): a rod's moments now; a string's state,
+        its columns computed for the block at :meth:`flush` (one vectorised evaluation)."""
         if not self.kinks:
             return
-        cols = self._columns(t)
         self.times.append(t)
-        for i, k in enumerate(self.kinks):
-            for c in KINK_COLUMNS[3:]:
-                self.rows[k.name][c].append(float(cols[c][i]))
-        self._pending.append((t, cols))
+        if self.beam:
+            self._pending.append((t, self._columns(t)))
+        else:
+            self._pending.append((t, self.moments.state(t)))
         if len(self._pending) >= self.FLUSH_ROWS:
             self.flush()
 
     def flush(self) -> None:
-        if not self._pending or self.csv is None:
+        """The pending rows' columns into the history and ``kinks.csv``."""
+        if not self._pending:
             return
-        labels = {"kink": [k.name for k in self.kinks], "s": [k.s for k in self.kinks]}
-        self.csv.write(anchorcsv.stacked_rows(self._pending, labels, KINK_COLUMNS[3:]))
+        if self.beam:
+            rows = self._pending
+        else:
+            cols = self.moments.columns_of([st for _, st in self._pending])
+            rows = [(t, {c: v[j] for c, v in cols.items()})
+                    for j, (t, _) in enumerate(self._pending)]
+        for _, cols in rows:
+            for i, k in enumerate(self.kinks):
+                for c in KINK_COLUMNS[3:]:
+                    self.rows[k.name][c].append(float(cols[c][i]))
+        if self.csv is not None:
+            labels = {"kink": [k.name for k in self.kinks], "s": [k.s for k in self.kinks]}
+            self.csv.write(anchorcsv.stacked_rows(rows, labels, KINK_COLUMNS[3:]))
         self._pending = []
 
     def close(self) -> None:
