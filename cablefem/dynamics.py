@@ -146,8 +146,11 @@ def _make_ts(model, dt: float, rho_inf: float, history: SNESHistory,
     if model.node_terms:  # terms outside UFL (a network's kink corners), at model.u
         extra = (lambda arr: junctions.add_residual(model, arr),
                  lambda A: junctions.add_jacobian(model, A))
-    rows = RowsAssembler(model.f_dynamic, model.j_dynamic, model.bcs, bc_rows, kappa,
-                         model.comm, extra, (model.u, model.v, model.a))
+    F = model.f_dynamic
+    timed = model.forms.time_laws or any(model.u_bc._cpp_object is c
+                                         for c in F.coefficients)
+    rows = RowsAssembler(F, model.j_dynamic, model.bcs, bc_rows, kappa, model.comm, extra,
+                         (model.u, model.v, model.a), timed)
     serial = model.comm.size == 1
     u, v, a = model.u, model.v, model.a
 
@@ -280,6 +283,7 @@ class DynamicProblem:
         self.newton = self._work[-1]
         self.ts.setMaxTime(_NO_END)  # PETSc steps only with an end; step(t_end) sets it
         self.reactions = AnchorReactions(model)
+        self.reactions.packer = self._rows  # the step's packing, its state copied in
         self.hinges = model.hinges
         self.time, self.step_number, self.level, self.calm = 0.0, 0, 0, 0
         #: the level of the last step taken (a step at another level starts with backward

@@ -332,6 +332,11 @@ class KinkMoments:
         R, n = len(states), len(self.kinks)
         if R == 0 or n == 0:
             return {k: v.reshape(R, n) for k, v in self.columns(np.zeros((0, 3, 3))).items()}
+        if self.corner is not None and self.corner.any():
+            # a string corner's fixed point takes as many iterations as its sharpest
+            # corner needs: one time at a time, so that a row does not depend on the block
+            rows = [self.columns(**st) for st in states]
+            return {k: np.stack([row[k] for row in rows]) for k in rows[0]}
         many = copy.copy(self)  # this object with its per-kink numbers repeated R times
         many.kinks = self.kinks * R
         for name in ("EI", "EA", "m", "spacing", "corner"):

@@ -225,7 +225,7 @@ class RowsAssembler:
     ``kappa`` on the Jacobian's diagonal)."""
 
     def __init__(self, F: fem.FormMetaClass, J: fem.FormMetaClass, bcs, rows: np.ndarray,
-                 kappa: float, comm, extra=None, state=()) -> None:
+                 kappa: float, comm, extra=None, state=(), timed: bool = True) -> None:
         #: ``extra``: (residual(array), jacobian(A)) of terms assembled outside UFL, or None
         self.extra = extra
         self.F, self.J, self.bcs = F, J, list(bcs)
@@ -236,6 +236,9 @@ class RowsAssembler:
         #: where the ``state`` Functions' values sit in the packed coefficients
         #: (:func:`state_gather`; None: always packed whole)
         self.gather = state_gather(F, state) if state else None
+        #: ``timed``: setting the model's time may change a Function of ``F`` besides the
+        #: state (a term's time law): the packing is then kept for one time only
+        self.timed = timed
         self._packed_at = None  # the time of the last whole packing (see residual)
 
     def forget(self) -> None:
@@ -243,9 +246,12 @@ class RowsAssembler:
         changed since)."""
         self._packed_at = None
 
-    def _coefficients(self, time):
-        """The packed coefficients: at the ``time`` of the last whole packing (not None),
+    def coefficients(self, time):
+        """``F``'s packed coefficients at the current state: after a whole packing at the
+        same ``time`` (not None; any time when not :attr:`timed`) and no :meth:`forget`,
         only the state Functions' values copied in, the same numbers; else all packed."""
+        if time is not None and not self.timed:
+            time = 0.0  # the Functions but the state do not change with time
         if time is not None and time == self._packed_at and self.gather is not None:
             for key, items in self.gather.items():
                 flat = self.packed[key].reshape(-1)
@@ -262,7 +268,7 @@ class RowsAssembler:
         (Newton's next iteration, after no :meth:`forget`) repacks only the state
         Functions (only they change between the iterations of a step)."""
         F = self.F
-        consts, coeffs = dcpp.fem.pack_constants(F), self._coefficients(time)
+        consts, coeffs = dcpp.fem.pack_constants(F), self.coefficients(time)
         if self.serial:  # one rank: no ghosts, the vector's array is its local form
             arr = b.array_w
             arr[:] = 0.0

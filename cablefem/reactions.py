@@ -89,6 +89,11 @@ class AnchorReactions:
         self._bc_rows = rows[rows < model.bs * n_owned].astype(PETSc.IntType)
         self._derive = self._mass_moves and self._derived_is_assembled()
         self._zero_rows = self._zero_rows_is_set_bc()
+        #: a :class:`cablefem.petsc_utils.RowsAssembler` of the same residual whose packed
+        #: coefficients serve (``coefficients(t)``: the state copied in when they can);
+        #: None: packed at every evaluation
+        self.packer = None
+        self._time = None  # the time of the evaluation (for the packer)
 
     def _derived_is_assembled(self) -> bool:
         """Whether :meth:`_derive_constrained` gives the constrained mass matrix assembled
@@ -132,7 +137,10 @@ class AnchorReactions:
         """The unconstrained residual into ``self.R`` (dolfinx's kernel called directly, as
         :class:`~cablefem.petsc_utils.RowsAssembler` does: the same sums)."""
         F = self.model.f_dynamic
-        consts, coeffs = dcpp.fem.pack_constants(F), dcpp.fem.pack_coefficients(F)
+        packer = self.packer
+        coeffs = (packer.coefficients(self._time) if packer is not None and packer.F is F
+                  else dcpp.fem.pack_coefficients(F))
+        consts = dcpp.fem.pack_constants(F)
         if self.model.comm.size == 1:  # no ghosts: the array is the local form
             arr = self.R.array_w
             arr[:] = 0.0
@@ -171,6 +179,7 @@ class AnchorReactions:
         """:meth:`equilibrium_acceleration` with the anchors' accelerations ``acc``,
         leaving ``F(u, v, a_b)`` in ``self.R`` and the correction ``δa`` in ``self.da``."""
         m = self.model
+        self._time = t
         if self._mass_moves:
             self._assemble_mass()
         arr = m.a.x.array
@@ -204,6 +213,7 @@ class AnchorReactions:
         ``F(u, v, a_b + δa)`` are those of ``F(u, v, a_b)`` plus ``M δa``: one assembly.
         """
         m = self.model
+        self._time = t
         if dynamic:
             acc = self._anchor_accelerations(t)
             self._equilibrium(t, acc)  # leaves F(u, v, a_b) in self.R
@@ -212,6 +222,7 @@ class AnchorReactions:
             arr = self.R.array_r
         else:
             m.a.x.array[:] = 0.0
+            self._time = None  # statics: packed afresh
             self._assemble()
             arr = self.R.array_r
         local = self._local

@@ -6,6 +6,7 @@ and coefficients add the same terms in the same order."""
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from conftest import level_case
 from dolfinx.fem import petsc as fpetsc
 from mpi4py import MPI
@@ -159,3 +160,37 @@ def test_state_gather_refuses_a_function_the_form_lacks():
     from dolfinx import fem
     stranger = fem.Function(model.V)
     assert state_gather(model.f_dynamic, (model.u, stranger)) is None
+
+
+@pytest.mark.parametrize("time_law", [False, True])
+def test_reactions_on_the_steps_packing_are_bit_identical(time_law):
+    """The anchor reactions take the integrator's packed coefficients with the output
+    state copied in (a model whose Functions but the state do not change with time), or
+    pack afresh at a new time (a term with a time law that sets a Function of its own):
+    the forces equal those of reactions that pack everything themselves, to the last bit,
+    at every output of a short run."""
+    import ufl
+    from dolfinx import fem
+
+    from cablefem.dynamics import DynamicProblem
+    from cablefem.terms import Term
+
+    model = CableModel(MPI.COMM_WORLD, parse_case(level_case(elements=8, motion=MOTION,
+                                                             damping=DAMPING)))
+    if time_law:  # a vertical load along the cable whose Function follows the time
+        q = fem.Function(model.V)
+
+        def law(t):
+            q.x.array[2::3] = -0.3 * np.sin(40.0 * t)
+
+        model.forms.add(Term("gust", -ufl.inner(q, model.du) * ufl.dx, "dynamic", law))
+        model.compile()
+    solve_static(model)
+    with DynamicProblem(model, 0.005) as problem, AnchorReactions(model) as own:
+        assert problem._rows.timed == time_law
+        for _ in range(6):
+            problem.step()
+            problem.anchor_forces()
+            shared = problem.reactions.compute(problem.time)
+            alone = own.compute(problem.time)
+            assert np.array_equal(shared, alone)

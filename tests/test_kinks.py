@@ -753,3 +753,28 @@ def test_a_block_of_kink_rows_is_the_rows_one_by_one(damping):
         assert col.shape[:2] == (21, 1)
         for j, one in enumerate(single):
             assert np.array_equal(col[j], one[key], equal_nan=True), (key, j)
+
+
+def test_a_block_of_a_networks_corner_kinks_is_the_rows_one_by_one():
+    """With a network's string corners (cablefem.junctions), whose fixed point takes the
+    iterations its sharpest corner needs, a block of rows is still each row's own to the
+    last bit (the corners are measured one time at a time): the roof demo's net."""
+    from pathlib import Path
+
+    from cablefem.case import load_case
+    from cablefem.create import model_from_case
+    from cablefem.dynamics import integrate
+
+    case = load_case(Path(__file__).parents[1] / "demos" / "roof.toml")
+    model = model_from_case(comm, case)
+    solve_static(model)
+    km = KinkMoments(model, omega=10.0)
+    assert km.corner is not None and km.corner.any()
+    states, single = [], []
+    for t, _ in integrate(model, 100 * case.dynamics.dt, case.dynamics.dt, 0.9, 1):
+        states.append(km.state(t))
+        single.append(km.measure(t))
+    block = km.columns_of(states)
+    for key, col in block.items():
+        for j, one in enumerate(single):
+            assert np.array_equal(col[j], one[key], equal_nan=True), (key, j)
