@@ -161,11 +161,14 @@ def _make_ts(model, dt: float, rho_inf: float, history: SNESHistory,
         copy_in(A, a, serial)
         rows.residual(F, U, t)
 
+    shifts = [None, None]  # the shifts the Constants hold (set here only)
+
     def I2Jacobian(ts, t, U, V, A, shift_v, shift_a, J, P):
         if newton.keep_jacobian(shift_v, shift_a):  # J and its factorisation kept
             return
-        model.shift_v.value = shift_v
-        model.shift_a.value = shift_a
+        if shifts[0] != shift_v or shifts[1] != shift_a:  # equal steps: the same shifts
+            model.shift_v.value = shifts[0] = shift_v
+            model.shift_a.value = shifts[1] = shift_a
         # SNES evaluates the residual at the same state just before: model.u/v/a are current
         rows.jacobian(J)
 
