@@ -53,6 +53,9 @@ class StaticResult:
     max_tension: float
     min_tension: float
     wall_time: float
+    #: with virtual hinges: the equilibrium before they were put in, nodal (n, bs) on
+    #: every rank (a start for the same case with another term, cablefem.app.stages)
+    before_hinges: np.ndarray | None = None
 
 
 def _make_snes(model, history: SNESHistory, bilateral: bool = False, prefix: str | None = None,
@@ -109,6 +112,24 @@ def _try(snes, x, history) -> tuple[bool, int]:
     return ok, snes.getIterationNumber()
 
 
+#: Newton with full steps (no line search), tried first from a neighbouring equilibrium
+FULL_STEPS = {"snes_linesearch_type": "basic", "snes_max_it": 25}
+
+
+def _try_full(snes, x, history) -> tuple[bool, int]:
+    """Newton of ``snes`` (:data:`FULL_STEPS`) from ``x``; ``x`` left as it was when it
+    fails. From a neighbouring equilibrium of a line on the seabed the backtracking line
+    search stalls (|F| down by 0.3 % an iteration over 50 iterations, measured on the
+    mooring demo: its contact law bends within a quarter millimetre), where full steps
+    converge in 5 to 10."""
+    y = x.copy()
+    ok, its = _try(snes, y, history)
+    if ok:
+        y.copy(x)
+    y.destroy()
+    return ok, its
+
+
 def _fresh_pc(ksp: PETSc.KSP) -> None:
     """Give ``ksp`` a new preconditioner of the same kind. A factorisation that failed (a
     wild iterate) fails every later solve of the same KSP at its first iteration, even on a
@@ -138,11 +159,18 @@ class HingeSteps:
         self.rtol, self.atol, _, _ = snes.getTolerances()
         self.last = x.copy()
         self.bilateral: PETSc.SNES | None = None  # compression allowed, made on first need
+        self.full, self._full_work = _make_snes(model, history, False,
+                                                snes.getOptionsPrefix(), None, FULL_STEPS)
 
     def solve(self, it: int) -> tuple[bool, int]:
-        """Newton at the current hinges from the current state: (converged, iterations)."""
+        """Newton at the current hinges from the current state (the last equilibrium's
+        neighbour): with full steps first (:func:`_try_full`), then with the line search:
+        (converged, iterations)."""
         model, x, history = self.model, self.x, self._history
-        ok, its = _try(self.snes, x, history)
+        ok, its = _try_full(self.full, x, history)
+        if not ok:
+            ok, its2 = _try(self.snes, x, history)
+            its += its2
         if not ok and model.tension_only:
             # as for the leading order: an element the hinge step leaves slack (H is ~h into
             # the first element; a cable's strain T/EA can be far smaller) can make the
@@ -179,7 +207,7 @@ class HingeSteps:
         return self._history.text()
 
     def destroy(self) -> None:
-        for obj in (self.last, self.bilateral):
+        for obj in (self.last, self.bilateral, self.full, *self._full_work):
             if obj is not None:
                 obj.destroy()
 
@@ -221,9 +249,17 @@ class StaticProblem:
         return _make_snes(self.model, self.history, bilateral, self.prefix,
                           self.petsc_options)
 
-    def solve(self) -> StaticResult:
+    def solve(self, start: np.ndarray | None = None) -> StaticResult:
         """Solve the static equilibrium of the model from its initial guess; leaves it in
-        ``model.u`` and ``model.u_static``. Raises :class:`StaticError`."""
+        ``model.u`` and ``model.u_static``. Raises :class:`StaticError`.
+
+        ``start`` (nodal displacements (n, bs) in station order, on every rank; e.g. the
+        equilibrium of the same case without one of its terms, the ``"auto"`` span
+        bending's probe): Newton from there first (:meth:`_from_start`), from the model's
+        own guess (and its fallbacks) only if that fails. With virtual hinges, ``start``
+        is an equilibrium before they are put in (:attr:`StaticResult.before_hinges`):
+        their fixed point then takes its usual way (the regions it takes the layers'
+        lengths from grow along that way: starting it elsewhere changes them)."""
         model, history, snes = self.model, self.history, self.snes
         max_continuation_steps = self.max_continuation_steps
         t_start = time.perf_counter()
@@ -253,7 +289,10 @@ class StaticProblem:
                 else:
                     last.copy(x)
                     self._note(f"pre-solve with {label} failed", history)
-        ok, its = _try(snes, x, history)
+        ok, its = self._from_start(start, x) if start is not None else (False, 0)
+        if not ok:
+            total_its += its
+            ok, its = _try(snes, x, history)
         total_its += its
         if not ok and model.tension_only:
             # every element slack on the guess (e.g. a coarse mesh of a stiff cable: the
@@ -303,7 +342,9 @@ class StaticProblem:
             self.reactions = AnchorReactions(model)
         reaction = self.reactions
         forces = reaction.compute(0.0, dynamic=False)
+        before = None
         if model.hinges:
+            before = model.comm.bcast(model.gather_all(model.u), root=0)
             hooks = HingeSteps(model, snes, x, history, reaction)
             try:
                 total_its += hinge_fixed_point(model, hooks, forces)
@@ -321,12 +362,34 @@ class StaticProblem:
         if slack:
             log.warning("statics: %d slack element(s) carry no tension", slack)
         res = StaticResult(forces, total_its, steps, slack, tmax, tmin,
-                           time.perf_counter() - t_start)
+                           time.perf_counter() - t_start, before)
         route = f"; {', then '.join(self.route)}" if self.route else ""
         log.info("statics: converged in %d Newton iterations (%d continuation steps%s), "
                  "tension %.6g..%.6g %s, %.2f s", total_its, steps, route, tmin, tmax,
                  unit(model.case.units, "force"), res.wall_time)
         return res
+
+    def _from_start(self, start: np.ndarray, x: PETSc.Vec) -> tuple[bool, int]:
+        """Newton from ``start`` (nodal, every rank; a neighbouring equilibrium, the
+        ``"auto"`` probe's without the span's bending) with full steps
+        (:func:`_try_full`): its equilibrium into ``x`` when it converges, ``x`` left as
+        it was otherwise. Returns (converged, iterations)."""
+        model, history = self.model, self.history
+        model.scatter_nodal(start, model.u)
+        y = model.u.vector.copy()
+        snes, work = _make_snes(model, history, False, self.prefix, self.petsc_options,
+                                FULL_STEPS)
+        try:
+            ok, its = _try_full(snes, y, history)
+            if ok:
+                y.copy(x)
+            else:
+                self._note("Newton failed from the given start", history)
+        finally:
+            for obj in (snes, *work, y):
+                obj.destroy()
+        copy_in(x, model.u)
+        return ok, its
 
     def _note(self, what: str, history: SNESHistory | None = None) -> None:
         """A step of the route to the equilibrium: kept for the final line, logged at
@@ -518,8 +581,10 @@ class StaticProblem:
         self.destroy()
 
 
-def solve_static(model, max_continuation_steps: int = 200) -> StaticResult:
+def solve_static(model, max_continuation_steps: int = 200,
+                 start: np.ndarray | None = None) -> StaticResult:
     """Solve the static equilibrium of ``model``; leaves it in ``model.u`` and
-    ``model.u_static`` (a :class:`StaticProblem` made, solved and destroyed)."""
+    ``model.u_static`` (a :class:`StaticProblem` made, solved and destroyed; ``start``:
+    where Newton starts first, :meth:`StaticProblem.solve`)."""
     with StaticProblem(model, max_continuation_steps=max_continuation_steps) as problem:
-        return problem.solve()
+        return problem.solve(start)

@@ -408,10 +408,17 @@ def test_auto_span_bending_where_it_matters(mpi_tmp_path, eps, on):
     assert rec["decision"] == ("on" if on else "off") and auto["span_bending"] is on
     assert (rec["largest_shift"] > 0.005) is on
     same = bent if on else off
+    # on: the statics start from the probe's equilibrium (before its virtual hinges), so
+    # the same equilibrium to Newton's tolerance (rtol 1e-10 of the forces; measured
+    # 2e-13 in the modes), in fewer Newton iterations
+    tol = 1e-9 if on else 0.0
     for a, b in zip(auto["modes"], same["modes"]):
-        assert a["omega"] == b["omega"]
+        assert a["omega"] == pytest.approx(b["omega"], rel=tol, abs=0)
     for name, F in auto["static"]["anchor_forces"].items():
-        np.testing.assert_array_equal(F, same["static"]["anchor_forces"][name])
+        np.testing.assert_allclose(F, same["static"]["anchor_forces"][name], rtol=tol,
+                                   atol=tol * np.abs(F).max())
+    print("static Newton iterations, auto and alone:",
+          auto["static"]["newton_iterations"], same["static"]["newton_iterations"])
     est = np.array([m["span_bending_shift"] for m in off["modes"]])
     actual = np.array([b["omega"] / a["omega"] - 1 for a, b in zip(off["modes"],
                                                                     bent["modes"])])
