@@ -466,11 +466,11 @@ class CableForms:
         return J
 
     def _dynamic_depends_on(self, w) -> bool:
-        """``F_dynamic`` depends on ``w`` (v, a): remembered (0.1 s a time in water)."""
+        """``F_dynamic`` depends on ``w`` (v, a): one of its parts does; remembered."""
         parts = [p for p in (self.inertia, self.internal, self.external, self.damping, *(
             t.form for t in self._terms.values() if t.kind in KINDS)) if p is not None]
         if (key := (id(w), *map(id, parts))) not in self._rates:  # parts kept: ids theirs
-            self._rates[key] = (depends_on(self.F_dynamic, w, self.trial), parts)
+            self._rates[key] = (any(depends_on(p, w, self.trial) for p in parts), parts)
         return self._rates[key][0]
 
     @property
