@@ -134,12 +134,19 @@ class HingeSteps:
 
     def solve(self, it: int) -> tuple[bool, int]:
         """Newton at the current hinges from the current state (the last equilibrium's
-        neighbour): with full steps first (:func:`try_full`), then with the line search:
+        neighbour): with full steps first (:func:`try_full`), then with the line search
+        for at most 10 iterations (where it stalls, as on the mooring demo's seabed over
+        its 50, the fixed point's continuation towards the hinges converges in a few):
         (converged, iterations)."""
         model, x, history = self.model, self.x, self._history
         ok, its = try_full(self.full, x, history)
         if not ok:
-            ok, its2 = try_solve(self.snes, x, history)
+            rtol, atol, stol, max_it = self.snes.getTolerances()
+            self.snes.setTolerances(max_it=min(max_it, 10))
+            try:
+                ok, its2 = try_solve(self.snes, x, history)
+            finally:
+                self.snes.setTolerances(max_it=max_it)
             its += its2
         if not ok and model.tension_only:
             # as for the leading order: an element the hinge step leaves slack (H is ~h into
