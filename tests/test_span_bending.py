@@ -417,8 +417,6 @@ def test_auto_span_bending_where_it_matters(mpi_tmp_path, eps, on):
     for name, F in auto["static"]["anchor_forces"].items():
         np.testing.assert_allclose(F, same["static"]["anchor_forces"][name], rtol=tol,
                                    atol=tol * np.abs(F).max())
-    print("static Newton iterations, auto and alone:",
-          auto["static"]["newton_iterations"], same["static"]["newton_iterations"])
     est = np.array([m["span_bending_shift"] for m in off["modes"]])
     actual = np.array([b["omega"] / a["omega"] - 1 for a, b in zip(off["modes"],
                                                                     bent["modes"])])
