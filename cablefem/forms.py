@@ -29,9 +29,8 @@ from __future__ import annotations
 import contextlib
 
 import ufl
-from ufl.algorithms import expand_derivatives
 
-from cablefem.terms import KINDS, Term, checked
+from cablefem.terms import KINDS, Term, checked, depends_on
 
 __all__ = ["CableForms", "reference_tangent", "ds_", "stretch_vector", "stretch", "axial_strain",
            "tension", "layer_law_tension", "layer_stretch_vector",
@@ -263,12 +262,6 @@ COMPILED = ("f_static", "j_static", "f_static_bilateral", "j_static_bilateral", 
 ON_DEMAND = ("k_dynamic", "c_form")
 
 
-def _depends_on(form, w, trial) -> bool:
-    """True when ``form`` varies with the coefficient ``w`` (its Gateaux derivative is not
-    identically zero)."""
-    return not expand_derivatives(ufl.derivative(form, w, trial)).empty()
-
-
 class CableForms:
     """The residual of a model as terms (:class:`cablefem.terms.Term`), and every form
     derived from them.
@@ -319,6 +312,7 @@ class CableForms:
         self._changes = 0  # bumped by every change of a term
         self._compiled_at = -1
         self._compiled: dict[str, object] = {}
+        self._rates: dict = {}  # F_dynamic's dependence on v, a (_dynamic_depends_on)
 
     # ------------------------------------------------------------------ terms
     def set_model_terms(self, internal, external, inertia, damping=None,
@@ -468,15 +462,22 @@ class CableForms:
 
     @property
     def J_dynamic(self):
-        """``∂F/∂u + shift_a ∂F/∂a + shift_v ∂F/∂v``, each rate's part only where
-        ``F_dynamic`` depends on it."""
+        """``∂F/∂u + shift_a ∂F/∂a + shift_v ∂F/∂v``, a rate's part where F depends on it."""
         F, dw = self.F_dynamic, self.trial
         J = ufl.derivative(F, self.u, dw)
-        if _depends_on(F, self.a, dw):
+        if self._dynamic_depends_on(self.a):
             J = J + self.shift_a * ufl.derivative(F, self.a, dw)
-        if _depends_on(F, self.v, dw):
+        if self._dynamic_depends_on(self.v):
             J = J + self.shift_v * ufl.derivative(F, self.v, dw)
         return J
+
+    def _dynamic_depends_on(self, w) -> bool:
+        """``F_dynamic`` depends on ``w`` (v, a): one of its parts does; remembered."""
+        parts = [p for p in (self.inertia, self.internal, self.external, self.damping, *(
+            t.form for t in self._terms.values() if t.kind in KINDS)) if p is not None]
+        if (key := (id(w), *map(id, parts))) not in self._rates:  # parts kept: ids theirs
+            self._rates[key] = (any(depends_on(p, w, self.trial) for p in parts), parts)
+        return self._rates[key][0]
 
     @property
     def K_dynamic(self):
@@ -489,7 +490,7 @@ class CableForms:
     def C_form(self):
         """``∂F_dynamic/∂v``: the damping matrix (Rayleigh, dampers, any dynamic term in
         ``v``); None when ``F_dynamic`` does not depend on ``v``."""
-        if not _depends_on(self.F_dynamic, self.v, self.trial):
+        if not self._dynamic_depends_on(self.v):
             return None
         return ufl.derivative(self.F_dynamic, self.v, self.trial)
 
@@ -498,7 +499,7 @@ class CableForms:
         """The mass form ``∂F_dynamic/∂a``: the inertia and the dynamic terms in ``a``."""
         M = self.inertia
         for term in self._terms.values():
-            if term.kind == "dynamic" and _depends_on(term.form, self.a, self.trial):
+            if term.kind == "dynamic" and depends_on(term.form, self.a, self.trial):
                 M = M + term.form
         return ufl.derivative(M, self.a, self.trial)
 

@@ -458,7 +458,7 @@ def hinge_fixed_point(model, steps, forces: np.ndarray, tol: float | None = None
     """Fixed point hinge -> equilibrium -> anchor forces -> hinge of ``model.hinges``,
     accelerated (Anderson mixing of depth ``depth`` on the hinges' (h, sigma_h, E)).
 
-    Statics is driven through ``steps`` (:class:`cablefem.statics.HingeSteps`, the hooks
+    Statics is driven through ``steps`` (:class:`cablefem.static_newton.HingeSteps`, the hooks
     of a static solve): ``solve(it)`` Newton at the current hinges -> (converged,
     iterations); ``keep()`` and ``restore()`` the state of the last equilibrium;
     ``anchor_forces()`` at the current equilibrium; ``rtol``, ``atol`` Newton's tolerances;

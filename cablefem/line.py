@@ -152,6 +152,10 @@ class LineDiscretisation:
         bs = self.bs
         n_owned = self.V.dofmap.index_map.size_local
         local = f.x.array[: bs * n_owned].reshape(-1, bs)
+        if self.comm.size == 1:  # one rank: no message (a touchdown at every output step)
+            out = np.full((len(self.geometry.stations), bs), np.nan)
+            out[self.owned_nodes] = local
+            return out
         parts = self.comm.gather((self.owned_nodes, local.copy()), root=root)
         if self.comm.rank != root:
             return None

@@ -19,7 +19,6 @@ from dataclasses import dataclass
 
 import numpy as np
 from dolfinx import fem
-from dolfinx.fem import petsc as fpetsc
 from mpi4py import MPI
 from petsc4py import PETSc
 
@@ -28,15 +27,10 @@ from cablefem.errors import StaticError
 from cablefem.hinge import hinge_fixed_point
 from cablefem.petsc_utils import (
     SNESHistory,
-    assemble_jacobian,
-    assemble_residual,
-    case_options,
     copy_in,
-    default_options,
-    lu_options,
-    model_dofs,
 )
 from cablefem.reactions import AnchorReactions
+from cablefem.static_newton import FULL_STEPS, HingeSteps, make_snes, try_full, try_solve
 from cablefem.units import unit
 
 __all__ = ["StaticProblem", "StaticResult", "StaticError", "HingeSteps", "solve_static"]
@@ -53,135 +47,9 @@ class StaticResult:
     max_tension: float
     min_tension: float
     wall_time: float
-
-
-def _make_snes(model, history: SNESHistory, bilateral: bool = False, prefix: str | None = None,
-               petsc_options: dict | None = None, defaults: dict | None = None
-               ) -> tuple[PETSc.SNES, tuple]:
-    """The static SNES of ``model`` and its (residual vector, Jacobian matrix), under
-    ``prefix`` (default ``<model prefix>static_``), ``defaults`` over the usual ones; the
-    caller destroys all three."""
-    extra = defaults or {}
-    prefix = model.prefix + "static_" if prefix is None else prefix
-    # absolute tolerance: round-off of the residual grows with the tension (EA v3), so
-    # scale it with the larger of the cable's weight and its catenary tension
-    defaults = {"snes_type": "newtonls", "snes_linesearch_type": "bt", "snes_max_it": 50,
-                "snes_rtol": 1e-10,
-                "snes_atol": max(1e-10 * model.force_scale,
-                                 10.0 * model.residual_floor(displaced=True)),
-                "snes_stol": 1e-14,
-                **lu_options(model.comm.size, model_dofs(model)), **model.static_options,
-                **extra}
-    f_form = model.f_static_bilateral if bilateral else model.f_static
-    j_form = model.j_static_bilateral if bilateral else model.j_static
-    b = fpetsc.create_vector(f_form)
-    A = junctions.create_matrix(model, j_form)
-    snes = PETSc.SNES().create(model.comm)
-    snes.setOptionsPrefix(prefix)
-    fixed = junctions.fixed_dofs(model) if model.node_terms else None
-
-    def F(snes, x, f):
-        copy_in(x, model.u)
-        assemble_residual(f, f_form, j_form, model.bcs, x,
-                          extra=lambda arr: junctions.add_residual(model, arr))
-
-    def J(snes, x, jac, pre):
-        copy_in(x, model.u)
-        assemble_jacobian(jac, j_form, model.bcs,
-                          extra=lambda A: junctions.add_jacobian(model, A, fixed))
-
-    snes.setFunction(F, b)
-    snes.setJacobian(J, A)
-    snes.setMonitor(history)
-    user = {**case_options(model, "static"), **(petsc_options or {})}
-    with default_options(prefix, defaults, user):
-        snes.setFromOptions()
-    return snes, (b, A)
-
-
-def _try(snes, x, history) -> tuple[bool, int]:
-    history.clear()
-    snes.solve(None, x)
-    ok = snes.getConvergedReason() > 0
-    if not ok and snes.getKSP().getConvergedReason() == \
-            PETSc.KSP.ConvergedReason.DIVERGED_PCSETUP_FAILED:
-        _fresh_pc(snes.getKSP())
-    return ok, snes.getIterationNumber()
-
-
-def _fresh_pc(ksp: PETSc.KSP) -> None:
-    """Give ``ksp`` a new preconditioner of the same kind. A factorisation that failed (a
-    wild iterate) fails every later solve of the same KSP at its first iteration, even on a
-    good matrix (a rod on 2 ranks, ``pc_type redundant``; resetting the PC does not clear
-    it): the continuation's and the relaxation's next steps could never succeed."""
-    old = ksp.getPC()
-    pc = PETSc.PC().create(old.getComm())
-    pc.setOptionsPrefix(old.getOptionsPrefix())
-    pc.setType(old.getType())
-    if old.getType() == PETSc.PC.Type.LU:
-        pc.setFactorSolverType(old.getFactorSolverType())
-    ksp.setPC(pc)
-    pc.destroy()
-
-
-class HingeSteps:
-    """Statics' hooks for the virtual hinges' fixed point
-    (:func:`cablefem.hinge.hinge_fixed_point`, which drives them): Newton at the current
-    hinges (:meth:`solve`), the state of the last equilibrium kept and restored, the
-    anchor forces at the equilibrium. ``x`` is the solution vector (updated in place);
-    :meth:`destroy` frees the vectors and solvers made here."""
-
-    def __init__(self, model, snes: PETSc.SNES, x: PETSc.Vec, history: SNESHistory,
-                 reaction: AnchorReactions):
-        self.model, self.snes, self.x, self.reaction = model, snes, x, reaction
-        self._history = history
-        self.rtol, self.atol, _, _ = snes.getTolerances()
-        self.last = x.copy()
-        self.bilateral: PETSc.SNES | None = None  # compression allowed, made on first need
-
-    def solve(self, it: int) -> tuple[bool, int]:
-        """Newton at the current hinges from the current state: (converged, iterations)."""
-        model, x, history = self.model, self.x, self._history
-        ok, its = _try(self.snes, x, history)
-        if not ok and model.tension_only:
-            # as for the leading order: an element the hinge step leaves slack (H is ~h into
-            # the first element; a cable's strain T/EA can be far smaller) can make the
-            # tension-only Jacobian singular; compression allowed first, then tension-only
-            self.last.copy(x)
-            if self.bilateral is None:
-                self.bilateral = _make_snes(model, history, bilateral=True)[0]
-            ok2, its2 = _try(self.bilateral, x, history)
-            its += its2
-            if ok2:
-                ok, its3 = _try(self.snes, x, history)
-                its += its3
-        if not ok and history.norms and history.norms[-1][1] <= 100.0 * self.atol:
-            ok = True  # stagnated at round-off near Newton's tolerance (a fine mesh)
-            log.info("statics: virtual hinges, iteration %d: Newton stagnated at |F| = "
-                     "%.2e (atol %.2e), accepted", it, history.norms[-1][1], self.atol)
-        return ok, its
-
-    def keep(self) -> None:
-        """The current state is the last equilibrium."""
-        self.x.copy(self.last)
-
-    def restore(self) -> None:
-        """Back to the last equilibrium."""
-        self.last.copy(self.x)
-
-    def anchor_forces(self) -> np.ndarray:
-        """The anchor forces at the current state (put into ``model.u``)."""
-        copy_in(self.x, self.model.u)
-        return self.reaction.compute(0.0, dynamic=False)
-
-    def history(self) -> str:
-        """The last Newton history."""
-        return self._history.text()
-
-    def destroy(self) -> None:
-        for obj in (self.last, self.bilateral):
-            if obj is not None:
-                obj.destroy()
+    #: with virtual hinges: the equilibrium before they were put in, nodal (n, bs) on
+    #: every rank (a start for the same case with another term, cablefem.app.stages)
+    before_hinges: np.ndarray | None = None
 
 
 class StaticProblem:
@@ -212,18 +80,26 @@ class StaticProblem:
         self.petsc_options = dict(petsc_options or {})
         self.max_continuation_steps = max_continuation_steps
         self.history = SNESHistory()
-        self.snes, self._work = self._make_snes(bilateral=False)
+        self.snes, self._work = self.make_snes(bilateral=False)
         self.bilateral_snes: PETSc.SNES | None = None
         self._bilateral_work: tuple = ()
         self.reactions: AnchorReactions | None = None
 
-    def _make_snes(self, bilateral: bool) -> tuple[PETSc.SNES, tuple]:
-        return _make_snes(self.model, self.history, bilateral, self.prefix,
+    def make_snes(self, bilateral: bool) -> tuple[PETSc.SNES, tuple]:
+        return make_snes(self.model, self.history, bilateral, self.prefix,
                           self.petsc_options)
 
-    def solve(self) -> StaticResult:
+    def solve(self, start: np.ndarray | None = None) -> StaticResult:
         """Solve the static equilibrium of the model from its initial guess; leaves it in
-        ``model.u`` and ``model.u_static``. Raises :class:`StaticError`."""
+        ``model.u`` and ``model.u_static``. Raises :class:`StaticError`.
+
+        ``start`` (nodal displacements (n, bs) in station order, on every rank; e.g. the
+        equilibrium of the same case without one of its terms, the ``"auto"`` span
+        bending's probe): Newton from there first (:meth:`_from_start`), from the model's
+        own guess (and its fallbacks) only if that fails. With virtual hinges, ``start``
+        is an equilibrium before they are put in (:attr:`StaticResult.before_hinges`):
+        their fixed point then takes its usual way (the regions it takes the layers'
+        lengths from grow along that way: starting it elsewhere changes them)."""
         model, history, snes = self.model, self.history, self.snes
         max_continuation_steps = self.max_continuation_steps
         t_start = time.perf_counter()
@@ -244,7 +120,7 @@ class StaticProblem:
         if stages is not None:
             last = x.copy()
             for label in stages():
-                ok, its = _try(snes, x, history)
+                ok, its = try_solve(snes, x, history)
                 total_its += its
                 if ok:
                     x.copy(last)
@@ -253,7 +129,10 @@ class StaticProblem:
                 else:
                     last.copy(x)
                     self._note(f"pre-solve with {label} failed", history)
-        ok, its = _try(snes, x, history)
+        ok, its = self._from_start(start, x) if start is not None else (False, 0)
+        if not ok:
+            total_its += its
+            ok, its = try_solve(snes, x, history)
         total_its += its
         if not ok and model.tension_only:
             # every element slack on the guess (e.g. a coarse mesh of a stiff cable: the
@@ -262,13 +141,13 @@ class StaticProblem:
             self._note("tension-only Newton failed from the catenary; compression allowed "
                        "first", history)
             if self.bilateral_snes is None:
-                self.bilateral_snes, self._bilateral_work = self._make_snes(bilateral=True)
+                self.bilateral_snes, self._bilateral_work = self.make_snes(bilateral=True)
             model.scatter_nodal(guess, model.u)
             x = model.u.vector.copy()
-            ok, its = _try(self.bilateral_snes, x, history)
+            ok, its = try_solve(self.bilateral_snes, x, history)
             total_its += its
             if ok:
-                ok, its = _try(snes, x, history)
+                ok, its = try_solve(snes, x, history)
                 total_its += its
         buckled = None
         if ok and stages is not None:
@@ -303,7 +182,9 @@ class StaticProblem:
             self.reactions = AnchorReactions(model)
         reaction = self.reactions
         forces = reaction.compute(0.0, dynamic=False)
+        before = None
         if model.hinges:
+            before = model.comm.bcast(model.gather_all(model.u), root=0)
             hooks = HingeSteps(model, snes, x, history, reaction)
             try:
                 total_its += hinge_fixed_point(model, hooks, forces)
@@ -321,12 +202,34 @@ class StaticProblem:
         if slack:
             log.warning("statics: %d slack element(s) carry no tension", slack)
         res = StaticResult(forces, total_its, steps, slack, tmax, tmin,
-                           time.perf_counter() - t_start)
+                           time.perf_counter() - t_start, before)
         route = f"; {', then '.join(self.route)}" if self.route else ""
         log.info("statics: converged in %d Newton iterations (%d continuation steps%s), "
                  "tension %.6g..%.6g %s, %.2f s", total_its, steps, route, tmin, tmax,
                  unit(model.case.units, "force"), res.wall_time)
         return res
+
+    def _from_start(self, start: np.ndarray, x: PETSc.Vec) -> tuple[bool, int]:
+        """Newton from ``start`` (nodal, every rank; a neighbouring equilibrium, the
+        ``"auto"`` probe's without the span's bending) with full steps
+        (:func:`try_full`): its equilibrium into ``x`` when it converges, ``x`` left as
+        it was otherwise. Returns (converged, iterations)."""
+        model, history = self.model, self.history
+        model.scatter_nodal(start, model.u)
+        y = model.u.vector.copy()
+        snes, work = make_snes(model, history, False, self.prefix, self.petsc_options,
+                                FULL_STEPS)
+        try:
+            ok, its = try_full(snes, y, history)
+            if ok:
+                y.copy(x)
+            else:
+                self._note("Newton failed from the given start", history)
+        finally:
+            for obj in (snes, *work, y):
+                obj.destroy()
+        copy_in(x, model.u)
+        return ok, its
 
     def _note(self, what: str, history: SNESHistory | None = None) -> None:
         """A step of the route to the equilibrium: kept for the final line, logged at
@@ -393,7 +296,7 @@ class StaticProblem:
                 trial = min(1.0, lam + dlam)
                 model.load_factor.value = trial
                 x.copy(last)
-                ok, its = _try(snes, x, history)
+                ok, its = try_solve(snes, x, history)
                 total_its += its
                 steps += 1
                 if ok:
@@ -419,13 +322,13 @@ class StaticProblem:
         StaticError naming them when it fails. Returns the iterations."""
         junctions.set_active(self.model, True)
         y = x.copy()
-        ok, its = _try(self.snes, y, self.history)
+        ok, its = try_solve(self.snes, y, self.history)
         total = its
         if not ok:  # the layers grown in steps (ℓ from a quarter of its size)
             x.copy(y)
             for share in (0.25, 0.5, 0.75, 1.0):
                 junctions.set_active(self.model, True, share)
-                ok, its = _try(self.snes, y, self.history)
+                ok, its = try_solve(self.snes, y, self.history)
                 total += its
                 if not ok:
                     break
@@ -467,7 +370,7 @@ class StaticProblem:
         # solution, and a backtracking line search on |F| stalls at the kinks of the
         # tension-only law (measured: 120 steps and 4900 iterations against 6 and 165 for
         # a mooring line meshed as an L, no convergence against 18 and 380 for a U chain)
-        snes, work = _make_snes(model, history, False, self.prefix + "relax_",
+        snes, work = make_snes(model, history, False, self.prefix + "relax_",
                                 self.petsc_options, {"snes_linesearch_type": "basic",
                                                      "snes_max_it": 100})
         total, last = 0, x.copy()
@@ -475,7 +378,7 @@ class StaticProblem:
             for step in range(1, self.RELAX_STEPS + 1):
                 copy_in(x, prev)
                 x.copy(last)
-                ok, its = _try(snes, x, history)
+                ok, its = try_solve(snes, x, history)
                 total += its
                 if not ok:
                     last.copy(x)
@@ -484,7 +387,7 @@ class StaticProblem:
                 kappa.value = float(kappa.value) / self.RELAX_DECAY
                 if step % 3 == 0:
                     y = x.copy()
-                    ok, its = _try(self.snes, y, history)
+                    ok, its = try_solve(self.snes, y, history)
                     total += its
                     if ok:
                         y.copy(x)
@@ -518,8 +421,10 @@ class StaticProblem:
         self.destroy()
 
 
-def solve_static(model, max_continuation_steps: int = 200) -> StaticResult:
+def solve_static(model, max_continuation_steps: int = 200,
+                 start: np.ndarray | None = None) -> StaticResult:
     """Solve the static equilibrium of ``model``; leaves it in ``model.u`` and
-    ``model.u_static`` (a :class:`StaticProblem` made, solved and destroyed)."""
+    ``model.u_static`` (a :class:`StaticProblem` made, solved and destroyed; ``start``:
+    where Newton starts first, :meth:`StaticProblem.solve`)."""
     with StaticProblem(model, max_continuation_steps=max_continuation_steps) as problem:
-        return problem.solve()
+        return problem.solve(start)

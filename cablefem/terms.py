@@ -24,7 +24,7 @@ import ufl
 from ufl.algorithms import estimate_total_polynomial_degree, expand_derivatives
 from ufl.algorithms.check_arities import ArityMismatch, check_form_arity
 
-__all__ = ["Term", "KINDS", "checked", "mass_part"]
+__all__ = ["Term", "KINDS", "checked", "depends_on", "mass_part"]
 
 #: kinds of a term: where it acts (``static``: statics and dynamics; ``dynamic``: dynamics)
 KINDS = ("static", "dynamic")
@@ -67,6 +67,14 @@ class Term:
     linearised: Callable[[], contextlib.AbstractContextManager] | None = None
     moves_mass: bool | None = None
     medium: bool = False
+
+
+def depends_on(form, w, trial) -> bool:
+    """True when ``form`` varies with the coefficient ``w`` (its Gateaux derivative is not
+    identically zero; a form without ``w`` does not: no derivative taken)."""
+    if w not in form.coefficients():
+        return False
+    return not expand_derivatives(ufl.derivative(form, w, trial)).empty()
 
 
 def mass_part(form, a, trial=None):

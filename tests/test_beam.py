@@ -149,9 +149,9 @@ def test_cantilever_pure_moment_bends_into_a_circle():
 def _solve_ramped(model, const, value, steps=8):
     """Static solve with the end load ``const`` ramped to ``value`` in equal steps."""
     from cablefem.petsc_utils import SNESHistory
-    from cablefem.statics import _make_snes
+    from cablefem.static_newton import make_snes
 
-    snes, _ = _make_snes(model, SNESHistory())
+    snes, _ = make_snes(model, SNESHistory())
     model.set_time(0.0)
     model.scatter_nodal(model.initial_guess(), model.u)
     x = model.u.vector.copy()
@@ -316,7 +316,7 @@ def test_a_fine_rod_finds_the_tensioned_equilibrium():
     is then in tension and the horizontal force equals the coarser rod's to its mesh
     convergence (measured 1.2e-5 from refine 2 to 8; tolerance 1e-4). On 2 ranks it
     also failed at refine 2: after one failed LU factorisation (a wild Newton iterate)
-    every later solve of that SNES failed at its first iteration (statics._fresh_pc)."""
+    every later solve of that SNES failed at its first iteration (static_newton.fresh_pc)."""
     H = {}
     for refine in (2.0, 4.0, 8.0):
         model = BeamModel(MPI.COMM_WORLD, parse_case(_sagging_clamped(9e-4)), refine=refine)

@@ -198,3 +198,23 @@ def test_user_term_takes_part_in_modal_linearisation():
                 for j in (1, 1, 2, 2)]
     np.testing.assert_allclose(res.omegas, expected, rtol=1e-9)
     assert float(kc.value) == 0.0 and float(mc.value) == 0.0
+
+
+# ----------------------------------------------------------------------------- dependence
+def test_depends_on_is_the_derivative_not_the_presence():
+    """``depends_on``: a form depends on a coefficient when its Gateaux derivative there is
+    not identically zero. Linear in v: yes; without v: no (no derivative taken); v only in
+    a conditional's test with equal branches (d/dv = 0 on both sides): no, though v is in
+    the form. The dynamic Jacobian takes its v and a parts exactly where F_dynamic depends
+    on them, asked once per part: the undamped string's F_dynamic depends on a (the
+    inertia) and not on v, so it has no damping form."""
+    from cablefem.terms import depends_on
+
+    model = _model(4)
+    u, v, du, dw = model.u, model.v, model.du, model.dw
+    assert depends_on(ufl.inner(v, du) * ufl.dx, v, dw)
+    assert not depends_on(ufl.inner(u, du) * ufl.dx, v, dw)
+    gated = ufl.conditional(ufl.gt(v[0], 0.0), 1.0, 1.0) * du[0] * ufl.dx
+    assert v in gated.coefficients() and not depends_on(gated, v, dw)
+    assert model.forms.C_form is None
+    assert model.forms.J_dynamic.coefficients() == model.forms.F_dynamic.coefficients()

@@ -65,6 +65,9 @@ class Built:
     n_modes: int | None  #: the modes asked for
     probe: Probe | None = None
     auto: dict | None = None  #: the "auto" span-bending record
+    #: where the statics' Newton starts ("auto" span bending on: the probe's equilibrium,
+    #: before its virtual hinges; nodal (n, bs) on every rank; None: the model's guess)
+    start: np.ndarray | None = None
     bending: dict | None = None  #: EI = 0: the string alone (cablefem.chain)
     beam: dict | None = None  #: the rod's mesh and section
     notes: list = field(default_factory=list)
@@ -109,19 +112,21 @@ def _g(x) -> str:
 def _auto_span_bending(comm: MPI.Comm, case: Case, n_modes: int | None):
     """Resolve ``solver.span_bending = "auto"`` (cablefem.span_bending): the case with it
     on or off, the probe to reuse when off (None when on, or when no mode is asked for),
-    and the record for ``summary.json``."""
+    the record for ``summary.json`` and, when on, the probe's equilibrium (nodal, every
+    rank; before its virtual hinges): the statics with the span's bending start there (a
+    few Newton iterations instead of the whole way from the catenary)."""
     def with_bending(on: bool) -> Case:
         return replace(case, solver=replace(case.solver, span_bending=on))
 
     off = with_bending(False)
     if not n_modes:
-        return off, None, {"decision": "off", "reason": "no mode computed"}
+        return off, None, {"decision": "off", "reason": "no mode computed"}, None
     log.info("span bending \"auto\": the string without it first (statics and modes)")
     model = model_from_case(comm, off)
     static = solve_static(model)
     n = min(n_modes, free_dofs(model))
     if not n:
-        return off, None, {"decision": "off", "reason": "no free degree of freedom"}
+        return off, None, {"decision": "off", "reason": "no free degree of freedom"}, None
     modal = solve_modes(model, n)
     shifts = frequency_shifts(model, modal)
     worst = int(np.nanargmax(np.abs(shifts))) if np.isfinite(shifts).any() else 0
@@ -130,10 +135,13 @@ def _auto_span_bending(comm: MPI.Comm, case: Case, n_modes: int | None):
     if size > AUTO_THRESHOLD:
         log.info("span bending: on (it would move mode %d by %.3g %%, above %.3g %%): "
                  "solving again with it", worst + 1, 100 * size, 100 * AUTO_THRESHOLD)
-        return with_bending(True), None, {"decision": "on", **record}
+        start = static.before_hinges  # the virtual hinges' fixed point its usual way
+        if start is None:
+            start = comm.bcast(model.gather_all(model.u_static), root=0)
+        return with_bending(True), None, {"decision": "on", **record}, start
     log.info("span bending: off (it would move mode %d by %.3g %%, at most %.3g %%)",
              worst + 1, 100 * size, 100 * AUTO_THRESHOLD)
-    return off, Probe(model, static, modal, shifts), {"decision": "off", **record}
+    return off, Probe(model, static, modal, shifts), {"decision": "off", **record}, None
 
 
 def build(comm: MPI.Comm, case: Case, asked: str, refine: float, n_modes: int | None,
@@ -142,9 +150,9 @@ def build(comm: MPI.Comm, case: Case, asked: str, refine: float, n_modes: int | 
     solves the string without it first (:func:`_auto_span_bending`). ``before_report()``
     runs once the model is built, before anything is reported (the output folder's
     cleaning)."""
-    probe, auto = None, None
+    probe, auto, start = None, None, None
     if asked == "string" and case.solver.span_bending == "auto":
-        case, probe, auto = _auto_span_bending(comm, case, n_modes)
+        case, probe, auto, start = _auto_span_bending(comm, case, n_modes)
     model = probe.model if probe else model_from_case(comm, case, model=asked, refine=refine)
     wall = time.perf_counter() - wall0
     if before_report is not None:
@@ -155,7 +163,7 @@ def build(comm: MPI.Comm, case: Case, asked: str, refine: float, n_modes: int | 
              len(model.geometry.stations) - 1, _g(groups.get("eps")),
              _g(groups.get("eps_b")))
     out = Built(case, model, asked, refine, kind_of(model), wall, groups, n_modes, probe,
-                auto)
+                auto, start=start)
     if model.string_alone:  # section.EI = 0 (cablefem.chain)
         out.bending = {"EI": 0.0, "moments": False, "note": CHAIN_NOTE}
         log.info("%s", CHAIN_NOTE)
@@ -174,7 +182,7 @@ def statics(b: Built) -> Statics:
     model, case = b.model, b.case
     if b.elements >= model.LOG_PHASES_FROM:
         log.info("statics: %d degrees of freedom", b.dofs)
-    static = b.probe.static if b.probe else solve_static(model)
+    static = b.probe.static if b.probe else solve_static(model, start=b.start)
     r = model.gather_nodal(model.u)
     sag = None
     if model.comm.rank == 0 and case.gravity.g > 0 and case.network is None:
