@@ -147,8 +147,9 @@ def _make_ts(model, dt: float, rho_inf: float, history: SNESHistory,
         extra = (lambda arr: junctions.add_residual(model, arr),
                  lambda A: junctions.add_jacobian(model, A))
     F = model.f_dynamic
-    timed = model.forms.time_laws or any(model.u_bc._cpp_object is c
-                                         for c in F.coefficients)
+    # a term's time law may set its Functions (not only Constants) at a new time
+    timed = (any(model.forms.term(n).set_time is not None for n in model.forms.user)
+             or any(model.u_bc._cpp_object is c for c in F.coefficients))
     rows = RowsAssembler(F, model.j_dynamic, model.bcs, bc_rows, kappa, model.comm, extra,
                          (model.u, model.v, model.a), timed)
     serial = model.comm.size == 1

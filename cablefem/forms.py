@@ -400,12 +400,6 @@ class CableForms:
             yield
 
     @property
-    def time_laws(self) -> bool:
-        """True when a term has a time law (``set_time``): setting the time may change
-        its Functions, not only its Constants."""
-        return any(t.set_time is not None for t in self._terms.values())
-
-    @property
     def mass_moves(self) -> bool:
         """True when a term's mass changes with the state or with time (``moves_mass``):
         the mass matrix must be assembled again where it is used."""

@@ -14,8 +14,9 @@ from mpi4py import MPI
 from cablefem.app.run import run_case
 from cablefem.cable import CableModel
 from cablefem.case import parse_case
-from cablefem.kinks import KinkMoments, kink_points, rod_kink_moments
+from cablefem.kinks import KinkMoments, kink_points
 from cablefem.rod import BeamModel
+from cablefem.rod_kinks import rod_kink_moments
 from cablefem.statics import solve_static
 
 comm = MPI.COMM_WORLD
@@ -428,7 +429,7 @@ def test_composite_field_rounds_the_kink(mpi_tmp_path):
       DG0 moments, which sit at element midpoints in a profile that falls by e^-1 per ℓ)."""
     from conftest import read_series
 
-    from cablefem.kinks import rod_moments_along
+    from cablefem.rod_kinks import rod_moments_along
 
     d = taut(2000.0, dynamics={"t_end": 0.002, "dt": 0.002})
     out = mpi_tmp_path / "run"

@@ -10,7 +10,8 @@ import numpy as np
 
 from cablefem.app.report import steady_state_stats
 from cablefem.io import anchorcsv
-from cablefem.kinks import KINK_COLUMNS, KinkMoments, rod_kink_moments
+from cablefem.kinks import KINK_COLUMNS, KinkMoments
+from cablefem.rod_kinks import rod_kink_moments
 
 __all__ = ["KinkOutput", "KinkHistory"]
 
