@@ -11,6 +11,7 @@ from dolfinx import fem
 from dolfinx.fem import petsc as fpetsc
 from petsc4py import PETSc
 
+from cablefem.gathered_lu import PYTHON_TYPE as GATHERED
 from cablefem.stepnewton import INCREMENT_RTOL
 
 __all__ = ["default_options", "case_options", "assemble_residual", "assemble_jacobian",
@@ -26,6 +27,10 @@ FORWARD, REVERSE = PETSc.ScatterMode.FORWARD, PETSc.ScatterMode.REVERSE
 
 #: above this many degrees of freedom the time integrator reuses its factorisations
 LARGE_ABOVE = 20_000
+
+#: on several ranks, above this many degrees of freedom a direct solve factors on rank 0
+#: only (:mod:`cablefem.gathered_lu`); below it on every rank (``pc_type redundant``)
+GATHER_ABOVE = LARGE_ABOVE
 
 #: GMRES's relative tolerance on the lagged-LU route: a tenth of Newton's increment test
 #: (:data:`cablefem.stepnewton.INCREMENT_RTOL`). The linear solve only has to make Newton's
@@ -102,6 +107,11 @@ def lu_options(comm_size: int = 1, n_dofs: int | None = None) -> dict[str, str]:
         opts = {"ksp_type": "preonly", "pc_type": "lu"}
         if amd:
             opts["pc_factor_mat_ordering_type"] = "amd"
+        return opts
+    if n_dofs is not None and n_dofs > GATHER_ABOVE:
+        opts = {"ksp_type": "preonly", "pc_type": "python", "pc_python_type": GATHERED}
+        if amd:
+            opts["gathered_pc_factor_mat_ordering_type"] = "amd"
         return opts
     opts = {"ksp_type": "preonly", "pc_type": "redundant", "redundant_pc_type": "lu"}
     if amd:
