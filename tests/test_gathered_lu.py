@@ -7,7 +7,7 @@ import numpy as np
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from cablefem.gathered_lu import PYTHON_TYPE
+from cablefem.gathered_lu import PYTHON_TYPE, GatheredLU
 
 N = 60  # block rows of 3 unknowns, a chain as a cable's
 
@@ -87,3 +87,43 @@ def test_gathered_lu_reports_a_failed_factorisation_then_recovers():
     assert np.all(np.isnan(x.array))  # on every rank
     assert _error(ksp, A) < 1e-13
     ksp.destroy()
+
+
+def test_every_direct_solve_of_a_network_on_the_gathered_route(mpi_tmp_path, monkeypatch):
+    """The route taken by every direct solve of a large network on several ranks (statics,
+    the modal analysis's shift-invert, the reactions' mass solve), forced on the weightless
+    fan of tests/test_network.py: its frequencies are the stays' taut-string ones within
+    that test's tolerance (the consistent-mass error (pi/k)^2/24 and 3e-4), the modal
+    analysis's solves run through the gathered LU."""
+    from test_network import fan_case, fan_mesh
+
+    import cablefem.petsc_utils as pu
+    from cablefem.case import parse_case
+    from cablefem.modal import solve_modes
+    from cablefem.network import NetworkModel
+    from cablefem.statics import solve_static
+
+    monkeypatch.setattr(pu, "GATHER_ABOVE", 0)
+    assert pu.lu_options(2, 10)["pc_python_type"] == PYTHON_TYPE
+    mesh = fan_mesh(str(mpi_tmp_path / "fan.msh"))
+    model = NetworkModel(MPI.COMM_WORLD, parse_case(fan_case(mesh)))
+    calls = []
+    monkeypatch.setattr(GatheredLU, "apply", _counted(GatheredLU.apply, calls))
+    solve_static(model)
+    om = solve_modes(model, 6).omegas
+    if MPI.COMM_WORLD.size > 1:  # one rank: PETSc's own LU, as before
+        assert len(calls) > 0
+    lam = 1 + 2e6 / 9e8
+    expected = []
+    for xd, zt in [(15.0, 60.0), (30.0, 58.5), (45.0, 57.0)]:
+        L = np.hypot(xd - 0.5, zt)
+        expected += [np.pi * np.sqrt(2e6 / (37.0 / lam)) / L] * 2
+    np.testing.assert_allclose(om, np.sort(expected) * (1 + (np.pi / 10) ** 2 / 24),
+                               rtol=3e-4)
+
+
+def _counted(method, calls):
+    def wrapped(self, *args):
+        calls.append(1)
+        return method(self, *args)
+    return wrapped
