@@ -19,6 +19,8 @@ Options under the PC's prefix followed by ``gathered_`` reach the sequential sol
 
 from __future__ import annotations
 
+import time
+
 import numpy as np
 from petsc4py import PETSc
 
@@ -26,6 +28,22 @@ __all__ = ["GatheredLU", "PYTHON_TYPE"]
 
 #: the ``pc_python_type`` naming :class:`GatheredLU`
 PYTHON_TYPE = "cablefem.gathered_lu.GatheredLU"
+
+
+#: seconds a rank sleeps between two tests of the barrier while it waits for rank 0
+POLL = 50e-6
+
+
+def _wait_idle(comm) -> None:
+    """A barrier that waits without spinning: MPI's own waits poll at full speed, so a rank
+    waiting for rank 0's factorisation or solve would take a core that rank 0 (or another
+    job of the machine) could use. Measured on the 94 000-dof roof on a shared 2-core
+    machine: docs/benchmarks.md, "One factorisation on one rank"."""
+    if comm.size == 1:
+        return
+    req = comm.Ibarrier()
+    while not req.Test():
+        time.sleep(POLL)
 
 
 class GatheredLU:
@@ -42,6 +60,7 @@ class GatheredLU:
         self.nz = -1.0  # the global nonzeros it was gathered with
         self.ksp: PETSc.KSP | None = None  # the sequential solver (rank 0)
         self.scatter = None  # to rank 0, with its work vectors
+        self.comm = None  # the operator's communicator (mpi4py)
         self.x0 = self.y0 = None
         self.failed = False
 
@@ -83,8 +102,10 @@ class GatheredLU:
         if self.scatter is None:
             self.scatter, self.x0 = PETSc.Scatter.toZero(x)
             self.y0 = self.x0.duplicate()
+            self.comm = x.getComm().tompi4py()
         insert, fwd, rev = (PETSc.InsertMode.INSERT, PETSc.ScatterMode.FORWARD,
                             PETSc.ScatterMode.REVERSE)
+        _wait_idle(self.comm)  # rank 0 may still be factoring
         self.scatter.scatter(x, self.x0, insert, fwd)
         if self.x0.getSize():  # rank 0
             if not self.failed:
@@ -96,6 +117,7 @@ class GatheredLU:
                     not np.all(np.isfinite(self.y0.array_r)):
                 self.failed = True
                 self.y0.set(np.nan)
+        _wait_idle(self.comm)  # the other ranks: while rank 0 solves
         self.scatter.scatter(self.y0, y, insert, rev)
 
     def view(self, pc: PETSc.PC, viewer: PETSc.Viewer) -> None:
