@@ -11,6 +11,7 @@ from dolfinx import fem
 from dolfinx.fem import petsc as fpetsc
 from petsc4py import PETSc
 
+from cablefem.gathered_lu import PYTHON_TYPE as GATHERED
 from cablefem.stepnewton import INCREMENT_RTOL
 
 __all__ = ["default_options", "case_options", "assemble_residual", "assemble_jacobian",
@@ -26,6 +27,10 @@ FORWARD, REVERSE = PETSc.ScatterMode.FORWARD, PETSc.ScatterMode.REVERSE
 
 #: above this many degrees of freedom the time integrator reuses its factorisations
 LARGE_ABOVE = 20_000
+
+#: on several ranks, above this many degrees of freedom a direct solve factors on rank 0
+#: only (:mod:`cablefem.gathered_lu`); below it on every rank (``pc_type redundant``)
+GATHER_ABOVE = LARGE_ABOVE
 
 #: GMRES's relative tolerance on the lagged-LU route: a tenth of Newton's increment test
 #: (:data:`cablefem.stepnewton.INCREMENT_RTOL`). The linear solve only has to make Newton's
@@ -59,7 +64,11 @@ def linear_solver_options(n_dofs: int, comm_size: int = 1, reuse: bool = True
     the roof within a step: docs/networks.md),
     PCFIELDSPLIT with a Schur complement on the partition interface (0.28 s per step on 2
     ranks: forming the Schur complement costs 300 triangular solves), MUMPS with METIS or
-    SCOTCH orderings (0.6-0.75 s). Override with ``-cable_mat_type``, ``-cable_ksp_type``,
+    SCOTCH orderings (0.6-0.75 s); on 2026-11-27 BDDC on a MATIS with every interface node
+    primal (1 GMRES iteration, but three half-size triangular solves per application and
+    ~180 coarse-basis solves per factorisation: docs/benchmarks.md, "One factorisation on
+    one rank"). Above :data:`GATHER_ABOVE` on several ranks the LU is gathered onto rank 0
+    (:func:`lu_options`). Override with ``-cable_mat_type``, ``-cable_ksp_type``,
     ``-cable_pc_type``, ``-cable_snes_lag_preconditioner``.
 
     ``reuse=False`` (the rod): a direct solve at every size. The rod's nearly rigid shear
@@ -81,12 +90,17 @@ def model_dofs(model) -> int:
 def lu_options(comm_size: int = 1, n_dofs: int | None = None) -> dict[str, str]:
     """A direct solver: PETSc's own LU, above :data:`LARGE_ABOVE` degrees of freedom
     (``n_dofs``) with the approximate minimum degree ordering (``amd``), below with PETSc's
-    default (nested dissection); in parallel every rank factors the whole system
-    (``pc_type redundant``). On
-    the cable systems seen here (1D cells, little fill) that is 2.5 to 4 times faster on 2
-    ranks than MUMPS (measured from 6e3 to 1e5 dofs: MUMPS's factorisation ~100 ms and solve
-    ~30 ms at 1e5 dofs against 40 and 4 ms). The cost: each rank holds the whole
-    factorisation. ``-cable_pc_type lu -cable_pc_factor_mat_solver_type mumps`` (and
+    default (nested dissection). In parallel, above :data:`GATHER_ABOVE` degrees of freedom
+    the whole system is gathered onto rank 0 and factored there only
+    (:mod:`cablefem.gathered_lu`, ``pc_type python``; its sequential LU's options under
+    ``<prefix>gathered_``); below, every rank factors the whole system (``pc_type
+    redundant``). On the cable systems seen here (1D cells, little fill) a sequential LU is
+    2.5 to 4 times faster on 2 ranks than MUMPS (measured from 6e3 to 1e5 dofs: MUMPS's
+    factorisation ~100 ms and solve ~30 ms at 1e5 dofs against 40 and 4 ms), and BDDC with
+    every interface node primal, exact in one GMRES iteration, costs 4-10 times the
+    redundant LU's setup and solve (docs/benchmarks.md, "One factorisation on one rank").
+    The redundant LU's copies compete for a 2-core machine's memory bus; one copy on rank 0
+    does not. ``-cable_pc_type lu -cable_pc_factor_mat_solver_type mumps`` (and
     ``static_``/``modal_``/``mass_`` prefixes) selects MUMPS.
 
     The ordering, measured on the 94 000-dof roof's dynamic matrix (BAIJ, 2026-11-26,
@@ -102,6 +116,11 @@ def lu_options(comm_size: int = 1, n_dofs: int | None = None) -> dict[str, str]:
         opts = {"ksp_type": "preonly", "pc_type": "lu"}
         if amd:
             opts["pc_factor_mat_ordering_type"] = "amd"
+        return opts
+    if n_dofs is not None and n_dofs > GATHER_ABOVE:
+        opts = {"ksp_type": "preonly", "pc_type": "python", "pc_python_type": GATHERED}
+        if amd:
+            opts["gathered_pc_factor_mat_ordering_type"] = "amd"
         return opts
     opts = {"ksp_type": "preonly", "pc_type": "redundant", "redundant_pc_type": "lu"}
     if amd:

@@ -111,6 +111,8 @@ def fresh_pc(ksp: PETSc.KSP) -> None:
     pc.setType(old.getType())
     if old.getType() == PETSc.PC.Type.LU:
         pc.setFactorSolverType(old.getFactorSolverType())
+    elif old.getType() == PETSc.PC.Type.PYTHON:  # e.g. cablefem.gathered_lu: a new one
+        pc.setPythonContext(type(old.getPythonContext())())
     ksp.setPC(pc)
     pc.destroy()
 

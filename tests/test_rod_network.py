@@ -276,7 +276,9 @@ def test_the_rod_solves_directly_at_every_size():
     rod = linear_solver_options(n, 1, reuse=False)
     assert string["ksp_type"] == "gmres" and string["snes_lag_preconditioner"] == 10
     assert rod["ksp_type"] == "preonly" and "snes_lag_preconditioner" not in rod
-    assert linear_solver_options(n, 2, reuse=False)["pc_type"] == "redundant"
+    parallel = linear_solver_options(n, 2, reuse=False)  # a direct solve on rank 0
+    assert parallel["ksp_type"] == "preonly" and parallel["pc_type"] == "python"
+    assert parallel["pc_python_type"] == "cablefem.gathered_lu.GatheredLU"
 
 
 def test_a_network_damper_on_the_rod(mpi_tmp_path):

@@ -10,7 +10,8 @@ from mpi4py import MPI
 
 from cablefem.cable import CableModel
 from cablefem.dynamics import _make_ts, integrate
-from cablefem.petsc_utils import LARGE_ABOVE, SNESHistory, linear_solver_options
+from cablefem.gathered_lu import PYTHON_TYPE as GATHERED
+from cablefem.petsc_utils import GATHER_ABOVE, LARGE_ABOVE, SNESHistory, linear_solver_options
 from cablefem.statics import solve_static
 
 LAGGED = {"ksp_type": "gmres", "ksp_rtol": 1e-12, "ksp_max_it": 500,
@@ -21,10 +22,16 @@ LAGGED = {"ksp_type": "gmres", "ksp_rtol": 1e-12, "ksp_max_it": 500,
                                          (LARGE_ABOVE + 3, 2)])
 def test_automatic_choice(n_dofs, size):
     """Block matrices always; a direct solve for small systems, the factorisation reused by
-    GMRES for large ones; in parallel every rank factors the whole system (redundant)."""
+    GMRES for large ones; in parallel every rank factors a small system (redundant), a large
+    one is factored on rank 0 only (cablefem.gathered_lu)."""
     o = linear_solver_options(n_dofs, size)
     assert o["mat_type"] == "baij"
-    assert o["pc_type"] == ("lu" if size == 1 else "redundant")
+    if size == 1:
+        assert o["pc_type"] == "lu"
+    elif n_dofs > GATHER_ABOVE:
+        assert (o["pc_type"], o["pc_python_type"]) == ("python", GATHERED)
+    else:
+        assert o["pc_type"] == "redundant"
     assert o["ksp_type"] == ("gmres" if n_dofs > LARGE_ABOVE else "preonly")
     assert ("snes_lag_preconditioner" in o) == (n_dofs > LARGE_ABOVE)
     if n_dofs > LARGE_ABOVE:  # tied to Newton's increment test, a tenth of it (1e-12 before)
@@ -96,7 +103,43 @@ def _net_history(case, comm, options):
             forces.append(problem.anchor_forces().copy())
         newton = problem.ts.getSNESIterations()
         assemblies = problem.newton.assemblies
+        pc = problem.ts.getSNES().getKSP().getPC()
+        assert pc.getType() == options.get("pc_type", pc.getType())  # the route asked for
     return np.array(forces), newton, assemblies
+
+
+def _saddle_case(mesh, petsc_options=None):
+    from cablefem.case import parse_case
+
+    return parse_case({
+        "title": "roof", "network": {"mesh": str(mesh)},
+        "sections": [{"name": "s", "EA": 2e8, "EI": 2e3, "mass": 10.0}],
+        "cables": [{"group": "cables_x", "section": "s", "pretension": 1e5},
+                   {"group": "cables_y", "section": "s", "pretension": 1e5}],
+        "gravity": {"g": 9.81}, "anchors": [{"name": "anchors_x"}, {"name": "anchors_y"}],
+        "loads": [{"value": [0.0, 0.0, 1500.0], "time": {"type": "harmonic", "omega": 8.0}}],
+        "solver": {"span_bending": False, "petsc_options": petsc_options or {}}})
+
+
+def _route_against_direct(mpi_tmp_path, route_options, case_options=None):
+    """The saddle net's anchor forces over 40 steps on ``route_options`` (all ranks)
+    against a fresh Jacobian and a direct solve at every Newton iteration on one rank,
+    within the bound of :func:`test_network_route_equals_the_direct_solve`."""
+    from cablefem.petsc_utils import KSP_RTOL
+    from cablefem.stepnewton import INCREMENT_RTOL
+
+    mesh = _roof_net(mpi_tmp_path / "roof.msh")
+    direct, _, _ = _net_history(_saddle_case(mesh), MPI.COMM_SELF,
+                                {"newton_jacobian_reuse": 0, "ksp_type": "preonly"})
+    route, newton, assemblies = _net_history(
+        _saddle_case(mesh, case_options), MPI.COMM_WORLD,
+        {**LAGGED, "ksp_rtol": KSP_RTOL, **route_options})
+    assert assemblies < newton  # the Jacobian kept over steps
+    variation = np.abs(np.diff(direct, axis=0)).sum(axis=0)
+    assert variation.max() > 1e3  # the load moves the anchor forces (N)
+    bound = 10 * 2 * INCREMENT_RTOL * variation + 1e-9 * np.abs(direct).max()
+    print("max |route - direct| / bound:", np.max(np.abs(route - direct) / bound))
+    assert np.all(np.abs(route - direct) <= bound)
 
 
 def test_network_route_equals_the_direct_solve(mpi_tmp_path):
@@ -109,26 +152,14 @@ def test_network_route_equals_the_direct_solve(mpi_tmp_path):
     each step's force change, summed over the steps, bounds the difference (x 2: both
     runs; x 10: the test is an estimate of the error, not a bound). The default reuses the
     Jacobian: fewer assemblies than Newton iterations (one per iteration before)."""
-    from cablefem.case import parse_case
-    from cablefem.petsc_utils import KSP_RTOL
-    from cablefem.stepnewton import INCREMENT_RTOL
+    _route_against_direct(mpi_tmp_path, {})
 
-    mesh = _roof_net(mpi_tmp_path / "roof.msh")
-    case = parse_case({
-        "title": "roof", "network": {"mesh": str(mesh)},
-        "sections": [{"name": "s", "EA": 2e8, "EI": 2e3, "mass": 10.0}],
-        "cables": [{"group": "cables_x", "section": "s", "pretension": 1e5},
-                   {"group": "cables_y", "section": "s", "pretension": 1e5}],
-        "gravity": {"g": 9.81}, "anchors": [{"name": "anchors_x"}, {"name": "anchors_y"}],
-        "loads": [{"value": [0.0, 0.0, 1500.0], "time": {"type": "harmonic", "omega": 8.0}}],
-        "solver": {"span_bending": False}})
-    direct, _, _ = _net_history(case, MPI.COMM_SELF,
-                                {"newton_jacobian_reuse": 0, "ksp_type": "preonly"})
-    route, newton, assemblies = _net_history(
-        case, MPI.COMM_WORLD, {**LAGGED, "ksp_rtol": KSP_RTOL})
-    assert assemblies < newton  # the Jacobian kept over steps
-    variation = np.abs(np.diff(direct, axis=0)).sum(axis=0)
-    assert variation.max() > 1e3  # the load moves the anchor forces (N)
-    bound = 10 * 2 * INCREMENT_RTOL * variation + 1e-9 * np.abs(direct).max()
-    print("max |route - direct| / bound:", np.max(np.abs(route - direct) / bound))
-    assert np.all(np.abs(route - direct) <= bound)
+
+def test_gathered_lu_route_equals_the_direct_solve(mpi_tmp_path):
+    """The same with the factorisation of large networks on several ranks: the whole
+    system gathered onto rank 0 and factored there (cablefem.gathered_lu), for the time
+    steps and for the statics before them (``static_`` options), partitioned under mpirun:
+    the anchor forces of the direct solve on one rank, within the same bound."""
+    gathered = {"pc_type": "python", "pc_python_type": GATHERED}
+    _route_against_direct(mpi_tmp_path, gathered,
+                          {"static_" + k: v for k, v in gathered.items()})

@@ -1,0 +1,131 @@
+"""A direct solve on one rank of several: the preconditioner matrix gathered onto rank 0,
+factored there by PETSc's LU, each right-hand side gathered to rank 0, solved there and the
+solution scattered back (a ``pc_type python`` preconditioner, :class:`GatheredLU`).
+
+Why, on the cable networks of this project (docs/benchmarks.md, "One factorisation on one
+rank"): their systems are 1D chains with little fill, so a sequential LU of the whole system
+costs tens of milliseconds at 1e5 unknowns, while the parallel alternatives lose: a parallel
+LU (MUMPS) is 2.5-4 times slower, and local or substructuring preconditioners need many
+iterations or, exact (BDDC with every interface node primal), several local solves and
+hundreds of coarse-basis solves per factorisation. ``pc_type redundant`` factors the whole
+system on every rank; on a 2-core machine the two copies compete for the memory bus and
+each factorisation and triangular solve takes about three times as long as one alone. Here
+only rank 0 factors and solves; the other ranks wait for it (a few milliseconds a solve),
+then go on with their share of the assembly, which is what scales.
+
+Options under the PC's prefix followed by ``gathered_`` reach the sequential solver (e.g.
+``-cable_gathered_pc_factor_mat_ordering_type amd``).
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+from petsc4py import PETSc
+
+__all__ = ["GatheredLU", "PYTHON_TYPE"]
+
+#: the ``pc_python_type`` naming :class:`GatheredLU`
+PYTHON_TYPE = "cablefem.gathered_lu.GatheredLU"
+
+
+#: seconds a rank sleeps between two tests of the barrier while it waits for rank 0
+POLL = 50e-6
+
+
+def _wait_idle(comm) -> None:
+    """A barrier that waits without spinning: MPI's own waits poll at full speed, so a rank
+    waiting for rank 0's factorisation or solve would take a core that rank 0 (or another
+    job of the machine) could use. Measured on the 94 000-dof roof on a shared 2-core
+    machine: docs/benchmarks.md, "One factorisation on one rank"."""
+    if comm.size == 1:
+        return
+    req = comm.Ibarrier()
+    while not req.Test():
+        time.sleep(POLL)
+
+
+class GatheredLU:
+    """PETSc python preconditioner: an LU of the whole operator on rank 0 only.
+
+    ``setUp`` gathers the preconditioner matrix onto rank 0 (``MatCreateSubMatrices``, the
+    gathered copy reused while the global number of nonzeros stays the same) and factors it
+    there; ``apply`` gathers ``x`` onto rank 0, solves there and scatters the solution back.
+    A failed factorisation or solve gives a NaN solution on every rank (the caller's Newton
+    then fails as with any failed solve) and a fresh sequential solver at the next setUp."""
+
+    def __init__(self) -> None:
+        self.sub: PETSc.Mat | None = None  # the gathered matrix (rank 0: all rows)
+        self.nz = -1.0  # the global nonzeros it was gathered with
+        self.ksp: PETSc.KSP | None = None  # the sequential solver (rank 0)
+        self.scatter = None  # to rank 0, with its work vectors
+        self.comm = None  # the operator's communicator (mpi4py)
+        self.x0 = self.y0 = None
+        self.failed = False
+
+    def setUp(self, pc: PETSc.PC) -> None:
+        _, P = pc.getOperators()
+        rank = P.getComm().getRank()
+        nz = P.getInfo(PETSc.Mat.InfoType.GLOBAL_SUM)["nz_allocated"]
+        n = P.getSize()[0] if rank == 0 else 0
+        rows = PETSc.IS().createStride(n, 0, 1, comm=PETSc.COMM_SELF)
+        if self.sub is not None and nz == self.nz:
+            P.createSubMatrices(rows, rows, submats=[self.sub])
+        else:
+            if self.sub is not None:
+                self.sub.destroy()
+            self.sub = P.createSubMatrices(rows, rows)[0]
+            self.nz = nz
+        rows.destroy()
+        if self.ksp is None or self.failed:
+            self._new_ksp(pc)
+        if rank == 0:
+            self.ksp.setOperators(self.sub)
+            try:  # an error here must not leave the other ranks waiting in apply
+                self.ksp.setUp()
+            except PETSc.Error:
+                self.failed = True
+
+    def _new_ksp(self, pc: PETSc.PC) -> None:
+        if self.ksp is not None:
+            self.ksp.destroy()
+        self.failed = False
+        ksp = PETSc.KSP().create(PETSc.COMM_SELF)
+        ksp.setOptionsPrefix((pc.getOptionsPrefix() or "") + "gathered_")
+        ksp.setType(PETSc.KSP.Type.PREONLY)
+        ksp.getPC().setType(PETSc.PC.Type.LU)
+        ksp.setFromOptions()
+        self.ksp = ksp
+
+    def apply(self, pc: PETSc.PC, x: PETSc.Vec, y: PETSc.Vec) -> None:
+        if self.scatter is None:
+            self.scatter, self.x0 = PETSc.Scatter.toZero(x)
+            self.y0 = self.x0.duplicate()
+            self.comm = x.getComm().tompi4py()
+        insert, fwd, rev = (PETSc.InsertMode.INSERT, PETSc.ScatterMode.FORWARD,
+                            PETSc.ScatterMode.REVERSE)
+        _wait_idle(self.comm)  # rank 0 may still be factoring
+        self.scatter.scatter(x, self.x0, insert, fwd)
+        if self.x0.getSize():  # rank 0
+            if not self.failed:
+                try:
+                    self.ksp.solve(self.x0, self.y0)
+                except PETSc.Error:
+                    self.failed = True
+            if self.failed or self.ksp.getConvergedReason() < 0 or \
+                    not np.all(np.isfinite(self.y0.array_r)):
+                self.failed = True
+                self.y0.set(np.nan)
+        _wait_idle(self.comm)  # the other ranks: while rank 0 solves
+        self.scatter.scatter(self.y0, y, insert, rev)
+
+    def view(self, pc: PETSc.PC, viewer: PETSc.Viewer) -> None:
+        viewer.printfASCII("  LU of the whole operator on rank 0 (gathered), prefix "
+                           f"{(pc.getOptionsPrefix() or '')}gathered_\n")
+
+    def destroy(self, pc: PETSc.PC) -> None:
+        # references dropped, not destroyed here: PETSc may call this from PetscFinalize
+        # (its garbage cleanup), when destroying petsc4py objects is no longer safe
+        self.sub = self.ksp = self.scatter = self.x0 = self.y0 = None
+        self.nz = -1.0

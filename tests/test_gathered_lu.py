@@ -1,0 +1,129 @@
+"""The direct solve on rank 0 of several (cablefem.gathered_lu): the answer of an LU, again
+after the matrix's values change, and a failed factorisation reported and then recovered."""
+
+from __future__ import annotations
+
+import numpy as np
+from mpi4py import MPI
+from petsc4py import PETSc
+
+from cablefem.gathered_lu import PYTHON_TYPE, GatheredLU
+
+N = 60  # block rows of 3 unknowns, a chain as a cable's
+
+
+def _chain(shift: float) -> PETSc.Mat:
+    """A block-tridiagonal (BAIJ, 3 x 3 blocks) matrix ``shift I + K`` with ``K`` a chain's
+    stiffness (1D Laplacian, one row of nodes), distributed over the ranks."""
+    A = PETSc.Mat().createBAIJ(((PETSc.DECIDE, 3 * N), (PETSc.DECIDE, 3 * N)), 3, nnz=(3, 2),
+                               comm=MPI.COMM_WORLD)
+    lo, hi = (r // 3 for r in A.getOwnershipRange())
+    for i in range(lo, hi):
+        for j in (i - 1, i, i + 1):
+            if 0 <= j < N:
+                w = (shift + 2.0) if i == j else -1.0
+                A.setValuesBlocked([i], [j], w * np.eye(3) + (0.1 * (i == j)) * np.ones(3))
+    A.assemble()
+    return A
+
+
+def _solver(A: PETSc.Mat) -> PETSc.KSP:
+    opts = PETSc.Options()
+    for key, val in {"ksp_type": "preonly", "pc_type": "python",
+                     "pc_python_type": PYTHON_TYPE}.items():
+        opts.setValue("glu_" + key, val)
+    ksp = PETSc.KSP().create(MPI.COMM_WORLD)
+    ksp.setOptionsPrefix("glu_")
+    ksp.setOperators(A)
+    ksp.setFromOptions()
+    for key in ("ksp_type", "pc_type", "pc_python_type"):
+        opts.delValue("glu_" + key)
+    return ksp
+
+
+def _error(ksp: PETSc.KSP, A: PETSc.Mat) -> float:
+    """The relative error of the solve against a known solution."""
+    x_true, b = A.createVecs()
+    lo, hi = x_true.getOwnershipRange()
+    x_true.array[:] = np.sin(0.37 * np.arange(lo, hi)) + 2.0
+    A.mult(x_true, b)
+    x = x_true.duplicate()
+    ksp.setOperators(A)
+    ksp.solve(b, x)
+    x.axpy(-1.0, x_true)
+    return x.norm() / x_true.norm()
+
+
+def test_gathered_lu_is_a_direct_solve():
+    """The solution of a block chain matrix to round-off (its condition number is below 10
+    for shift 1: Gershgorin bounds the spectrum to [1, 5.3]; an LU's error is then a few
+    1e-16), on any number of ranks; the same after new values in the same pattern (the
+    gathered copy reused), with the new matrix's solution, not the old one's."""
+    A = _chain(1.0)
+    ksp = _solver(A)
+    assert ksp.getPC().getType() == "python"
+    assert _error(ksp, A) < 1e-13
+    B = _chain(3.0)  # other values, same pattern: copied into A
+    B.copy(A, structure=PETSc.Mat.Structure.SAME_NONZERO_PATTERN)
+    assert _error(ksp, A) < 1e-13
+    ksp.destroy()
+
+
+def test_gathered_lu_reports_a_failed_factorisation_then_recovers():
+    """A singular matrix (a zero block row) gives a NaN solution on every rank (the caller's
+    Newton sees a failed solve, never a wrong finite answer); the next regular matrix is
+    solved again to round-off (a fresh factorisation)."""
+    A = _chain(1.0)
+    ksp = _solver(A)
+    assert _error(ksp, A) < 1e-13
+    S = A.duplicate(copy=True)
+    if S.getOwnershipRange()[0] == 0:  # the first node's rows zero: singular
+        S.setValuesBlocked([0], [0, 1], np.zeros((3, 6)))
+    S.assemble()
+    x, b = S.createVecs()
+    b.set(1.0)
+    ksp.setOperators(S)
+    ksp.solve(b, x)
+    assert np.all(np.isnan(x.array))  # on every rank
+    assert _error(ksp, A) < 1e-13
+    ksp.destroy()
+
+
+def test_every_direct_solve_of_a_network_on_the_gathered_route(mpi_tmp_path, monkeypatch):
+    """The route taken by every direct solve of a large network on several ranks (statics,
+    the modal analysis's shift-invert, the reactions' mass solve), forced on the weightless
+    fan of tests/test_network.py: its frequencies are the stays' taut-string ones within
+    that test's tolerance (the consistent-mass error (pi/k)^2/24 and 3e-4), the modal
+    analysis's solves run through the gathered LU."""
+    from test_network import fan_case, fan_mesh
+
+    import cablefem.petsc_utils as pu
+    from cablefem.case import parse_case
+    from cablefem.modal import solve_modes
+    from cablefem.network import NetworkModel
+    from cablefem.statics import solve_static
+
+    monkeypatch.setattr(pu, "GATHER_ABOVE", 0)
+    assert pu.lu_options(2, 10)["pc_python_type"] == PYTHON_TYPE
+    mesh = fan_mesh(str(mpi_tmp_path / "fan.msh"))
+    model = NetworkModel(MPI.COMM_WORLD, parse_case(fan_case(mesh)))
+    calls = []
+    monkeypatch.setattr(GatheredLU, "apply", _counted(GatheredLU.apply, calls))
+    solve_static(model)
+    om = solve_modes(model, 6).omegas
+    if MPI.COMM_WORLD.size > 1:  # one rank: PETSc's own LU, as before
+        assert len(calls) > 0
+    lam = 1 + 2e6 / 9e8
+    expected = []
+    for xd, zt in [(15.0, 60.0), (30.0, 58.5), (45.0, 57.0)]:
+        L = np.hypot(xd - 0.5, zt)
+        expected += [np.pi * np.sqrt(2e6 / (37.0 / lam)) / L] * 2
+    np.testing.assert_allclose(om, np.sort(expected) * (1 + (np.pi / 10) ** 2 / 24),
+                               rtol=3e-4)
+
+
+def _counted(method, calls):
+    def wrapped(self, *args):
+        calls.append(1)
+        return method(self, *args)
+    return wrapped
