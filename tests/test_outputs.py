@@ -83,3 +83,35 @@ def test_a_new_run_leaves_nothing_of_the_last_one(mpi_tmp_path):
         ls = lambda d: sorted(str(p.relative_to(d)) for p in d.rglob("*"))  # noqa: E731
         assert ls(mpi_tmp_path / "reused") == ls(mpi_tmp_path / "clean")
     comm.Barrier()
+
+
+def test_a_field_waiting_for_its_rows_block_is_the_field_written_at_once(
+        mpi_tmp_path, make_case, monkeypatch):
+    """moments.xdmf's frames wait for their row's block of layers (the anchors.csv rows
+    are computed in blocks); with no wait at all (every frame flushing its block at once,
+    the route before) the composite fields, anchors.csv and every field time are the same
+    to the last bit: the same layers of the same rows. Field times off the output rows
+    (fields_every 3, output_every 2) and a checkpoint are in the run."""
+    from cablefem.app.output import RunOutput
+
+    case = make_case(elements=8, damping={"ratio": 0.005, "frequencies": [16.407, 32.814]},
+                     motion={"type": "harmonic", "amplitude": [2e-4, 0, 0],
+                             "omega": 32.814},
+                     dynamics={"t_end": 0.2, "dt": 0.005, "fields_every": 3,
+                               "output_every": 2, "checkpoint_every": 15})
+    kw = dict(figures=False, progress=False, modes=0)
+    waited = run_case(case, mpi_tmp_path / "waited", comm, **kw)
+    monkeypatch.setattr(RunOutput, "WAITING_BYTES", -1)  # every frame written at once
+    at_once = run_case(case, mpi_tmp_path / "at_once", comm, **kw)
+    for name in waited.forces:
+        assert np.array_equal(waited.forces[name], at_once.forces[name])
+    if comm.rank == 0:
+        a = read_series(mpi_tmp_path / "waited" / "moments.xdmf")
+        b = read_series(mpi_tmp_path / "at_once" / "moments.xdmf")
+        assert [t for t, _ in a] == [t for t, _ in b] and len(a) > 10
+        for (_, fa), (_, fb) in zip(a, b):
+            assert fa.keys() == fb.keys()
+            for key in fa:
+                assert np.array_equal(fa[key], fb[key]), key
+        assert ((mpi_tmp_path / "waited" / "anchors.csv").read_text()
+                == (mpi_tmp_path / "at_once" / "anchors.csv").read_text())

@@ -103,7 +103,6 @@ class RunOutput:
         self._last_time = None  # and its last time
         #: composite fields waiting for their row's layers: (row index, field state)
         self._waiting: list[tuple[int, dict]] = []
-        self._waiting_bytes = 0
         self.last_fields_time = None
         self.moments = None
         #: the composite moment field (None: nothing clamped or kinked, or a rod)
@@ -206,7 +205,7 @@ class RunOutput:
             self._write_moments(state, {c.name: {k: v[j:j + 1] for k, v in
                                                  self._last[c.name].items()}
                                         for c in self.clamped})
-        self._waiting, self._waiting_bytes = [], 0
+        self._waiting = []
 
     def fields(self, t: float, forces: np.ndarray) -> None:
         """Write the string fields at ``t`` and the composite moment field (collective).
@@ -219,9 +218,9 @@ class RunOutput:
         state = self.composite.state(t, forces)
         if self._pending and self.times[-1] == t:  # its layers come with the batch
             self._waiting.append((len(self.times) - 1, state))
-            self._waiting_bytes += sum(v.nbytes for v in state.values()
-                                       if isinstance(v, np.ndarray))
-            if self._waiting_bytes > self.WAITING_BYTES:
+            # a state holds at most the nodes' positions and accelerations (on rank 0):
+            # the same count on every rank
+            if len(self._waiting) * 48 * len(self.model.geometry.points) > self.WAITING_BYTES:
                 self.flush()
             return
         if self._waiting:  # the frames in time order
