@@ -488,3 +488,31 @@ def kink_estimate(model, kink, delta: float, ell: float) -> float:
 def _sum():
     from mpi4py import MPI
     return MPI.SUM
+
+
+def set_corner_cells(model, f, values) -> None:
+    """Set the cell field ``f`` (one value per cell, on ``model.W``) on the corrected
+    kinks' two elements to ``values(term)`` (per kink, its two elements) of the corner
+    term (``model.corner_report``), on every rank that holds those cells (collective). The
+    term lives on the rank that holds a kink's three nodes; a cell of its another rank
+    owns gets its value through the cells' ghost exchange (before, the owner kept the
+    chord's value)."""
+    from dolfinx import fem, la
+
+    W = f.function_space
+    n_owned = W.dofmap.index_map.size_local
+    sent, count = fem.Function(W), fem.Function(W)
+    report = model.corner_report
+    if report is not None and len(report[0]):
+        term, cells = report
+        idx = W.dofmap.list.array[cells.ravel()]
+        vals = np.asarray(values(term), float).ravel()
+        own = idx < n_owned
+        f.x.array[idx[own]] = vals[own]
+        sent.x.array[idx[~own]] = vals[~own]
+        count.x.array[idx[~own]] = 1.0
+    for g in (sent, count):  # each ghost's value to the cell's owner
+        g.x.scatter_reverse(la.ScatterMode.add)
+    got = np.flatnonzero(count.x.array[:n_owned] > 0)
+    f.x.array[got] = sent.x.array[got] / count.x.array[got]
+    f.x.scatter_forward()

@@ -27,7 +27,7 @@ from dolfinx import fem
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from cablefem import forms
+from cablefem import forms, junctions
 from cablefem.anchor import AnchorBC
 from cablefem.cable import CableModel, string_bcs
 from cablefem.contract import Builders
@@ -377,20 +377,15 @@ class NetworkModel(CableModel):
         """The cells' tensions; a corrected kink's two elements carry the tension of the
         string run to its corner (:mod:`cablefem.junctions`), not the chord to the node."""
         f = super().tension_field(name)
-        if self.corner_report is not None and len(self.corner_report[0]):
-            term, cells = self.corner_report
-            f.x.array[self.W.dofmap.list.array[cells.ravel()]] = \
-                term.element_tensions(self.u.x.array).ravel()
+        junctions.set_corner_cells(self, f, lambda term: term.element_tensions(self.u.x.array))
         return f
 
     def strain_field(self, name: str = "strain") -> fem.Function:
         """The cells' strains, ``T/EA`` on a corrected kink's elements (as
         :meth:`tension_field`)."""
         f = super().strain_field(name)
-        if self.corner_report is not None and len(self.corner_report[0]):
-            term, cells = self.corner_report
-            T = term.element_tensions(self.u.x.array)
-            f.x.array[self.W.dofmap.list.array[cells.ravel()]] = (T / term.EA[:, None]).ravel()
+        junctions.set_corner_cells(
+            self, f, lambda term: term.element_tensions(self.u.x.array) / term.EA[:, None])
         return f
 
     def cable_cells(self) -> np.ndarray:
