@@ -409,10 +409,7 @@ class AnchorMoments:
                  ) -> np.ndarray:
         """(n, 3) :meth:`load_at` at each of ``times``, the same numbers."""
         times = np.asarray(times, float).reshape(-1)
-        f = np.tile(self.load_at(0.0, mass, diameter) if not self.loads
-                    else mass * self.gravity, (times.size, 1))
-        if not self.loads:
-            return f
+        f = np.tile(mass * self.gravity, (times.size, 1))
         for value, tf in self.loads:
             f = f + np.asarray(value)[None, :] * factors(tf, times)[:, None]
         if self.buoyancy is not None:
