@@ -14,7 +14,10 @@ only rank 0 factors and solves; the other ranks wait for it (a few milliseconds 
 then go on with their share of the assembly, which is what scales.
 
 Options under the PC's prefix followed by ``gathered_`` reach the sequential solver (e.g.
-``-cable_gathered_pc_factor_mat_ordering_type amd``).
+``-cable_gathered_pc_factor_mat_ordering_type amd``). They are read when the PC reads its
+options (``setFromOptions``) and kept: cablefem puts a solver's options into PETSc's
+database for that call only (:class:`cablefem.petsc_utils.default_options`), while the
+sequential solver is made at the first factorisation (and again after a failed one).
 """
 
 from __future__ import annotations
@@ -55,7 +58,10 @@ class GatheredLU:
     A failed factorisation or solve gives a NaN solution on every rank (the caller's Newton
     then fails as with any failed solve) and a fresh sequential solver at the next setUp."""
 
-    def __init__(self) -> None:
+    def __init__(self, options: dict[str, str] | None = None) -> None:
+        #: the sequential solver's options (under its own prefix), as read by
+        #: :meth:`setFromOptions`
+        self.options: dict[str, str] = dict(options or {})
         self.sub: PETSc.Mat | None = None  # the gathered matrix (rank 0: all rows)
         self.nz = -1.0  # the global nonzeros it was gathered with
         self.ksp: PETSc.KSP | None = None  # the sequential solver (rank 0)
@@ -87,6 +93,18 @@ class GatheredLU:
             except PETSc.Error:
                 self.failed = True
 
+    def setFromOptions(self, pc: PETSc.PC) -> None:
+        """Keep the options under ``<PC prefix>gathered_`` that are in the database now,
+        for the sequential solver made later (:meth:`_new_ksp`)."""
+        prefix = (pc.getOptionsPrefix() or "") + "gathered_"
+        self.options = {k: v for k, v in PETSc.Options().getAll().items()
+                        if k.startswith(prefix)}
+
+    def fresh(self) -> "GatheredLU":
+        """A new preconditioner context with the same options (a PC made anew after a
+        failure, :func:`cablefem.static_newton.fresh_pc`)."""
+        return type(self)(self.options)
+
     def _new_ksp(self, pc: PETSc.PC) -> None:
         if self.ksp is not None:
             self.ksp.destroy()
@@ -95,7 +113,15 @@ class GatheredLU:
         ksp.setOptionsPrefix((pc.getOptionsPrefix() or "") + "gathered_")
         ksp.setType(PETSc.KSP.Type.PREONLY)
         ksp.getPC().setType(PETSc.PC.Type.LU)
-        ksp.setFromOptions()
+        opts = PETSc.Options()
+        added = [k for k in self.options if not opts.hasName(k)]  # the database's win
+        for k in added:
+            opts.setValue(k, self.options[k])
+        try:
+            ksp.setFromOptions()
+        finally:
+            for k in added:
+                opts.delValue(k)
         self.ksp = ksp
 
     def apply(self, pc: PETSc.PC, x: PETSc.Vec, y: PETSc.Vec) -> None:

@@ -112,7 +112,8 @@ def fresh_pc(ksp: PETSc.KSP) -> None:
     if old.getType() == PETSc.PC.Type.LU:
         pc.setFactorSolverType(old.getFactorSolverType())
     elif old.getType() == PETSc.PC.Type.PYTHON:  # e.g. cablefem.gathered_lu: a new one
-        pc.setPythonContext(type(old.getPythonContext())())
+        ctx = old.getPythonContext()  # with the options it read, where it keeps them
+        pc.setPythonContext(ctx.fresh() if hasattr(ctx, "fresh") else type(ctx)())
     ksp.setPC(pc)
     pc.destroy()
 

@@ -127,3 +127,40 @@ def _counted(method, calls):
         calls.append(1)
         return method(self, *args)
     return wrapped
+
+
+def test_options_given_for_one_setfromoptions_reach_the_gathered_solver():
+    """cablefem puts a solver's options into PETSc's database for its ``setFromOptions``
+    call only (:class:`cablefem.petsc_utils.default_options`), e.g. the ``amd`` ordering
+    of a large model's LU. The sequential solver on rank 0 is made later (at the first
+    factorisation, and again after a failed one): it must still get them. Here the
+    sequential KSP's type (observable) stands for them, before and after a failure."""
+    from cablefem.petsc_utils import default_options
+
+    A = _chain(1.0)
+    ksp = PETSc.KSP().create(MPI.COMM_WORLD)
+    ksp.setOptionsPrefix("glu2_")
+    ksp.setOperators(A)
+    with default_options("glu2_", {"ksp_type": "preonly", "pc_type": "python",
+                                   "pc_python_type": PYTHON_TYPE,
+                                   "gathered_ksp_type": "richardson",
+                                   "gathered_ksp_max_it": 1}):
+        ksp.setFromOptions()
+    assert not PETSc.Options().hasName("glu2_gathered_ksp_type")  # taken out again
+    assert _error(ksp, A) < 1e-13  # richardson, one iteration, LU: exact
+    ctx = ksp.getPC().getPythonContext()
+    if MPI.COMM_WORLD.rank == 0:
+        assert ctx.ksp.getType() == "richardson"
+    S = A.duplicate(copy=True)  # a failed factorisation: a new sequential solver
+    if S.getOwnershipRange()[0] == 0:
+        S.setValuesBlocked([0], [0, 1], np.zeros((3, 6)))
+    S.assemble()
+    x, b = S.createVecs()
+    b.set(1.0)
+    ksp.setOperators(S)
+    ksp.solve(b, x)
+    assert np.all(np.isnan(x.array))
+    assert _error(ksp, A) < 1e-13
+    if MPI.COMM_WORLD.rank == 0:
+        assert ctx.ksp.getType() == "richardson"
+    ksp.destroy()
