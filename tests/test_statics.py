@@ -122,3 +122,40 @@ def test_taut_weightless_cable_uniform_tension():
     T = 2.0e8 * (L / 99.0 - 1.0)
     assert st.max_tension == pytest.approx(T, rel=1e-10)
     assert st.min_tension == pytest.approx(T, rel=1e-10)
+
+
+def test_newton_stops_at_the_round_off_floor_above_its_tolerance():
+    """Where the residual's round-off floor lies above ``atol`` (an estimate: the
+    94 000-dof roof's floor was 1.4 times its ``atol``), Newton stops once it reaches the
+    floor (an iteration without contraction, within ``STAGNATION`` atol), instead of
+    wandering there until the noise dips below ``atol`` or ``max_it`` is reached. The floor
+    is measured first: Newton (full steps) from the catenary guess with every tolerance
+    off, its last 10 of 30 norms; then ``atol`` a tenth of the floor's median: the solve must converge
+    within two iterations of the first that reached the floor (Newton's quadratic phase
+    ends there; before, it ran to ``max_it`` and failed)."""
+    from cablefem.petsc_utils import SNESHistory
+    from cablefem.static_newton import make_snes, try_solve
+
+    model = CableModel(MPI.COMM_WORLD, parse_case(inclined_case(40)))
+
+    def solve(options):
+        history = SNESHistory(maxlen=100)
+        model.scatter_nodal(model.initial_guess(), model.u)
+        x = model.u.vector.copy()
+        snes, work = make_snes(model, history, petsc_options={
+            "snes_rtol": 0.0, "snes_stol": 0.0, "snes_max_it": 30,
+            "snes_linesearch_type": "basic", **options})  # full steps: none refused
+        try:
+            ok, its = try_solve(snes, x, history)
+        finally:
+            for obj in (snes, *work, x):
+                obj.destroy()
+        return ok, its, [n for _, n in history.norms]
+
+    _, _, norms = solve({"snes_atol": 0.0})
+    assert len(norms) == 31  # every tolerance off: all 30 iterations
+    floor = float(np.median(norms[-10:]))
+    reached = next(k for k, n in enumerate(norms) if n <= 10.0 * floor)
+    ok, its, norms2 = solve({"snes_atol": 0.1 * floor})
+    assert ok, norms2
+    assert its <= reached + 2, (its, reached, norms2)
