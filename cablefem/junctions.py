@@ -240,9 +240,10 @@ class JunctionCorners:
         A.assemblyBegin(PETSc.Mat.AssemblyType.FLUSH)
         A.assemblyEnd(PETSc.Mat.AssemblyType.FLUSH)
         if not self.active:  # zeros: an assembled matrix drops the entries never set
-            zero = np.zeros((9, 9))
-            for rows in self.blocks:
-                A.setValuesBlockedLocal(rows, rows, zero, addv=PETSc.InsertMode.ADD)
+            if len(self):
+                A.setValuesBlockedLocalRCV(self.blocks, self.blocks,
+                                           np.zeros((len(self), 81)),
+                                           addv=PETSc.InsertMode.ADD)
             return
         x = self.positions(u_local)
         # the term's Jacobian is a small part of the whole (~ℓ/h of the two elements'):
@@ -262,9 +263,12 @@ class JunctionCorners:
         if fixed is not None and fixed.size:
             keep = ~np.isin(self._flat, fixed)
             K = K * keep[:, :, None] * keep[:, None, :]
-        for rows, block in zip(self.blocks, K):  # blocked: AIJ and BAIJ alike
-            A.setValuesBlockedLocal(rows, rows, np.ascontiguousarray(block),
-                                    addv=PETSc.InsertMode.ADD)
+        # blocked (AIJ and BAIJ alike), every kink's 9 x 9 block in one call: the same
+        # additions in the same order as one call per kink (3 200 calls, 8 ms, on the
+        # 94 000-dof roof)
+        A.setValuesBlockedLocalRCV(self.blocks, self.blocks,
+                                   np.ascontiguousarray(K).reshape(len(K), 81),
+                                   addv=PETSc.InsertMode.ADD)
 
     def element_tensions(self, u_local: np.ndarray) -> np.ndarray:
         """(n, 2) the tensions of each kink's two elements, run to the corner with their

@@ -267,38 +267,58 @@ def touchdown(model, forces=None) -> dict | None:
     between a node in contact and one not): the penalty contact's end. With the static
     anchor ``forces`` (rows in the order of ``model.anchors``), also the rigid seabed's
     equivalent (:func:`rigid_touchdown`). None when nothing touches."""
-    sb = model.case.seabed
     r = model.gather_nodal(model.u)
     out = None
     if model.comm.rank == 0:
         r = r + model.geometry.points
-        g = np.asarray(model.g_vec, float)
-        up = -g / np.linalg.norm(g)
-        pen = sb.z - r @ up
-        st = model.geometry.stations
-        on = pen > 0.0
-        if np.any(on):
-            # grounded length: each element's share in contact (linear in penetration),
-            # summed in order (a cumulative sum: the same digits as a loop)
-            grounded = np.cumsum(np.diff(st) * _grounded_shares(pen[:-1], pen[1:]))[-1] \
-                if st.size > 1 else 0.0
-            # towards the fairlead (the higher end): the last node in contact, and where
-            # the penetration crosses zero between it and the next node
-            up_end = -1 if r[-1] @ up >= r[0] @ up else 0
-            idx = np.nonzero(on)[0]
-            k = int(idx[-1] if up_end == -1 else idx[0])
-            n = k + 1 if up_end == -1 else k - 1
-            s_td, x_td = float(st[k]), r[k]
-            if 0 <= n < st.size and pen[n] < 0:
-                f = pen[k] / (pen[k] - pen[n])
-                s_td = float(st[k] + f * (st[n] - st[k]))
-                x_td = r[k] + f * (r[n] - r[k])
-            out = {"s": s_td, "position": np.asarray(x_td).tolist(), "node": k,
-                   "grounded_length": float(grounded)}
-            if forces is not None:
-                out.update(rigid_touchdown(model.case, r, st, forces, model.anchors,
-                                           model.submerged_weight, up))
+        out = touchdowns(model, r[None])[0]
+        if out is not None and forces is not None:
+            out.update(rigid_touchdown(model.case, r, model.geometry.stations, forces,
+                                       model.anchors, model.submerged_weight,
+                                       _up(model)))
     return model.comm.bcast(out, root=0)
+
+
+def _up(model) -> np.ndarray:
+    g = np.asarray(model.g_vec, float)
+    return -g / np.linalg.norm(g)
+
+
+def touchdowns(model, r: np.ndarray) -> list[dict | None]:
+    """:func:`touchdown` (without the rigid equivalent) of a single cable at each of a
+    block of states, the nodes' positions ``r`` (times, nodes, 3) in station order (no
+    MPI: the caller has gathered them), evaluated at once: the same numbers as one state
+    at a time (the same products and sums, row by row)."""
+    up = _up(model)
+    pen = model.case.seabed.z - r @ up  # (times, nodes)
+    st = model.geometry.stations
+    on = pen > 0.0
+    touches = np.any(on, axis=1)
+    if st.size > 1:  # each element's share in contact, summed in order
+        grounded = np.cumsum(np.diff(st) * _grounded_shares(pen[:, :-1], pen[:, 1:]),
+                             axis=1)[:, -1]
+    else:
+        grounded = np.zeros(len(r))
+    # towards the fairlead (the higher end): the last node in contact, and where the
+    # penetration crosses zero between it and the next node
+    up_end = r[:, -1] @ up >= r[:, 0] @ up
+    last = on.shape[1] - 1 - np.argmax(on[:, ::-1], axis=1)
+    k = np.where(up_end, last, np.argmax(on, axis=1))
+    out = []
+    for j in range(len(r)):
+        if not touches[j]:
+            out.append(None)
+            continue
+        kj = int(k[j])
+        n = kj + 1 if up_end[j] else kj - 1
+        s_td, x_td = float(st[kj]), r[j, kj]
+        if 0 <= n < st.size and pen[j, n] < 0:
+            f = pen[j, kj] / (pen[j, kj] - pen[j, n])
+            s_td = float(st[kj] + f * (st[n] - st[kj]))
+            x_td = r[j, kj] + f * (r[j, n] - r[j, kj])
+        out.append({"s": s_td, "position": np.asarray(x_td).tolist(), "node": kj,
+                    "grounded_length": float(grounded[j])})
+    return out
 
 
 def _grounded_shares(a: np.ndarray, b: np.ndarray) -> np.ndarray:

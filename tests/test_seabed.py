@@ -335,3 +335,30 @@ def test_a_cable_that_floats_to_the_surface_is_refused(surface, floats):
     else:
         assert CableModel(comm, parse_case(d)).submerged_weight == pytest.approx(
             W - 1e5 * G * math.pi * 0.1**2 / 4, rel=1e-12)
+
+
+def test_touchdowns_of_a_block_are_the_states_one_at_a_time():
+    """``touchdown.csv``'s rows are evaluated for a block of output times at once
+    (:func:`cablefem.seabed.touchdowns`): the same numbers, bit for bit, as each state
+    alone, for states that touch (the static line; the line lowered by 0.5 m at the anchor,
+    less towards the fairlead: more nodes on the seabed, a longer grounded length) and one
+    that does not (lifted by 60 m: None), and the static state's as :func:`touchdown`
+    reports it."""
+    from cablefem.seabed import touchdowns
+
+    model = CableModel(comm, parse_case(mooring(60)))
+    solve_static(model)
+    td = touchdown(model)
+    r = model.gather_nodal(model.u)
+    if comm.rank != 0:
+        return
+    r = r + model.geometry.points
+    up = np.array([0.0, 0.0, 1.0])
+    s = model.geometry.stations
+    lowered = r - 0.5 * np.multiply.outer(1.0 - s / s[-1], up)
+    block = np.stack([r, lowered, r + 60.0 * up, r])
+    rows = touchdowns(model, block)
+    assert rows == [touchdowns(model, b[None])[0] for b in block]
+    assert rows[0] == td and rows[3] == td
+    assert rows[2] is None
+    assert rows[1]["grounded_length"] > rows[0]["grounded_length"] > 0.0

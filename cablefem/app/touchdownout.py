@@ -51,32 +51,56 @@ class TouchdownOutput:
 
     def measure(self, t: float) -> list[tuple]:
         """The rows at the model's current state, time ``t`` (collective)."""
-        from cablefem.seabed import network_contact, touchdown
+        from cablefem.seabed import network_contact
 
-        nan3 = (np.nan, np.nan, np.nan)
         if not self.network:
-            td = touchdown(self.model)
-            if td is None:
-                return [(t, "cable", np.nan) + nan3 + (0.0,)]
-            return [(t, "cable", td["s"]) + tuple(td["position"]) + (td["grounded_length"],)]
+            return self._rows([(t, self._positions())])
+        nan3 = (np.nan, np.nan, np.nan)
         out = []
         for group, c in (network_contact(self.model) or {}).items():
             points = c["touchdown"] or [nan3]
             out += [(t, group, np.nan) + tuple(p) + (c["grounded_length"],) for p in points]
         return out
 
+    def _positions(self) -> np.ndarray | None:
+        """A single cable's node positions now (rank 0; None on the others; collective)."""
+        r = self.model.gather_nodal(self.model.u)
+        return r + self.model.geometry.points if self.model.comm.rank == 0 else None
+
+    def _rows(self, states: list[tuple]) -> list[tuple]:
+        """A single cable's rows of a block of (time, positions) (collective: rank 0
+        evaluates them at once, :func:`cablefem.seabed.touchdowns`, and sends them)."""
+        from cablefem.seabed import touchdowns
+
+        rows = None
+        if self.model.comm.rank == 0:
+            nan3 = (np.nan, np.nan, np.nan)
+            tds = touchdowns(self.model, np.stack([r for _, r in states]))
+            rows = [(t, "cable", np.nan) + nan3 + (0.0,) if td is None else
+                    (t, "cable", td["s"]) + tuple(td["position"]) + (td["grounded_length"],)
+                    for (t, _), td in zip(states, tds)]
+        return self.model.comm.bcast(rows, root=0) if self.model.comm.size > 1 else rows
+
     def add(self, t: float) -> None:
+        """Record the touchdown at ``t`` (collective): a network's rows now; a single
+        cable's node positions, its rows evaluated for the block at :meth:`flush`."""
         if not self.active:
             return
-        rows = self.measure(t)
-        self.rows += rows
-        self._pending += rows
+        if self.network:
+            rows = self.measure(t)
+            self.rows += rows
+            self._pending += rows
+        else:
+            self._pending.append((t, self._positions()))
         if len(self._pending) >= self.FLUSH_ROWS:
             self.flush()
 
     def flush(self) -> None:
         if not self._pending or self.csv is None:
             return
+        if not self.network:
+            self._pending = self._rows(self._pending)
+            self.rows += self._pending
         cols = list(zip(*self._pending))
         self.csv.write({c: list(v) for c, v in zip(TOUCHDOWN_COLUMNS, cols)})
         self._pending = []
