@@ -10,6 +10,7 @@ import math
 import numpy as np
 import pytest
 from mpi4py import MPI
+from petsc4py import PETSc
 
 from cablefem.app.run import run_case
 from cablefem.cable import CableModel
@@ -362,3 +363,37 @@ def test_touchdowns_of_a_block_are_the_states_one_at_a_time():
     assert rows[0] == td and rows[3] == td
     assert rows[2] is None
     assert rows[1]["grounded_length"] > rows[0]["grounded_length"] > 0.0
+
+
+def test_seabed_dashpot_is_continuous_where_a_node_touches_down():
+    """The contact's dashpot ``-c v_z`` ramps in with the contact's stiffness (``ds/dp``,
+    from none at zero penetration to all of it at the smoothing depth ``b``): the residual
+    is continuous where a node moving vertically crosses the seabed. Before, it acted at
+    any penetration above zero, a jump of ``c v_z`` per length that Newton cycled across
+    (the mooring demo at t = 26.72 s: 25 iterations between two residuals, a cut step and
+    the rest of the run at a sixteenth of its step). A line laid flat at the seabed,
+    sinking at 1 m/s, penetrations -1e-9 m and +1e-9 m (2e-5 of ``b``): the term's forces
+    differ by that share of ``c`` times the speed times the length, not all of it."""
+    from dolfinx import fem
+    from dolfinx.fem import petsc as fpetsc
+
+    c = 2.0e3
+    model = CableModel(comm, parse_case(mooring(20, seabed={
+        "z": 0.0, "stiffness": 1e6, "damping": c})))
+    form = fem.form(model.forms.term("seabed_dynamic").form)
+    X = model.V.tabulate_dof_coordinates()
+
+    def force(p):
+        u = model.u.x.array.reshape(-1, 3)
+        u[:] = 0.0
+        u[:, 2] = -p - X[:, 2]  # every node at elevation -p
+        model.v.x.array.reshape(-1, 3)[:] = [0.0, 0.0, -1.0]
+        b = fpetsc.assemble_vector(form)
+        b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        total = comm.allreduce(float(np.sum(b.array_r.reshape(-1, 3)[:, 2])), op=MPI.SUM)
+        b.destroy()
+        return total
+
+    scale = c * 1.0 * LINE  # the whole dashpot's force on the line, N
+    assert abs(force(1e-9) - force(-1e-9)) < 1e-3 * scale
+    assert force(1.0) == pytest.approx(-scale, rel=1e-9)  # deep in: all of it
