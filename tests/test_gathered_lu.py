@@ -54,6 +54,22 @@ def _error(ksp: PETSc.KSP, A: PETSc.Mat) -> float:
     return x.norm() / x_true.norm()
 
 
+def _solve_singular(ksp: PETSc.KSP, A: PETSc.Mat) -> None:
+    """Solve with ``A`` whose first node's rows are zero (singular): the solution is NaN
+    on every rank."""
+    S = A.duplicate(copy=True)
+    if S.getOwnershipRange()[0] == 0:
+        S.setValuesBlocked([0], [0, 1], np.zeros((3, 6)))
+    S.assemble()
+    x, b = S.createVecs()
+    b.set(1.0)
+    ksp.setOperators(S)
+    ksp.solve(b, x)
+    assert np.all(np.isnan(x.array))  # on every rank
+    for obj in (S, x, b):
+        obj.destroy()
+
+
 def test_gathered_lu_is_a_direct_solve():
     """The solution of a block chain matrix to round-off (its condition number is below 10
     for shift 1: Gershgorin bounds the spectrum to [1, 5.3]; an LU's error is then a few
@@ -76,15 +92,7 @@ def test_gathered_lu_reports_a_failed_factorisation_then_recovers():
     A = _chain(1.0)
     ksp = _solver(A)
     assert _error(ksp, A) < 1e-13
-    S = A.duplicate(copy=True)
-    if S.getOwnershipRange()[0] == 0:  # the first node's rows zero: singular
-        S.setValuesBlocked([0], [0, 1], np.zeros((3, 6)))
-    S.assemble()
-    x, b = S.createVecs()
-    b.set(1.0)
-    ksp.setOperators(S)
-    ksp.solve(b, x)
-    assert np.all(np.isnan(x.array))  # on every rank
+    _solve_singular(ksp, A)
     assert _error(ksp, A) < 1e-13
     ksp.destroy()
 
@@ -151,15 +159,7 @@ def test_options_given_for_one_setfromoptions_reach_the_gathered_solver():
     ctx = ksp.getPC().getPythonContext()
     if MPI.COMM_WORLD.rank == 0:
         assert ctx.ksp.getType() == "richardson"
-    S = A.duplicate(copy=True)  # a failed factorisation: a new sequential solver
-    if S.getOwnershipRange()[0] == 0:
-        S.setValuesBlocked([0], [0, 1], np.zeros((3, 6)))
-    S.assemble()
-    x, b = S.createVecs()
-    b.set(1.0)
-    ksp.setOperators(S)
-    ksp.solve(b, x)
-    assert np.all(np.isnan(x.array))
+    _solve_singular(ksp, A)  # a failed factorisation: a new sequential solver
     assert _error(ksp, A) < 1e-13
     if MPI.COMM_WORLD.rank == 0:
         assert ctx.ksp.getType() == "richardson"
