@@ -37,7 +37,7 @@ from cablefem.terms import Term
 
 __all__ = ["PENETRATION_BLEND", "GroundedCatenary", "add_seabed_terms", "network_contact",
            "touchdown", "without_friction", "penalty_offset_factor", "anchor_penalty_force",
-           "rigid_touchdown"]
+           "rigid_touchdown", "touchdowns", "positions"]
 
 #: the smoothing length of the contact law as a fraction of the static penetration w/k
 PENETRATION_BLEND = 0.1
@@ -272,16 +272,22 @@ def touchdown(model, forces=None) -> dict | None:
     between a node in contact and one not): the penalty contact's end. With the static
     anchor ``forces`` (rows in the order of ``model.anchors``), also the rigid seabed's
     equivalent (:func:`rigid_touchdown`). None when nothing touches."""
-    r = model.gather_nodal(model.u)
+    r = positions(model)
     out = None
     if model.comm.rank == 0:
-        r = r + model.geometry.points
         out = touchdowns(model, r[None])[0]
         if out is not None and forces is not None:
             out.update(rigid_touchdown(model.case, r, model.geometry.stations, forces,
                                        model.anchors, model.submerged_weight,
                                        _up(model)))
     return model.comm.bcast(out, root=0)
+
+
+def positions(model) -> np.ndarray | None:
+    """A single cable's node positions at its current state, in station order, on rank 0
+    (None on the others; collective)."""
+    r = model.gather_nodal(model.u)
+    return r + model.geometry.points if model.comm.rank == 0 else None
 
 
 def _up(model) -> np.ndarray:

@@ -40,8 +40,10 @@ STAGNATION = 100.0
 #: "no contraction": ``|F_k| > STAGNATION_RATIO |F_{k-1}|``
 STAGNATION_RATIO = 0.5
 
-#: PETSc's SNESConvergedReason values used here
-_ABS, _REL, _SNORM, _NAN, _DTOL = 2, 3, 4, -4, -9
+_REASON = PETSc.SNES.ConvergedReason
+_ABS, _REL, _SNORM = (_REASON.CONVERGED_FNORM_ABS, _REASON.CONVERGED_FNORM_RELATIVE,
+                      _REASON.CONVERGED_SNORM_RELATIVE)
+_NAN, _DTOL = _REASON.DIVERGED_FNORM_NAN, _REASON.DIVERGED_DTOL
 
 
 class StaticTest:
@@ -217,7 +219,7 @@ class HingeSteps:
             if ok2:
                 ok, its3 = try_solve(self.snes, x, history)
                 its += its3
-        if not ok and history.norms and history.norms[-1][1] <= 100.0 * self.atol:
+        if not ok and history.norms and history.norms[-1][1] <= STAGNATION * self.atol:
             ok = True  # stagnated at round-off near Newton's tolerance (a fine mesh)
             log.info("statics: virtual hinges, iteration %d: Newton stagnated at |F| = "
                      "%.2e (atol %.2e), accepted", it, history.norms[-1][1], self.atol)

@@ -130,9 +130,9 @@ def test_newton_stops_at_the_round_off_floor_above_its_tolerance():
     floor (an iteration without contraction, within ``STAGNATION`` atol), instead of
     wandering there until the noise dips below ``atol`` or ``max_it`` is reached. The floor
     is measured first: Newton (full steps) from the catenary guess with every tolerance
-    off, its last 10 of 30 norms; then ``atol`` a tenth of the floor's median: the solve must converge
-    within two iterations of the first that reached the floor (Newton's quadratic phase
-    ends there; before, it ran to ``max_it`` and failed)."""
+    off, its last 10 of 30 norms; then ``atol`` a tenth of the floor's median: the solve
+    must converge within two iterations of the first that reached the floor (Newton's
+    quadratic phase ends there; before, it ran to ``max_it`` and failed)."""
     from cablefem.petsc_utils import SNESHistory
     from cablefem.static_newton import make_snes, try_solve
 

@@ -51,21 +51,16 @@ class TouchdownOutput:
 
     def measure(self, t: float) -> list[tuple]:
         """The rows at the model's current state, time ``t`` (collective)."""
-        from cablefem.seabed import network_contact
+        from cablefem.seabed import network_contact, positions
 
         if not self.network:
-            return self._rows([(t, self._positions())])
+            return self._rows([(t, positions(self.model))])
         nan3 = (np.nan, np.nan, np.nan)
         out = []
         for group, c in (network_contact(self.model) or {}).items():
             points = c["touchdown"] or [nan3]
             out += [(t, group, np.nan) + tuple(p) + (c["grounded_length"],) for p in points]
         return out
-
-    def _positions(self) -> np.ndarray | None:
-        """A single cable's node positions now (rank 0; None on the others; collective)."""
-        r = self.model.gather_nodal(self.model.u)
-        return r + self.model.geometry.points if self.model.comm.rank == 0 else None
 
     def _rows(self, states: list[tuple]) -> list[tuple]:
         """A single cable's rows of a block of (time, positions) (collective: rank 0
@@ -84,6 +79,8 @@ class TouchdownOutput:
     def add(self, t: float) -> None:
         """Record the touchdown at ``t`` (collective): a network's rows now; a single
         cable's node positions, its rows evaluated for the block at :meth:`flush`."""
+        from cablefem.seabed import positions
+
         if not self.active:
             return
         if self.network:
@@ -91,7 +88,7 @@ class TouchdownOutput:
             self.rows += rows
             self._pending += rows
         else:
-            self._pending.append((t, self._positions()))
+            self._pending.append((t, positions(self.model)))
         if len(self._pending) >= self.FLUSH_ROWS:
             self.flush()
 
