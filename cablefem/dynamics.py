@@ -87,6 +87,8 @@ class DynamicsStats:
     linear_iterations: int = 0
     wall_time: float = 0.0
     output_times: list[float] = field(default_factory=list)
+    #: every cut of the step: (the failed step's start time, the step the run went on with)
+    cuts: list[tuple[float, float]] = field(default_factory=list)
 
 
 def grid_time(step: int, dt: float) -> float:
@@ -425,6 +427,7 @@ class DynamicProblem:
                     f"({_TS_REASONS.get(reason, reason)}); last Newton history: "
                     f"{history.text()}", t)
             self.level += 1
+            stats.cuts.append((float(t), float(sub / 4)))
             log.info("t = %.6g: Newton failed with dt = %.3g; going on with dt = %.3g", t, h,
                      sub / 4)
         self.calm = 0 if failed else self.calm + 1

@@ -167,6 +167,14 @@ def test_step_cut_and_retry(mpi_tmp_path):
     assert r_cut.summary["status"] == "completed"
     assert r_cut.summary["dynamics"]["rejected_steps"] == 2
     assert r_ref.summary["dynamics"]["rejected_steps"] == 0
+    # the cuts are recorded and warned: the run's step is not the one asked for
+    assert r_cut.summary["dynamics"]["step_cuts"] == [
+        {"time": 0.0, "dt": pytest.approx(0.05 / 4)}, {"time": 0.0, "dt": pytest.approx(0.05 / 16)}]
+    assert r_ref.summary["dynamics"]["step_cuts"] == []
+    cut_warnings = [w for w in r_cut.summary["warnings"] if w["key"] == "dynamics.dt"
+                    and "step was cut" in w["message"]]
+    assert len(cut_warnings) == 1 and "16 steps per output step" in cut_warnings[0]["message"]
+    assert not any("step was cut" in w["message"] for w in r_ref.summary.get("warnings", []))
     np.testing.assert_allclose(r_cut.times, np.linspace(0, 0.3, 7), atol=1e-12)
     for name in ("p", "q"):
         np.testing.assert_allclose(r_cut.forces[name], r_ref.forces[name][::16], rtol=0,

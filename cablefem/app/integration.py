@@ -292,5 +292,7 @@ def _integrate(b: Built, output: RunOutput, outdir: Path, stats: DynamicsStats, 
         "newton_iterations": total["newton_iterations"],
         "linear_iterations": total["linear_iterations"],
         "newton_per_step": total["newton_iterations"] / max(stats.steps, 1),
-        "outputs": total["outputs"]}
+        "outputs": total["outputs"],
+        # this run's cuts of the step (a resumed run: since its checkpoint)
+        "step_cuts": [{"time": t, "dt": h} for t, h in stats.cuts]}
     return entries, total["wall_dynamics"]

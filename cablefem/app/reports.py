@@ -72,6 +72,16 @@ def report(b: Built, st: Statics, res: Resonance, static_entries: dict, dyn: Dyn
         from cablefem.app.alternation import check_alternation
 
         check_alternation(frag, h.times, h.forces, case.dynamics)
+    cuts = (dyn.entries or {}).get("step_cuts")
+    if cuts:  # the rest of the run went on at the cut step (cablefem.dynamics)
+        first, last = cuts[0], cuts[-1]
+        out.warnings.add("dynamics.dt", f"Newton failed at t = {first['time']:g} s and the "
+                         f"step was cut ({len(cuts)} cut(s), summary.json dynamics."
+                         f"step_cuts): the run went on with dt = {last['dt']:g} s from "
+                         f"t = {last['time']:g} s, {case.dynamics.dt / last['dt']:g} steps "
+                         "per output step of the nominal grid (its outputs stay on it); "
+                         "a smaller dynamics.dt from the start costs the same per step and "
+                         "keeps the whole run on one step size")
     if h.touchdown is not None:  # the touchdown's history
         out.touchdown = h.touchdown
         off = out.touchdown.get("cable", {}).get("times_off_the_seabed", 0)
