@@ -22,6 +22,7 @@ from cablefem.petsc_utils import (
     model_dofs,
 )
 from cablefem.reactions import AnchorReactions
+from cablefem.stepnewton import default_reason
 
 __all__ = ["FULL_STEPS", "HingeSteps", "STAGNATION", "StaticTest", "fresh_pc", "make_snes",
            "try_full", "try_solve"]
@@ -40,10 +41,6 @@ STAGNATION = 100.0
 #: "no contraction": ``|F_k| > STAGNATION_RATIO |F_{k-1}|``
 STAGNATION_RATIO = 0.5
 
-_REASON = PETSc.SNES.ConvergedReason
-_ABS, _REL, _SNORM = (_REASON.CONVERGED_FNORM_ABS, _REASON.CONVERGED_FNORM_RELATIVE,
-                      _REASON.CONVERGED_SNORM_RELATIVE)
-_NAN, _DTOL = _REASON.DIVERGED_FNORM_NAN, _REASON.DIVERGED_DTOL
 
 
 class StaticTest:
@@ -62,23 +59,16 @@ class StaticTest:
         xnorm, ynorm, fnorm = norms
         self.history(snes, it, fnorm)
         rtol, atol, stol, _ = snes.getTolerances()
-        if fnorm != fnorm:
-            return _NAN
         if it == 0:
-            self.f0 = self.f_prev = fnorm
-            return _ABS if fnorm < atol else 0
-        f_prev, self.f_prev = self.f_prev, fnorm
-        if fnorm < atol:
-            return _ABS
-        if fnorm <= rtol * self.f0:
-            return _REL
-        if ynorm < stol * xnorm:
-            return _SNORM
-        if self.divtol > 0 and fnorm > self.divtol * self.f0:
-            return _DTOL
+            self.f0 = fnorm
+        f_prev, self.f_prev = self.f_prev if it else fnorm, fnorm
+        reason = default_reason(it, fnorm, self.f0, xnorm, ynorm, rtol, atol, stol,
+                                self.divtol)
+        if reason or it == 0:
+            return reason
         if fnorm <= STAGNATION * atol and fnorm > STAGNATION_RATIO * f_prev:
             self.stagnated += 1
-            return _SNORM
+            return PETSc.SNES.ConvergedReason.CONVERGED_SNORM_RELATIVE
         return 0
 
 

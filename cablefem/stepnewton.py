@@ -62,6 +62,26 @@ _ABS, _REL, _SNORM = 2, 3, 4
 _NAN, _DTOL = -4, -9
 
 
+def default_reason(it: int, fnorm: float, f0: float, xnorm: float, ynorm: float,
+                   rtol: float, atol: float, stol: float, divtol: float) -> int:
+    """PETSc's default stopping test (``SNESConvergedDefault``) at iteration ``it``, the
+    solve's first residual norm ``f0``: a NaN norm, ``atol``, then (after the first
+    iteration) ``rtol``, ``stol`` and the divergence tolerance; 0 to go on."""
+    if fnorm != fnorm:
+        return _NAN
+    if fnorm < atol:
+        return _ABS
+    if it == 0:
+        return 0
+    if fnorm <= rtol * f0:
+        return _REL
+    if ynorm < stol * xnorm:
+        return _SNORM
+    if divtol > 0 and fnorm > divtol * f0:
+        return _DTOL
+    return 0
+
+
 def _same(a: float, b: float) -> bool:
     """Equal to round-off: a step size, a shift computed from grid times."""
     return abs(a - b) <= 1e-9 * max(abs(a), abs(b))
@@ -191,23 +211,16 @@ class StepNewton:
             self.history(snes, it, fnorm)
         self.f_before, self.f_last = (fnorm, fnorm) if it == 0 else (self.f_last, fnorm)
         self.residuals += 1  # SNES tests after each residual (basic line search)
-        if fnorm != fnorm:
-            self.kept = None
-            return _NAN
         if it == 0:
             self.own = self._own_step()
-            self.f0 = self.f_prev = fnorm
-            return _ABS if fnorm < self.atol else 0
-        f_prev, self.f_prev = self.f_prev, fnorm
-        if fnorm < self.atol:
-            return _ABS
-        if fnorm <= self.rtol * self.f0:
-            return _REL
-        if ynorm < self.stol * xnorm:
-            return _SNORM
-        if self.divtol > 0 and fnorm > self.divtol * self.f0:
-            self.kept = None
-            return _DTOL
+            self.f0 = fnorm
+        f_prev, self.f_prev = self.f_prev if it else fnorm, fnorm
+        reason = default_reason(it, fnorm, self.f0, xnorm, ynorm, self.rtol, self.atol,
+                                self.stol, self.divtol)
+        if reason or it == 0:
+            if reason in (_NAN, _DTOL):
+                self.kept = None  # a wild iterate: no Jacobian of it is kept
+            return reason
         if self.own and self.eta > 0 and f_prev > 0:
             X0, _ = self.ts.getSolution2()
             if self.work is None:

@@ -49,12 +49,11 @@ class TouchdownOutput:
             float(r[c]) if r[c] else np.nan for c in TOUCHDOWN_COLUMNS[2:])
             for r in anchorcsv.read_rows(self.model.comm, path)]
 
-    def measure(self, t: float) -> list[tuple]:
-        """The rows at the model's current state, time ``t`` (collective)."""
-        from cablefem.seabed import network_contact, positions
+    def _network_rows(self, t: float) -> list[tuple]:
+        """A network's rows at the model's current state, time ``t`` (collective): per
+        cable group that touches, one row per touchdown point."""
+        from cablefem.seabed import network_contact
 
-        if not self.network:
-            return self._rows([(t, positions(self.model))])
         nan3 = (np.nan, np.nan, np.nan)
         out = []
         for group, c in (network_contact(self.model) or {}).items():
@@ -84,7 +83,7 @@ class TouchdownOutput:
         if not self.active:
             return
         if self.network:
-            rows = self.measure(t)
+            rows = self._network_rows(t)
             self.rows += rows
             self._pending += rows
         else:
