@@ -22,6 +22,7 @@ sequential solver is made at the first factorisation (and again after a failed o
 
 from __future__ import annotations
 
+import ctypes
 import time
 
 import numpy as np
@@ -31,6 +32,37 @@ __all__ = ["GatheredLU", "PYTHON_TYPE"]
 
 #: the ``pc_python_type`` naming :class:`GatheredLU`
 PYTHON_TYPE = "cablefem.gathered_lu.GatheredLU"
+
+
+#: PETSc's ``PCFailedReason`` values used here (petscpc.h)
+PC_NOERROR, PC_FACTOR_OTHER = 0, 4
+
+
+def _petsc_c():
+    """PETSc's C library as ctypes sees it through petsc4py's extension module (its
+    dependencies' symbols resolve through it), for the two calls petsc4py 3.18 does not
+    bind: ``PCSetFailedReason`` and ``PCGetFailedReason``."""
+    lib = ctypes.CDLL(PETSc.__file__)
+    lib.PCSetFailedReason.argtypes = [ctypes.c_void_p, ctypes.c_int]
+    lib.PCGetFailedReason.argtypes = [ctypes.c_void_p, ctypes.POINTER(ctypes.c_int)]
+    return lib
+
+
+_LIB = _petsc_c()
+
+
+def set_failed_reason(pc: PETSc.PC, reason: int) -> None:
+    """``PCSetFailedReason``: the KSP that applies ``pc`` then reports
+    ``DIVERGED_PC_FAILED`` (and sets its solution to infinity), so that a Newton solver
+    stops at once with a failed linear solve, as with PETSc's own LU."""
+    _LIB.PCSetFailedReason(pc.handle, int(reason))
+
+
+def failed_reason(pc: PETSc.PC) -> int:
+    """``PCGetFailedReason`` of ``pc`` on this rank (0: none)."""
+    out = ctypes.c_int(0)
+    _LIB.PCGetFailedReason(pc.handle, ctypes.byref(out))
+    return out.value
 
 
 #: seconds a rank sleeps between two tests of the barrier while it waits for rank 0
@@ -55,8 +87,10 @@ class GatheredLU:
     ``setUp`` gathers the preconditioner matrix onto rank 0 (``MatCreateSubMatrices``, the
     gathered copy reused while the global number of nonzeros stays the same) and factors it
     there; ``apply`` gathers ``x`` onto rank 0, solves there and scatters the solution back.
-    A failed factorisation or solve gives a NaN solution on every rank (the caller's Newton
-    then fails as with any failed solve) and a fresh sequential solver at the next setUp."""
+    A failed factorisation is the PC's failure on every rank (``PCSetFailedReason``: the KSP
+    reports ``DIVERGED_PC_FAILED`` and its solution is not finite, so the caller's Newton
+    stops at once, as with PETSc's own LU); a failed solve gives a NaN solution on every
+    rank; either way a fresh sequential solver is made at the next setUp."""
 
     def __init__(self, options: dict[str, str] | None = None) -> None:
         #: the sequential solver's options (under its own prefix), as read by
@@ -72,7 +106,8 @@ class GatheredLU:
 
     def setUp(self, pc: PETSc.PC) -> None:
         _, P = pc.getOperators()
-        rank = P.getComm().getRank()
+        comm = P.getComm().tompi4py()
+        rank = comm.rank
         nz = P.getInfo(PETSc.Mat.InfoType.GLOBAL_SUM)["nz_allocated"]
         n = P.getSize()[0] if rank == 0 else 0
         rows = PETSc.IS().createStride(n, 0, 1, comm=PETSc.COMM_SELF)
@@ -86,12 +121,29 @@ class GatheredLU:
         rows.destroy()
         if self.ksp is None or self.failed:
             self._new_ksp(pc)
+        reason, error = PC_NOERROR, None
         if rank == 0:
             self.ksp.setOperators(self.sub)
-            try:  # an error here must not leave the other ranks waiting in apply
+            try:  # an error here must not leave the other ranks waiting
                 self.ksp.setUp()
+                reason = failed_reason(self.ksp.getPC())  # a zero pivot raises nothing
             except PETSc.Error:
-                self.failed = True
+                reason = PC_FACTOR_OTHER
+            except Exception as exc:  # noqa: BLE001 - raised again below, on every rank
+                error = exc
+        # every rank learns the outcome (the others sleep meanwhile): a failed
+        # factorisation is the PC's failure on every rank (the KSP reports
+        # DIVERGED_PC_FAILED, Newton stops at once); before, the ranks went on with a NaN
+        # solution, on which a line search evaluated the residual some 40 times
+        _wait_idle(comm)
+        reason, raised = comm.bcast((reason, error is not None) if rank == 0 else None,
+                                    root=0) if comm.size > 1 else (reason, error is not None)
+        if raised:
+            if error is not None:
+                raise error
+            raise RuntimeError("the gathered LU's set-up failed on rank 0 (its error there)")
+        self.failed = reason != PC_NOERROR
+        set_failed_reason(pc, reason)
 
     def setFromOptions(self, pc: PETSc.PC) -> None:
         """Keep the options under ``<PC prefix>gathered_`` that are in the database now,
