@@ -53,7 +53,9 @@ from cablefem.petsc_utils import (
     case_options,
     copy_in,
     default_options,
+    keeps_factorisation,
     linear_solver_options,
+    model_dofs,
 )
 from cablefem.reactions import AnchorReactions
 from cablefem.stepnewton import StepNewton
@@ -133,8 +135,8 @@ def _make_ts(model, dt: float, rho_inf: float, history: SNESHistory,
                 # round-off, summed over the dofs) can exceed atol; a relative update of
                 # 1e-13 is converged
                 "snes_stol": 1e-13,
-                **linear_solver_options(model.bs * model.V.dofmap.index_map.size_global,
-                                        model.comm.size, reuse=not model.is_beam)}
+                **linear_solver_options(model_dofs(model), model.comm.size,
+                                        reuse=not model.is_beam)}
 
     n_owned = model.V.dofmap.index_map.size_local
     bc_rows = np.concatenate([a.flat_dofs for a in model.anchors]).astype(np.int32)
@@ -195,8 +197,10 @@ def _make_ts(model, dt: float, rho_inf: float, history: SNESHistory,
         ts.setFromOptions()
         # predictor, stopping test and Jacobian reuse (a fluid's, a seabed's Jacobian is
         # dear, and so is the kink corners' complex-step one: docs/benchmarks.md, "Networks
-        # on 2 ranks")
-        newton = StepNewton(ts, prefix, bool(model.forms.medium_forms or model.node_terms),
+        # on 2 ranks"), and so is a large model's factorisation (linear_solver_options)
+        costly = bool(model.forms.medium_forms or model.node_terms) or keeps_factorisation(
+            model_dofs(model), reuse=not model.is_beam)
+        newton = StepNewton(ts, prefix, costly,
                             history)  # the norms kept by its test: no monitor callback
     return ts, (F_vec, J_mat, newton), rows
 

@@ -12,12 +12,11 @@ from dolfinx.fem import petsc as fpetsc
 from petsc4py import PETSc
 
 from cablefem.gathered_lu import PYTHON_TYPE as GATHERED
-from cablefem.stepnewton import INCREMENT_RTOL
 
 __all__ = ["default_options", "case_options", "assemble_residual", "assemble_jacobian",
            "assemble_residual_rows", "assemble_jacobian_rows",
            "SNESHistory",
-           "lu_options", "model_dofs", "linear_solver_options", "KSP_RTOL", "copy_in",
+           "lu_options", "model_dofs", "linear_solver_options", "keeps_factorisation", "copy_in",
            "RowsAssembler",
            "jacobian_columns"]
 
@@ -32,54 +31,53 @@ LARGE_ABOVE = 20_000
 #: only (:mod:`cablefem.gathered_lu`); below it on every rank (``pc_type redundant``)
 GATHER_ABOVE = LARGE_ABOVE
 
-#: GMRES's relative tolerance on the lagged-LU route: a tenth of Newton's increment test
-#: (:data:`cablefem.stepnewton.INCREMENT_RTOL`). The linear solve only has to make Newton's
-#: correction good to well below the error Newton itself accepts; the true residual and
-#: the increment are tested by Newton (a correction error of ``κ rtol``, κ ~ 1e3 for the
-#: dynamic matrix, slows its contraction by ~1e-5 per iteration). 1e-12 before: 5.3 GMRES
-#: iterations per Newton iteration on the 94 000-dof roof, 3.4 with this.
-KSP_RTOL = 0.1 * INCREMENT_RTOL
-
-
 def linear_solver_options(n_dofs: int, comm_size: int = 1, reuse: bool = True
                           ) -> dict[str, object]:
-    """The automatic linear solver of the time integrator's Newton steps.
+    """The automatic linear solver of the time integrator's Newton steps: a direct solve
+    (:func:`lu_options`) of a block matrix (``mat_type baij``, blocks of the node's 3 or 6
+    unknowns: its assembly, factorisation and triangular solves are faster than with AIJ).
 
-    The Jacobian is a block matrix (``mat_type baij``, blocks of the node's 3 or 6
-    unknowns): its assembly, factorisation and triangular solves are faster than with AIJ.
-    Up to :data:`LARGE_ABOVE` degrees of freedom: a direct solve (:func:`lu_options`). Above
-    it the numeric factorisation dominates, so it is reused: GMRES preconditioned by an LU
-    refreshed every 10 Jacobians, across steps (``snes_lag_preconditioner``).
+    Above :data:`LARGE_ABOVE` degrees of freedom the factorisation dominates a step, so
+    the time integrator keeps the Jacobian and its factorisation over steps while Newton
+    contracts (:func:`keeps_factorisation`, :mod:`cablefem.stepnewton`): modified Newton,
+    one triangular solve per iteration. Until 2026-11-27 this route was GMRES (to a tenth
+    of Newton's increment test) preconditioned by an LU refreshed every 10 Jacobians
+    (``snes_lag_preconditioner``); on the 94 000-dof roof of
+    ``benchmarks/bench_scaling.py`` (100 steps, the kink corners' Jacobian kept over steps
+    either way) it took 2.46 Newton and 1.86 GMRES iterations a step, i.e. 7 to 8
+    applications of the factorisation, against 2.46 Newton iterations and as many
+    applications now: the dynamics 13.0-16.3 s -> 10.0-11.7 s on 1 rank, 8.7-9.9 s ->
+    6.2-7.4 s on 2, where every application is made on rank 0 alone (docs/benchmarks.md,
+    "The dynamic step's solve without GMRES").
 
-    Measured on the 94 000-dof roof of ``benchmarks/bench_scaling.py`` (seconds per step,
-    2-core machine): serial AIJ + LU lagged 20, 0.28; BAIJ + LU lagged 10, 0.15; on 2 ranks
-    MUMPS, 0.6; BAIJ + redundant LU lagged 10, 0.13-0.16. Rejected on these axially stiff,
-    anisotropic systems: algebraic multigrid (GAMG, BoomerAMG: 10-25 times slower),
-    block-Jacobi/ILU and additive Schwarz (hundreds of GMRES iterations on 2 ranks); again
-    on 2026-11-26 with the kink corners, the Jacobian kept over steps and GMRES to
-    :data:`KSP_RTOL` (1.7 GMRES iterations per Newton iteration with the redundant LU):
-    block Jacobi with an LU per rank 229, additive Schwarz with LU sub-solves and an overlap
-    of 4 (8) elements 47 (38), MUMPS 0.49 s of CPU a step against 0.32 s (rank 0, a shared
-    machine; the axial wave crosses
-    the roof within a step: docs/networks.md),
-    PCFIELDSPLIT with a Schur complement on the partition interface (0.28 s per step on 2
-    ranks: forming the Schur complement costs 300 triangular solves), MUMPS with METIS or
-    SCOTCH orderings (0.6-0.75 s); on 2026-11-27 BDDC on a MATIS with every interface node
-    primal (1 GMRES iteration, but three half-size triangular solves per application and
-    ~180 coarse-basis solves per factorisation: docs/benchmarks.md, "One factorisation on
-    one rank"). Above :data:`GATHER_ABOVE` on several ranks the LU is gathered onto rank 0
+    Rejected earlier on these axially stiff, anisotropic systems (seconds per step, 2-core
+    machine): serial AIJ + LU lagged 20, 0.28 against 0.15 in BAIJ; algebraic multigrid
+    (GAMG, BoomerAMG: 10-25 times slower); block Jacobi with an LU per rank (229 GMRES
+    iterations per Newton iteration on 2 ranks) and additive Schwarz with LU sub-solves and
+    an overlap of 4 (8) elements (47 (38)): the axial wave crosses the roof within a step
+    (docs/networks.md); MUMPS (0.49 s of CPU a step against 0.32 s; with METIS or SCOTCH
+    orderings 0.6-0.75 s); PCFIELDSPLIT with a Schur complement on the partition interface
+    (0.28 s per step on 2 ranks: forming the Schur complement costs 300 triangular solves);
+    BDDC on a MATIS with every interface node primal (1 GMRES iteration, but three
+    half-size triangular solves per application and ~180 coarse-basis solves per
+    factorisation: docs/benchmarks.md, "One factorisation on one rank"). Above
+    :data:`GATHER_ABOVE` on several ranks the LU is gathered onto rank 0
     (:func:`lu_options`). Override with ``-cable_mat_type``, ``-cable_ksp_type``,
-    ``-cable_pc_type``, ``-cable_snes_lag_preconditioner``.
+    ``-cable_pc_type``, ``-cable_snes_lag_preconditioner``, ``-cable_newton_jacobian_reuse``.
 
-    ``reuse=False`` (the rod): a direct solve at every size. The rod's nearly rigid shear
-    (``GA`` = 1e5 T) makes GMRES on a stale factorisation crawl: the 5 x 5 saddle net's rod
-    (34 425 dofs) took more than 6 s a step with the reused LU, 0.8 s with a fresh one.
+    ``reuse=False`` (the rod): a fresh factorisation at every Newton iteration at every
+    size. The rod's nearly rigid shear (``GA`` = 1e5 T) makes a stale factorisation crawl:
+    the 5 x 5 saddle net's rod (34 425 dofs) took more than 6 s a step with GMRES on the
+    reused LU, 0.8 s with a fresh one.
     """
-    opts: dict[str, object] = {"mat_type": "baij", **lu_options(comm_size, n_dofs)}
-    if n_dofs > LARGE_ABOVE and reuse:
-        opts.update(ksp_type="gmres", ksp_rtol=KSP_RTOL, ksp_max_it=500,
-                    snes_lag_preconditioner=10, snes_lag_preconditioner_persists="true")
-    return opts
+    return {"mat_type": "baij", **lu_options(comm_size, n_dofs)}
+
+
+def keeps_factorisation(n_dofs: int, reuse: bool = True) -> bool:
+    """Whether the time integrator keeps its Jacobian and factorisation over steps because
+    the factorisation is dear (above :data:`LARGE_ABOVE` degrees of freedom, not the rod):
+    :func:`linear_solver_options`."""
+    return reuse and n_dofs > LARGE_ABOVE
 
 
 def model_dofs(model) -> int:

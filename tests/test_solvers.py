@@ -1,6 +1,7 @@
 """The time integrator's automatic linear solver (cablefem.petsc_utils) and its overrides give
-the same answer: a block (BAIJ) Jacobian against AIJ, and the lagged-LU GMRES route of large
-networks against a fresh direct solve at every Newton step."""
+the same answer: a block (BAIJ) Jacobian against AIJ and GMRES on a lagged LU, and the route
+of large networks (the Jacobian and its factorisation kept over steps) against a fresh direct
+solve at every Newton step."""
 
 from __future__ import annotations
 
@@ -11,7 +12,13 @@ from mpi4py import MPI
 from cablefem.cable import CableModel
 from cablefem.dynamics import _make_ts, integrate
 from cablefem.gathered_lu import PYTHON_TYPE as GATHERED
-from cablefem.petsc_utils import GATHER_ABOVE, LARGE_ABOVE, SNESHistory, linear_solver_options
+from cablefem.petsc_utils import (
+    GATHER_ABOVE,
+    LARGE_ABOVE,
+    SNESHistory,
+    keeps_factorisation,
+    linear_solver_options,
+)
 from cablefem.statics import solve_static
 
 LAGGED = {"ksp_type": "gmres", "ksp_rtol": 1e-12, "ksp_max_it": 500,
@@ -21,9 +28,11 @@ LAGGED = {"ksp_type": "gmres", "ksp_rtol": 1e-12, "ksp_max_it": 500,
 @pytest.mark.parametrize("n_dofs,size", [(90, 1), (90, 2), (LARGE_ABOVE + 3, 1),
                                          (LARGE_ABOVE + 3, 2)])
 def test_automatic_choice(n_dofs, size):
-    """Block matrices always; a direct solve for small systems, the factorisation reused by
-    GMRES for large ones; in parallel every rank factors a small system (redundant), a large
-    one is factored on rank 0 only (cablefem.gathered_lu)."""
+    """Block matrices and a direct solve always; in parallel every rank factors a small
+    system (redundant), a large one is factored on rank 0 only (cablefem.gathered_lu); a
+    large system's factorisation is kept over steps (modified Newton: one triangular solve
+    an iteration), no longer GMRES on an LU lagged over 10 Jacobians (7 to 8 applications
+    of the factorisation a step on the 94 000-dof roof instead of 2.5)."""
     o = linear_solver_options(n_dofs, size)
     assert o["mat_type"] == "baij"
     if size == 1:
@@ -32,12 +41,27 @@ def test_automatic_choice(n_dofs, size):
         assert (o["pc_type"], o["pc_python_type"]) == ("python", GATHERED)
     else:
         assert o["pc_type"] == "redundant"
-    assert o["ksp_type"] == ("gmres" if n_dofs > LARGE_ABOVE else "preonly")
-    assert ("snes_lag_preconditioner" in o) == (n_dofs > LARGE_ABOVE)
-    if n_dofs > LARGE_ABOVE:  # tied to Newton's increment test, a tenth of it (1e-12 before)
-        from cablefem.stepnewton import INCREMENT_RTOL
+    assert o["ksp_type"] == "preonly"
+    assert "snes_lag_preconditioner" not in o
+    assert keeps_factorisation(n_dofs) == (n_dofs > LARGE_ABOVE)
+    assert not keeps_factorisation(n_dofs, reuse=False)  # the rod: fresh every iteration
 
-        assert o["ksp_rtol"] == pytest.approx(0.1 * INCREMENT_RTOL)
+
+@pytest.mark.single_rank  # the choice of options, the same on any number of ranks
+def test_a_large_model_keeps_its_factorisation_over_steps(make_case):
+    """A cable of 7 000 elements (21 006 unknowns, above LARGE_ABOVE): its time integrator
+    solves directly and keeps the Jacobian over steps (StepNewton's reuse), which a small
+    one without a fluid, a seabed or kink corners does not (its Jacobian costs about a
+    residual)."""
+    from cablefem.stepnewton import JACOBIAN_REUSE
+
+    for elements, reuse in ((7000, JACOBIAN_REUSE), (30, 0)):
+        model = CableModel(MPI.COMM_WORLD, make_case(elements=elements))
+        assert (3 * (elements + 1) > LARGE_ABOVE) == (elements == 7000)
+        ts, (F, J, newton), _ = _make_ts(model, 0.005, 0.9, SNESHistory())
+        assert ts.getSNES().getKSP().getType() == "preonly"
+        assert newton.reuse == reuse
+        ts.destroy()
 
 
 def _history(make_case, options):
@@ -125,15 +149,13 @@ def _route_against_direct(mpi_tmp_path, route_options, case_options=None):
     """The saddle net's anchor forces over 40 steps on ``route_options`` (all ranks)
     against a fresh Jacobian and a direct solve at every Newton iteration on one rank,
     within the bound of :func:`test_network_route_equals_the_direct_solve`."""
-    from cablefem.petsc_utils import KSP_RTOL
     from cablefem.stepnewton import INCREMENT_RTOL
 
     mesh = _roof_net(mpi_tmp_path / "roof.msh")
     direct, _, _ = _net_history(_saddle_case(mesh), MPI.COMM_SELF,
                                 {"newton_jacobian_reuse": 0, "ksp_type": "preonly"})
     route, newton, assemblies = _net_history(
-        _saddle_case(mesh, case_options), MPI.COMM_WORLD,
-        {**LAGGED, "ksp_rtol": KSP_RTOL, **route_options})
+        _saddle_case(mesh, case_options), MPI.COMM_WORLD, route_options)
     assert assemblies < newton  # the Jacobian kept over steps
     variation = np.abs(np.diff(direct, axis=0)).sum(axis=0)
     assert variation.max() > 1e3  # the load moves the anchor forces (N)
@@ -144,8 +166,8 @@ def _route_against_direct(mpi_tmp_path, route_options, case_options=None):
 
 def test_network_route_equals_the_direct_solve(mpi_tmp_path):
     """A saddle net with its kink corners under a harmonic uplift, 40 steps: the route of
-    large networks (GMRES to KSP_RTOL on an LU lagged over 10 Jacobians) with the
-    Jacobian kept over steps (the default with kink corners), on all ranks (partitioned
+    large networks (a direct solve, the Jacobian and its factorisation kept over steps
+    while Newton contracts: the default with kink corners), on all ranks (partitioned
     under mpirun), gives the anchor forces of a fresh Jacobian and a direct solve at every
     Newton iteration on one rank. Both stop Newton once its estimated error is below
     INCREMENT_RTOL of the step's displacement increment; a force error of that share of
@@ -153,6 +175,14 @@ def test_network_route_equals_the_direct_solve(mpi_tmp_path):
     runs; x 10: the test is an estimate of the error, not a bound). The default reuses the
     Jacobian: fewer assemblies than Newton iterations (one per iteration before)."""
     _route_against_direct(mpi_tmp_path, {})
+
+
+def test_lagged_gmres_route_equals_the_direct_solve(mpi_tmp_path):
+    """The same with the route large networks took before (GMRES to a tenth of Newton's
+    increment test on an LU lagged over 10 Jacobians), still there as an override."""
+    from cablefem.stepnewton import INCREMENT_RTOL
+
+    _route_against_direct(mpi_tmp_path, {**LAGGED, "ksp_rtol": 0.1 * INCREMENT_RTOL})
 
 
 def test_gathered_lu_route_equals_the_direct_solve(mpi_tmp_path):
