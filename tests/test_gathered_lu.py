@@ -4,6 +4,7 @@ after the matrix's values change, and a failed factorisation reported and then r
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from mpi4py import MPI
 from petsc4py import PETSc
 
@@ -140,6 +141,29 @@ def test_newton_stops_at_once_when_the_gathered_factorisation_fails():
         PETSc.KSP.ConvergedReason.DIVERGED_PCSETUP_FAILED
     assert calls[0] == 1  # the initial residual only
     for obj in (snes, S, A, f, x):
+        obj.destroy()
+
+
+def test_an_error_in_the_set_up_on_rank_0_is_raised_on_every_rank(monkeypatch):
+    """A Python error inside rank 0's part of the set-up (here: a broken check after the
+    factorisation) reaches every rank as a failed solve, instead of leaving the other ranks
+    waiting for rank 0 (they waited before, in the first collective of the solve)."""
+    import cablefem.gathered_lu as glu
+
+    def broken(pc):
+        raise ValueError("broken on purpose")
+
+    monkeypatch.setattr(glu, "failed_reason", broken)
+    A = _chain(1.0)
+    ksp = _solver(A)
+    x, b = A.createVecs()
+    b.set(1.0)
+    # rank 0: its own error; the others: a RuntimeError naming rank 0's set-up
+    with pytest.raises(ValueError if MPI.COMM_WORLD.rank == 0 else RuntimeError):
+        ksp.solve(b, x)
+    monkeypatch.undo()
+    assert _error(ksp, A) < 1e-13  # and the next solve works
+    for obj in (ksp, A, x, b):
         obj.destroy()
 
 
