@@ -17,6 +17,7 @@ from cablefem import startup
 __version__ = "0.2.0.dev0"
 
 startup.install()  # UFL's and FFCx's version lookups without pkg_resources' scan
+startup.singleton_transport()  # one rank without mpirun: no network probing in MPI_Init
 
 #: public name -> module that defines it (loaded on first access, PEP 562)
 _API = {

@@ -10,15 +10,27 @@ version: its ``get_distribution(name).version`` is ``importlib.metadata.version(
 a distribution, a distribution that metadata does not know) loads the real
 ``pkg_resources``, which then replaces the stand-in. Nothing is installed when
 ``pkg_resources``, UFL or FFCx is already imported.
+
+:func:`singleton_transport`: a process started without ``mpirun`` (one rank, an MPI
+"singleton") talks to no other process, yet Open MPI's default point-to-point layer (UCX)
+probes the machine's network devices in ``MPI_Init``: 0.2 s of wall time in every
+``cablefem`` command on the machines measured (docs/benchmarks.md). Such a process gets
+Open MPI's own layer (``OMPI_MCA_pml=ob1``) unless the variable is set already; a process
+of an ``mpirun`` job (``OMPI_COMM_WORLD_SIZE`` or a PMI/PMIx rank in its environment) is
+left as it is, and so is one whose MPI is already initialised.
 """
 
 from __future__ import annotations
 
 import importlib.metadata
+import os
 import sys
 import types
 
-__all__ = ["install"]
+__all__ = ["install", "singleton_transport"]
+
+#: environment variables that say the process is a rank of a launched MPI job
+_LAUNCHED = ("OMPI_COMM_WORLD_SIZE", "PMIX_RANK", "PMI_RANK", "PMI_SIZE")
 
 #: the distributions whose version the stand-in serves before it leaves
 _SERVES = frozenset({"fenics-ufl", "fenics-ffcx"})
@@ -68,4 +80,18 @@ def install() -> bool:
     if any(name in sys.modules for name in ("pkg_resources", "ufl", "ffcx")):
         return False
     sys.modules["pkg_resources"] = _StandIn()
+    return True
+
+
+def singleton_transport(environ=None) -> bool:
+    """Give a process started without ``mpirun`` Open MPI's ``ob1`` point-to-point layer
+    (see the module docs); True when it set ``OMPI_MCA_pml``. ``environ``: the mapping to
+    change (default ``os.environ``)."""
+    env = os.environ if environ is None else environ
+    if "OMPI_MCA_pml" in env or any(k in env for k in _LAUNCHED):
+        return False
+    mpi = sys.modules.get("mpi4py.MPI")
+    if mpi is not None and mpi.Is_initialized():
+        return False
+    env["OMPI_MCA_pml"] = "ob1"
     return True

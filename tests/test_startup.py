@@ -48,3 +48,32 @@ def test_an_unknown_distribution_raises_pkg_resources_own_error():
         "except Exception as err:\n"
         "    print(type(err).__name__)")
     assert out == "DistributionNotFound"
+
+
+def test_a_singleton_gets_open_mpis_own_transport():
+    """A process started without mpirun gets OMPI_MCA_pml=ob1 when cablefem is imported
+    (before MPI_Init: Open MPI's default UCX layer probes the network devices, 0.2 s of wall
+    time a command), and MPI then works on its one rank."""
+    import os
+
+    env = {k: v for k, v in os.environ.items()
+           if k != "OMPI_MCA_pml" and not k.startswith(("OMPI_COMM_WORLD", "PMIX_", "PMI_"))}
+    out = subprocess.run(
+        [sys.executable, "-c", "import os, cablefem\n"
+         "pml = os.environ.get('OMPI_MCA_pml')\n"
+         "from mpi4py import MPI\n"
+         "print(pml, MPI.COMM_WORLD.size, MPI.COMM_WORLD.allreduce(2))"],
+        capture_output=True, text=True, check=True, env=env).stdout.strip()
+    assert out == "ob1 1 2"
+
+
+@pytest.mark.parametrize("given", [{"OMPI_COMM_WORLD_SIZE": "2"}, {"PMIX_RANK": "0"},
+                                   {"OMPI_MCA_pml": "ucx"}])
+def test_a_launched_rank_or_a_given_transport_is_left_alone(given):
+    """A rank of an mpirun job (its launcher's variables) keeps the job's transport (every
+    rank must use the same); a transport the user gave stays."""
+    from cablefem.startup import singleton_transport
+
+    env = dict(given)
+    assert not singleton_transport(env)
+    assert env == given
