@@ -189,7 +189,11 @@ class HingeSteps:
         (converged, iterations)."""
         model, x, history = self.model, self.x, self._history
         ok, its = try_full(self.full, x, history)
-        if not ok:
+        # the Jacobian at x itself could not be factored (a slack element: see below): the
+        # line search would start from the same x and fail the same way
+        singular = not ok and its == 0 and self.full.getKSP().getConvergedReason() == \
+            PETSc.KSP.ConvergedReason.DIVERGED_PCSETUP_FAILED
+        if not ok and not singular:
             rtol, atol, stol, max_it = self.snes.getTolerances()
             self.snes.setTolerances(max_it=min(max_it, 10))
             try:

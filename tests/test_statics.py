@@ -159,3 +159,60 @@ def test_newton_stops_at_the_round_off_floor_above_its_tolerance():
     ok, its, norms2 = solve({"snes_atol": 0.1 * floor})
     assert ok, norms2
     assert its <= reached + 2, (its, reached, norms2)
+
+
+def test_a_singular_jacobian_at_the_start_goes_to_compression_allowed_at_once(monkeypatch):
+    """The virtual hinges' Newton (``HingeSteps.solve``) from a state whose tension-only
+    Jacobian cannot be factored: two neighbouring elements slack (each 10 % shorter than
+    stress-free), so their shared node has no stiffness at all (the span's bending off).
+    Full steps fail at the first factorisation; the next attempt is compression allowed,
+    not the line search, which starts from the same state and would meet the same singular
+    Jacobian (on the 94 000-dof roof: a second failed factorisation, and on 2 ranks a new
+    gathered LU). Then the tension-only solve converges from the bilateral equilibrium."""
+    import cablefem.static_newton as sn
+    from cablefem.petsc_utils import SNESHistory
+    from cablefem.reactions import AnchorReactions
+
+    model = CableModel(MPI.COMM_WORLD, parse_case(inclined_case(
+        40, solver={"outer_correction": "none", "span_bending": False})))
+    assert model.tension_only
+    solve_static(model)
+    X = model.V.tabulate_dof_coordinates()  # owned and ghost nodes
+    u = model.u.x.array.reshape(-1, 3)
+    r = X + u
+    k = 20  # the middle node: its neighbours pulled towards it by a tenth of an element
+    s = model.geometry.stations
+    L0 = float(s[1] - s[0])
+    p = model.geometry.points
+    idx = {j: np.flatnonzero(np.all(np.isclose(X, p[j], atol=1e-9), axis=1)) for j in
+           (k - 1, k, k + 1)}  # this rank's copies of the three nodes
+    nodal = model.gather_nodal(model.u)  # collective: rank 0 gets every node
+    rk = model.comm.bcast(p[k] + nodal[k] if model.comm.rank == 0 else None, root=0)
+    for j in (k - 1, k + 1):
+        for i in idx[j]:
+            d = rk - r[i]
+            u[i] += d * (1.0 - 0.9 * L0 / np.linalg.norm(d))  # 0.9 L0 from node k
+    x = model.u.vector.copy()
+    model.u.x.scatter_forward()
+    history = SNESHistory()
+    snes, work = sn.make_snes(model, history)
+    calls = []
+    real = sn.try_solve
+
+    def counted(s_, x_, h_):
+        out = real(s_, x_, h_)
+        calls.append((s_, out[0], out[1]))
+        return out
+
+    monkeypatch.setattr(sn, "try_solve", counted)
+    with AnchorReactions(model) as reaction:
+        steps = sn.HingeSteps(model, snes, x, history, reaction)
+        try:
+            ok, its = steps.solve(1)
+            assert ok
+            assert calls[0][0] is steps.full and calls[0][1:] == (False, 0)
+            assert calls[1][0] is steps.bilateral  # not the line search from the same x
+        finally:
+            steps.destroy()
+            for obj in (snes, *work, x):
+                obj.destroy()
