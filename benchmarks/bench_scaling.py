@@ -5,8 +5,9 @@ speed-up from 1 to 2 MPI ranks on a large network, of the dynamics and of the wh
 Each size is a cable-net roof (meshes/make_roof.py, k = 10 elements per bay; 1e6: a larger
 plan, :func:`plan`) run in a fresh process: build, statics, then ``--steps`` time steps of
 the harmonic uplift case (demos/roof.toml's physics) without file output; the step time is
-the mean over the steps (anchor forces included), with Newton and GMRES iterations per
-step; memory is the peak resident set size of the process, also per degree of freedom
+the mean over the steps (anchor forces included), with Newton iterations per step and
+linear (KSP) iterations per Newton iteration (``gmres_per_newton``, named for the GMRES
+route of before; 1.0 with the direct solve of now); memory is the peak resident set size of the process, also per degree of freedom
 above the empty process's.
 Cost should grow about linearly. The speed-up runs take ``--speedup-steps`` steps (200:
 the run of issue 31); "whole" is build + statics + dynamics.
