@@ -126,6 +126,7 @@ def _make_ts(model, dt: float, rho_inf: float, history: SNESHistory,
              prefix: str | None = None, petsc_options: dict | None = None):
     prefix = model.prefix if prefix is None else prefix
     scale = model.force_scale
+    n_dofs = model_dofs(model)
     defaults = {"ts_type": "alpha2", "ts_alpha_radius": rho_inf, "ts_max_reject": 0,
                 "ts_max_snes_failures": -1, "snes_type": "newtonls",
                 "snes_linesearch_type": "basic", "snes_rtol": 1e-9,
@@ -135,8 +136,7 @@ def _make_ts(model, dt: float, rho_inf: float, history: SNESHistory,
                 # round-off, summed over the dofs) can exceed atol; a relative update of
                 # 1e-13 is converged
                 "snes_stol": 1e-13,
-                **linear_solver_options(model_dofs(model), model.comm.size,
-                                        reuse=not model.is_beam)}
+                **linear_solver_options(n_dofs, model.comm.size, reuse=not model.is_beam)}
 
     n_owned = model.V.dofmap.index_map.size_local
     bc_rows = np.concatenate([a.flat_dofs for a in model.anchors]).astype(np.int32)
@@ -199,7 +199,7 @@ def _make_ts(model, dt: float, rho_inf: float, history: SNESHistory,
         # dear, and so is the kink corners' complex-step one: docs/benchmarks.md, "Networks
         # on 2 ranks"), and so is a large model's factorisation (linear_solver_options)
         costly = bool(model.forms.medium_forms or model.node_terms) or keeps_factorisation(
-            model_dofs(model), reuse=not model.is_beam)
+            n_dofs, reuse=not model.is_beam)
         newton = StepNewton(ts, prefix, costly,
                             history)  # the norms kept by its test: no monitor callback
     return ts, (F_vec, J_mat, newton), rows

@@ -135,9 +135,11 @@ class GatheredLU:
         # factorisation is the PC's failure on every rank (the KSP reports
         # DIVERGED_PC_FAILED, Newton stops at once); before, the ranks went on with a NaN
         # solution, on which a line search evaluated the residual some 40 times
-        _wait_idle(comm)
-        reason, raised = comm.bcast((reason, error is not None) if rank == 0 else None,
-                                    root=0) if comm.size > 1 else (reason, error is not None)
+        outcome = (reason, error is not None)
+        if comm.size > 1:
+            _wait_idle(comm)
+            outcome = comm.bcast(outcome if rank == 0 else None, root=0)
+        reason, raised = outcome
         if raised:
             if error is not None:
                 raise error
