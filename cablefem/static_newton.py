@@ -42,7 +42,6 @@ STAGNATION = 100.0
 STAGNATION_RATIO = 0.5
 
 
-
 class StaticTest:
     """The static SNES's stopping test: PETSc's default one (``atol``, ``rtol``,
     ``stol``, the divergence tolerance) and Newton stagnating at the residual's round-off
@@ -118,12 +117,18 @@ def make_snes(model, history: SNESHistory, bilateral: bool = False, prefix: str 
     return snes, (b, A)
 
 
+def factorisation_failed(snes) -> bool:
+    """Whether ``snes``'s last linear solve failed in its preconditioner's set-up (a
+    factorisation that met a zero pivot)."""
+    return snes.getKSP().getConvergedReason() == \
+        PETSc.KSP.ConvergedReason.DIVERGED_PCSETUP_FAILED
+
+
 def try_solve(snes, x, history) -> tuple[bool, int]:
     history.clear()
     snes.solve(None, x)
     ok = snes.getConvergedReason() > 0
-    if not ok and snes.getKSP().getConvergedReason() == \
-            PETSc.KSP.ConvergedReason.DIVERGED_PCSETUP_FAILED:
+    if not ok and factorisation_failed(snes):
         fresh_pc(snes.getKSP())
     return ok, snes.getIterationNumber()
 
@@ -191,8 +196,7 @@ class HingeSteps:
         ok, its = try_full(self.full, x, history)
         # the Jacobian at x itself could not be factored (a slack element: see below): the
         # line search would start from the same x and fail the same way
-        singular = not ok and its == 0 and self.full.getKSP().getConvergedReason() == \
-            PETSc.KSP.ConvergedReason.DIVERGED_PCSETUP_FAILED
+        singular = not ok and its == 0 and factorisation_failed(self.full)
         if not ok and not singular:
             rtol, atol, stol, max_it = self.snes.getTolerances()
             self.snes.setTolerances(max_it=min(max_it, 10))
