@@ -163,14 +163,15 @@ class NetworkMesh:
     @property
     def junctions(self) -> np.ndarray:
         """Nodes where three or more cells meet, or two cells of different groups."""
-        deg = np.bincount(self.cells.ravel(), minlength=len(self.points))
-        out = set(np.nonzero(deg >= 3)[0].tolist())
-        first = {}
-        for c, g in zip(self.cells, self.cell_group):
-            for k in c:
-                if first.setdefault(int(k), g) != g:
-                    out.add(int(k))
-        return np.array(sorted(out), dtype=np.int64)
+        n = len(self.points)
+        nodes = np.asarray(self.cells, np.int64).ravel()
+        deg = np.bincount(nodes, minlength=n)
+        groups = np.repeat(np.asarray(self.cell_group, np.int64), 2)
+        low = np.full(n, np.iinfo(np.int64).max)  # the least and the largest group at
+        high = np.full(n, -1, np.int64)  # each node: two groups where they differ
+        np.minimum.at(low, nodes, groups)
+        np.maximum.at(high, nodes, groups)
+        return np.flatnonzero((deg >= 3) | ((deg > 0) & (low != high))).astype(np.int64)
 
 
 def read_network_mesh(path) -> NetworkMesh:

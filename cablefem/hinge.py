@@ -258,36 +258,60 @@ class VirtualHinges:
     # ------------------------------------------------------------------ statics
     def place(self, forces: np.ndarray) -> np.ndarray:
         """(n_hinges, 5): h, sigma_h and the second-order shift E (3) of every hinge from the
-        anchor forces (n_anchors, >= 3) at the real anchors. Raises :class:`HingeError`
-        where a hinge cannot be placed."""
+        anchor forces (n_anchors, >= 3) at the real anchors (the same on every rank).
+        Raises :class:`HingeError` where a hinge cannot be placed (on every rank, the
+        first such hinge's).
+
+        Collective: the hinges are shared out over the ranks (every ``size``-th one) and
+        their rows gathered, the same numbers as on one rank (a 160-clamp roof: 0.95 s of
+        statics on every rank before)."""
         out = np.zeros((len(self.items), 5))
         if self._loads is None:
             from cablefem.moments import AnchorMoments
             self._loads = AnchorMoments.from_model(self.model)
+        comm = self.model.comm
+        rank, size = comm.rank, comm.size
+        problems = []  # (hinge index, the error) of the hinges that could not be placed here
         for k, hg in enumerate(self.items):
-            sec = hg.anchor.section
-            N = np.asarray(forces[hg.index][:3], float)
-            lay = layer(N, hg.anchor.direction, sec.EI, sec.EA)
-            h, sig = (float(v) for v in virtual_hinge(lay.delta, lay.tension, sec.EI,
-                                                      sec.EA))
-            why = None
-            if not (np.isfinite(h) and np.isfinite(sig)):
-                why = "no layer (slack anchor or anchor angle near 180 deg)"
-            elif sig <= 0.0:
-                why = f"sigma_h = {sig:.3g} m <= 0 (anchor angle above ~120 deg)"
-            elif sig > REGION_FRACTION * float(np.sum(hg.s)):
-                why = (f"sigma_h = {sig:.3g} m: the layer is too long for the cable (more "
-                       f"than {REGION_FRACTION:g} of the {float(np.sum(hg.s)):.3g} m it may "
-                       "be taken from: half the cable, or up to the next junction)")
-            if why is not None:
-                raise HingeError(f"anchor {hg.anchor.name}: cannot place the virtual hinge: "
-                                 f"{why}. Use solver.outer_correction = \"none\" (or "
-                                 "--outer-correction none) for the leading order.")
-            # the far field's second-order shift (the load along the layer, theory.md §6.2)
-            q = -self._loads.anchor_load(hg.anchor.name, 0.0)
-            out[k, :2] = h, sig
-            out[k, 2:] = far_field_second_order(N, hg.anchor.direction, q, sec.EI, sig)
+            if k % size != rank:
+                continue
+            try:
+                out[k] = self._place(hg, forces)
+            except Exception as err:  # noqa: BLE001 - raised on every rank below
+                problems.append((k, err))
+        if size > 1:
+            for r, (rows, theirs) in enumerate(comm.allgather((out[rank::size], problems))):
+                out[r::size] = rows
+                if r != rank:
+                    problems += theirs
+        if problems:
+            raise min(problems, key=lambda p: p[0])[1]
         return out
+
+    def _place(self, hg, forces: np.ndarray) -> np.ndarray:
+        """(5,): :meth:`place`'s row of hinge ``hg``."""
+        sec = hg.anchor.section
+        N = np.asarray(forces[hg.index][:3], float)
+        lay = layer(N, hg.anchor.direction, sec.EI, sec.EA)
+        h, sig = (float(v) for v in virtual_hinge(lay.delta, lay.tension, sec.EI,
+                                                  sec.EA))
+        why = None
+        if not (np.isfinite(h) and np.isfinite(sig)):
+            why = "no layer (slack anchor or anchor angle near 180 deg)"
+        elif sig <= 0.0:
+            why = f"sigma_h = {sig:.3g} m <= 0 (anchor angle above ~120 deg)"
+        elif sig > REGION_FRACTION * float(np.sum(hg.s)):
+            why = (f"sigma_h = {sig:.3g} m: the layer is too long for the cable (more "
+                   f"than {REGION_FRACTION:g} of the {float(np.sum(hg.s)):.3g} m it may "
+                   "be taken from: half the cable, or up to the next junction)")
+        if why is not None:
+            raise HingeError(f"anchor {hg.anchor.name}: cannot place the virtual hinge: "
+                             f"{why}. Use solver.outer_correction = \"none\" (or "
+                             "--outer-correction none) for the leading order.")
+        # the far field's second-order shift (the load along the layer, theory.md §6.2)
+        q = -self._loads.anchor_load(hg.anchor.name, 0.0)
+        return np.concatenate([[h, sig], far_field_second_order(N, hg.anchor.direction,
+                                                                 q, sec.EI, sig)])
 
     def apply(self, z: np.ndarray) -> None:
         """Put hinges at ``z`` (n_hinges, 5: h, sigma_h, E) into the model (statics): the

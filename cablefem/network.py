@@ -525,8 +525,12 @@ class NetworkModel(CableModel):
         """The stress-free length of clamped anchor ``name``'s chain of elements
         (:meth:`chain`): the span its layer's validity and error estimate are measured
         against (a single cable's is its length), m."""
-        chain, _ = self.chain(self.geometry.anchor_nodes[name])
-        return float(np.sum(self.geometry.cell_lengths[chain]))
+        geo = self.geometry
+        chain, _ = self.chain(geo.anchor_nodes[name])
+        ends = np.asarray(geo.cells, np.int64)[chain]  # the chain's own cells' lengths
+        length = np.asarray(geo.cell_c, float)[chain] * np.linalg.norm(
+            geo.points[ends[:, 1]] - geo.points[ends[:, 0]], axis=1)
+        return float(np.sum(length))
 
     def anchor_junction_offset(self, name: str) -> float:
         """What the string leaves of the rod's node offsets at the far end of clamped

@@ -12,6 +12,7 @@ from petsc4py import PETSc
 
 from cablefem import junctions
 from cablefem.petsc_utils import (
+    LARGE_ABOVE,
     SNESHistory,
     assemble_jacobian,
     assemble_residual,
@@ -79,6 +80,7 @@ def make_snes(model, history: SNESHistory, bilateral: bool = False, prefix: str 
     caller destroys all three."""
     extra = defaults or {}
     prefix = model.prefix + "static_" if prefix is None else prefix
+    n_dofs = model_dofs(model)
     # absolute tolerance: round-off of the residual grows with the tension (EA v3), so
     # scale it with the larger of the cable's weight and its catenary tension
     defaults = {"snes_type": "newtonls", "snes_linesearch_type": "bt", "snes_max_it": 50,
@@ -86,12 +88,11 @@ def make_snes(model, history: SNESHistory, bilateral: bool = False, prefix: str 
                 "snes_atol": max(1e-10 * model.force_scale,
                                  10.0 * model.residual_floor(displaced=True)),
                 "snes_stol": 1e-14,
-                **lu_options(model.comm.size, model_dofs(model)), **model.static_options,
-                **extra}
+                **lu_options(model.comm.size, n_dofs), **static_matrix(n_dofs),
+                **model.static_options, **extra}
     f_form = model.f_static_bilateral if bilateral else model.f_static
     j_form = model.j_static_bilateral if bilateral else model.j_static
     b = fpetsc.create_vector(f_form)
-    A = junctions.create_matrix(model, j_form)
     snes = PETSc.SNES().create(model.comm)
     snes.setOptionsPrefix(prefix)
     fixed = junctions.fixed_dofs(model) if model.node_terms else None
@@ -107,14 +108,31 @@ def make_snes(model, history: SNESHistory, bilateral: bool = False, prefix: str 
                           extra=lambda A: junctions.add_jacobian(model, A, fixed))
 
     snes.setFunction(F, b)
-    snes.setJacobian(J, A)
     user = {**case_options(model, "static"), **(petsc_options or {})}
     with default_options(prefix, defaults, user):
+        # -cable_static_mat_type (static_matrix) is read here: the matrix comes first
+        A = junctions.create_matrix(model, j_form,
+                                    PETSc.Options().getString(prefix + "mat_type", "") or None)
+        snes.setJacobian(J, A)
         snes.setFromOptions()
         # PETSc's default divergence tolerance, or the one given
         divtol = PETSc.Options().getReal(prefix + "snes_divergence_tolerance", 1.0e4)
     snes.setConvergenceTest(StaticTest(history, divtol))
     return snes, (b, A)
+
+
+def static_matrix(n_dofs: int) -> dict[str, str]:
+    """The static Jacobian's matrix type: above :data:`~cablefem.petsc_utils.LARGE_ABOVE`
+    unknowns a block matrix (``mat_type baij``, the node's 3 or 6 unknowns a block), as in
+    the dynamics, below dolfinx's default (AIJ). Statics factors its Jacobian at every
+    Newton iteration, and on blocks that is cheaper: the 94 000-dof roof of
+    ``benchmarks/bench_scaling.py`` (29 factorisations, ``amd``, one rank, PETSc
+    ``-log_view``) 1.44 s of numeric factorisation against 2.00 s, 0.04 s of symbolic
+    against 0.23 s, 0.10 s of triangular solves against 0.17 s (docs/benchmarks.md, "The
+    statics of a large network on blocks"). Small models keep AIJ: their factorisation
+    costs little and their numbers stay as they were. ``-cable_static_mat_type``
+    overrides."""
+    return {"mat_type": "baij"} if n_dofs > LARGE_ABOVE else {}
 
 
 def factorisation_failed(snes) -> bool:

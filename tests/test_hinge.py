@@ -242,6 +242,26 @@ def test_hinge_fixed_point_is_accelerated_and_tight(monkeypatch):
     assert v[0] == pytest.approx(v_ref[0], rel=1e-8)
 
 
+def test_hinge_placement_shared_over_the_ranks_is_the_serial_one():
+    """``VirtualHinges.place`` shares the hinges out over the ranks and gathers their rows:
+    every rank gets the rows one rank computes, to the last bit, and a hinge that cannot
+    be placed (a slack second anchor, placed by the second rank under ``mpirun -n 2``)
+    raises the same error on every rank instead of leaving the others waiting."""
+    from cablefem.hinge import HingeError
+
+    case = _hinged("paper_inplane.toml")
+    world = CableModel(MPI.COMM_WORLD, case)
+    forces = np.array(solve_static(world).anchor_forces, float)
+    alone = CableModel(MPI.COMM_SELF, case)
+    assert len(world.hinges.items) == 2
+    assert np.array_equal(world.hinges.place(forces), alone.hinges.place(forces))
+    slack = forces.copy()
+    slack[world.hinges.items[1].index] = 0.0
+    name = world.hinges.items[1].anchor.name
+    with pytest.raises(HingeError, match=f"anchor {name}: .*no layer"):
+        world.hinges.place(slack)
+
+
 def test_hinge_refusal_is_a_case_error():
     """A hinge that cannot be placed (here: a layer longer than a quarter of half the
     cable, EI raised 1e4-fold) is an input problem naming solver.outer_correction."""

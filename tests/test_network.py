@@ -331,3 +331,25 @@ def test_a_slack_network_from_a_rough_mesh(mpi_tmp_path):
         "solver": {"outer_correction": "none"}}))
     F = [solve_static(m).anchor_forces[:, :3] for m in (single, net)]
     np.testing.assert_allclose(F[1], F[0], rtol=0, atol=1e-8 * np.abs(F[0]).max())
+
+
+def test_junctions_are_the_nodes_of_three_cells_or_of_two_groups():
+    """``NetworkMesh.junctions`` against its definition, node by node: a node where three
+    or more cells meet, or where cells of two different groups meet (in line too); not
+    a free end, a node inside one group's chain, or a node of no cell."""
+    from cablefem.geometry import NetworkMesh
+
+    rng = np.random.default_rng(3)
+    n = 60
+    cells = np.array([(i, i + 1) for i in range(n - 2)]  # a chain through 0..n-2
+                     + [(int(a), int(b)) for a, b in rng.integers(12, n - 1, (25, 2)) if a != b])
+    groups = rng.integers(0, 3, len(cells))
+    groups[:10] = 1  # a stretch of one group, then groups that change in line
+    net = NetworkMesh(np.zeros((n, 3)), cells, groups, ["a", "b", "c"], {})
+    expected = [k for k in range(n)
+                if np.count_nonzero(cells == k) >= 3
+                or len({int(g) for g, c in zip(groups, cells) if k in c}) >= 2]
+    # an end, nodes inside one group's chain, a node of no cell
+    assert not {0, 5, n - 1} & set(expected) and len(expected) > 10
+    assert net.junctions.tolist() == expected
+    assert net.junctions.dtype == np.int64

@@ -161,18 +161,24 @@ def test_newton_stops_at_the_round_off_floor_above_its_tolerance():
     assert its <= reached + 2, (its, reached, norms2)
 
 
-def test_a_singular_jacobian_at_the_start_goes_to_compression_allowed_at_once(monkeypatch):
+@pytest.mark.parametrize("blocks", [False, True])
+def test_a_singular_jacobian_at_the_start_goes_to_compression_allowed_at_once(monkeypatch,
+                                                                               blocks):
     """The virtual hinges' Newton (``HingeSteps.solve``) from a state whose tension-only
     Jacobian cannot be factored: two neighbouring elements slack (each 10 % shorter than
     stress-free), so their shared node has no stiffness at all (the span's bending off).
     Full steps fail at the first factorisation; the next attempt is compression allowed,
     not the line search, which starts from the same state and would meet the same singular
     Jacobian (on the 94 000-dof roof: a second failed factorisation, and on 2 ranks a new
-    gathered LU). Then the tension-only solve converges from the bilateral equilibrium."""
+    gathered LU). Then the tension-only solve converges from the bilateral equilibrium.
+    ``blocks``: the static Jacobian a block matrix, as above ``LARGE_ABOVE`` unknowns (its
+    block LU must report the singular block as a failed factorisation too)."""
     import cablefem.static_newton as sn
     from cablefem.petsc_utils import SNESHistory
     from cablefem.reactions import AnchorReactions
 
+    if blocks:
+        monkeypatch.setattr(sn, "LARGE_ABOVE", 0)
     model = CableModel(MPI.COMM_WORLD, parse_case(inclined_case(
         40, solver={"outer_correction": "none", "span_bending": False})))
     assert model.tension_only
@@ -196,6 +202,7 @@ def test_a_singular_jacobian_at_the_start_goes_to_compression_allowed_at_once(mo
     model.u.x.scatter_forward()
     history = SNESHistory()
     snes, work = sn.make_snes(model, history)
+    assert ("baij" in snes.getJacobian()[0].getType()) == blocks
     calls = []
     real = sn.try_solve
 
@@ -216,3 +223,24 @@ def test_a_singular_jacobian_at_the_start_goes_to_compression_allowed_at_once(mo
             steps.destroy()
             for obj in (snes, *work, x):
                 obj.destroy()
+
+
+def test_a_large_models_static_jacobian_is_a_block_matrix(monkeypatch):
+    """Above ``LARGE_ABOVE`` unknowns statics assembles and factors its Jacobian in blocks
+    of the node's unknowns (``static_matrix``: cheaper factorisations), here forced on a
+    40-element cable: the same equilibrium as with AIJ, the anchor forces within Newton's
+    tolerance (1e-10 of the force scale; the two factorisations round differently)."""
+    import cablefem.static_newton as sn
+    from cablefem.statics import StaticProblem
+
+    case = parse_case(inclined_case(40))
+    plain = CableModel(MPI.COMM_WORLD, case)
+    with StaticProblem(plain) as problem:
+        assert "baij" not in problem.snes.getJacobian()[0].getType()
+        F_aij = np.array(problem.solve().anchor_forces)
+    monkeypatch.setattr(sn, "LARGE_ABOVE", 0)
+    blocked = CableModel(MPI.COMM_WORLD, case)
+    with StaticProblem(blocked) as problem:
+        assert "baij" in problem.snes.getJacobian()[0].getType()
+        F_baij = np.array(problem.solve().anchor_forces)
+    assert np.allclose(F_baij, F_aij, rtol=0.0, atol=1e-9 * np.abs(F_aij).max())
