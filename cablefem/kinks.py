@@ -143,8 +143,10 @@ def network_kinks(model, which: str | None = None, record: bool = True) -> list[
     cells = np.asarray(geo.cells, np.int64)
     n = len(geo.points)
     h = geo.cell_lengths
+    ends = cells.tolist()  # Python ints: the walks below index them one by one
+    group_of = np.asarray(net.cell_group).tolist()
     at_node: list[list[int]] = [[] for _ in range(n)]
-    for e, (a, b) in enumerate(cells):
+    for e, (a, b) in enumerate(ends):
         at_node[a].append(e)
         at_node[b].append(e)
     anchored = {int(k) for k in geo.anchor_nodes.values()}
@@ -182,9 +184,9 @@ def network_kinks(model, which: str | None = None, record: bool = True) -> list[
     for k in candidates:
         # a damper's cells are no cable: a cable kinks where a damper pulls at it
         cab = [e for e in at_node[k] if not damper_cell[e]]
-        in_line = len(cab) == 2 and net.cell_group[cab[0]] != net.cell_group[cab[1]]
+        in_line = len(cab) == 2 and group_of[cab[0]] != group_of[cab[1]]
         if in_line and k in label:  # a force where two cable groups meet in line
-            where = "+".join(net.groups[int(net.cell_group[e])] for e in cab)
+            where = "+".join(net.groups[group_of[e]] for e in cab)
             if geo.cell_section[cab[0]] != geo.cell_section[cab[1]]:
                 gaps.append((k, where, "two cable groups of different sections "
                                                   "meet there in line (the layer straddles "
@@ -192,8 +194,8 @@ def network_kinks(model, which: str | None = None, record: bool = True) -> list[
                 continue
             add_kink(f"{label[k]}/{where}", k, cab)
             continue
-        for g in sorted({int(net.cell_group[e]) for e in cab}):
-            es = [e for e in at_node[k] if net.cell_group[e] == g]
+        for g in sorted({group_of[e] for e in cab}):
+            es = [e for e in at_node[k] if group_of[e] == g]
             if len(es) > 2:
                 gaps.append((k, net.groups[g], f"the group meets itself with "
                                                           f"{len(es)} elements there"))
@@ -203,15 +205,16 @@ def network_kinks(model, which: str | None = None, record: bool = True) -> list[
     for kink in out:  # walk each way along the side's group until a stop or a branch
         dist = []
         for e, node in zip(kink.cells, (kink.nodes[0], kink.nodes[2])):
-            g = net.cell_group[e]
+            g = group_of[e]
             d = h[e]
             while node not in stops:
-                nxt = [c for c in at_node[node] if c != e and net.cell_group[c] == g]
+                nxt = [c for c in at_node[node] if c != e and group_of[c] == g]
                 if len(nxt) != 1:
                     break  # the cable's free end (or a branch)
                 e = nxt[0]
                 d += h[e]
-                node = int(cells[e][cells[e] != node][0])
+                a, b = ends[e]
+                node = b if a == node else a
             dist.append(d)
         kink.spacing = float(min(dist))
         kink.sides = tuple(float(d) for d in dist)
