@@ -271,21 +271,29 @@ class VirtualHinges:
             self._loads = AnchorMoments.from_model(self.model)
         comm = self.model.comm
         rank, size = comm.rank, comm.size
-        problems = []  # (hinge index, the error) of the hinges that could not be placed here
+        errors = {}  # hinge index -> the error of a hinge that could not be placed here
         for k, hg in enumerate(self.items):
             if k % size != rank:
                 continue
             try:
                 out[k] = self._place(hg, forces)
             except Exception as err:  # noqa: BLE001 - raised on every rank below
-                problems.append((k, err))
+                errors[k] = err
+        # every rank learns each failure as (index, a HingeError?, its text): an error need
+        # not pickle, and a rank left out of the gather would wait for ever
+        failed = [(k, isinstance(e, HingeError), str(e)) for k, e in errors.items()]
         if size > 1:
-            for r, (rows, theirs) in enumerate(comm.allgather((out[rank::size], problems))):
+            parts = comm.allgather((out[rank::size], failed))
+            for r, (rows, _) in enumerate(parts):
                 out[r::size] = rows
-                if r != rank:
-                    problems += theirs
-        if problems:
-            raise min(problems, key=lambda p: p[0])[1]
+            failed = [f for _, theirs in parts for f in theirs]
+        if failed:
+            k, hinge, text = min(failed)
+            if k in errors:
+                raise errors[k]
+            raise HingeError(text) if hinge else RuntimeError(
+                f"placing the virtual hinge of anchor {self.items[k].anchor.name} failed on "
+                f"another rank: {text}")
         return out
 
     def _place(self, hg, forces: np.ndarray) -> np.ndarray:
