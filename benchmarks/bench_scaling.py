@@ -7,8 +7,8 @@ plan, :func:`plan`) run in a fresh process: build, statics, then ``--steps`` tim
 the harmonic uplift case (demos/roof.toml's physics) without file output; the step time is
 the mean over the steps (anchor forces included), with Newton iterations per step and
 linear (KSP) iterations per Newton iteration (``gmres_per_newton``, named for the GMRES
-route of before; 1.0 with the direct solve of now); memory is the peak resident set size of the process, also per degree of freedom
-above the empty process's.
+route of before; 1.0 with the direct solve of now); memory is the peak resident set size
+of the process, also per degree of freedom above the empty process's.
 Cost should grow about linearly. The speed-up runs take ``--speedup-steps`` steps (200:
 the run of issue 31); "whole" is build + statics + dynamics.
 
