@@ -165,8 +165,12 @@ class NetworkGeometry:
     @property
     def cell_lengths(self) -> np.ndarray:
         """The stress-free length of every cell, ``cell_c`` times its mesh length, m."""
-        cells = np.asarray(self.cells, np.int64)
-        return np.asarray(self.cell_c, float) * np.linalg.norm(
+        return self.lengths_of(slice(None))
+
+    def lengths_of(self, which) -> np.ndarray:
+        """:attr:`cell_lengths` of the cells ``which`` (indices, a mask or a slice) alone."""
+        cells = np.asarray(self.cells, np.int64)[which]
+        return np.asarray(self.cell_c, float)[which] * np.linalg.norm(
             self.points[cells[:, 1]] - self.points[cells[:, 0]], axis=1)
 
     @property
@@ -525,12 +529,8 @@ class NetworkModel(CableModel):
         """The stress-free length of clamped anchor ``name``'s chain of elements
         (:meth:`chain`): the span its layer's validity and error estimate are measured
         against (a single cable's is its length), m."""
-        geo = self.geometry
-        chain, _ = self.chain(geo.anchor_nodes[name])
-        ends = np.asarray(geo.cells, np.int64)[chain]  # the chain's own cells' lengths
-        length = np.asarray(geo.cell_c, float)[chain] * np.linalg.norm(
-            geo.points[ends[:, 1]] - geo.points[ends[:, 0]], axis=1)
-        return float(np.sum(length))
+        chain, _ = self.chain(self.geometry.anchor_nodes[name])
+        return float(np.sum(self.geometry.lengths_of(chain)))
 
     def anchor_junction_offset(self, name: str) -> float:
         """What the string leaves of the rod's node offsets at the far end of clamped
