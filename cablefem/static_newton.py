@@ -128,8 +128,8 @@ def static_matrix(n_dofs: int) -> dict[str, str]:
     Newton iteration, and on blocks that is cheaper: the 94 000-dof roof of
     ``benchmarks/bench_scaling.py`` (29 factorisations, ``amd``, one rank, PETSc
     ``-log_view``) 1.44 s of numeric factorisation against 2.00 s, 0.04 s of symbolic
-    against 0.23 s, 0.10 s of triangular solves against 0.17 s (docs/benchmarks.md, "The
-    statics of a large network on blocks"). Small models keep AIJ: their factorisation
+    against 0.23 s, 0.10 s of triangular solves against 0.17 s (docs/benchmarks.md,
+    "Statics on blocks, the hinges over the ranks"). Small models keep AIJ: their factorisation
     costs little and their numbers stay as they were. ``-cable_static_mat_type``
     overrides."""
     return {"mat_type": "baij"} if n_dofs > LARGE_ABOVE else {}
