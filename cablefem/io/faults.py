@@ -2,7 +2,8 @@
 ``n``-th time it reaches ``<point>`` (default ``n = 1``), to test that a run killed at any
 instant can be resumed. Points: ``step`` (after a time step's outputs), ``checkpoint``
 (``checkpoint.npz`` written to its temporary file, not yet renamed), ``xml`` (a series'
-XDMF file written to its temporary file, not yet renamed), ``frame-string`` and
+XDMF file written whole to its temporary file, not yet renamed, or, at a checkpoint, its
+new frames appended and its closing lines not yet), ``frame-string`` and
 ``frame-moments`` (in the middle of a frame of that series: one array written, the others
 not). Unset (the normal case), it does nothing. The variable is read once, when this
 module is imported (a run's process sets it before it starts): a call costs nothing then.
