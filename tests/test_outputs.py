@@ -115,3 +115,38 @@ def test_a_field_waiting_for_its_rows_block_is_the_field_written_at_once(
                 assert np.array_equal(fa[key], fb[key]), key
         assert ((mpi_tmp_path / "waited" / "anchors.csv").read_text()
                 == (mpi_tmp_path / "at_once" / "anchors.csv").read_text())
+
+
+def test_a_runs_histories_hold_about_8_bytes_a_number(make_case, mpi_tmp_path, monkeypatch):
+    """What the run keeps of its rows until the reports (times, anchor forces, moment
+    columns) in row buffers: at most 24 bytes a number. A float64 is 8 bytes, 16 just
+    after its buffer doubled; each row also holds one pointer per clamped anchor for its
+    reason (why it is invalid) and, with a virtual hinge, one for its range flag (4 x 8
+    bytes over 27 numbers). In lists (before) it was above 40: a Python float is 24 bytes
+    and its list pointer 8, a force row a NumPy view of over 100."""
+    import tracemalloc
+
+    from cablefem.app import output
+
+    case = make_case(elements=8, dynamics={"t_end": 5.0, "dt": 0.005, "fields_every": 10**6,
+                                           "checkpoint_every": 0})
+    held = {}
+    close = output.RunOutput.close
+
+    def measured_close(self):
+        close(self)  # every row flushed
+        snap = tracemalloc.take_snapshot().filter_traces(
+            [tracemalloc.Filter(True, output.__file__, all_frames=True)])
+        held["bytes"] = sum(s.size for s in snap.statistics("filename"))
+        # a row: its time, 3 force components per anchor, 10 moment columns per clamp
+        held["numbers"] = len(self.times) * (1 + 3 * len(self.forces)
+                                             + 10 * len(self.columns))
+
+    monkeypatch.setattr(output.RunOutput, "close", measured_close)
+    tracemalloc.start(12)
+    try:
+        run_case(case, mpi_tmp_path / "run", comm, figures=False, progress=False, modes=0)
+    finally:
+        tracemalloc.stop()
+    assert held["numbers"] == 1001 * 27
+    assert held["bytes"] / held["numbers"] < 24

@@ -223,7 +223,7 @@ def run_dynamics(b: Built, static, output: RunOutput, outdir: Path, *, run: bool
     except (DynamicsError, FloatingPointError) as err:
         log.error("%s", err)
         out = Dynamics(None, status="failed", message=str(err), error=err)
-        if isinstance(err, DynamicsError) and output.times:
+        if isinstance(err, DynamicsError) and len(output.times):
             out.failure_state_time = _failure_state(model, output, err)
     finally:
         for sig, old in handlers.items():

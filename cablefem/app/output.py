@@ -15,11 +15,12 @@ import numpy as np
 
 from cablefem.app.damperout import DamperHistory, DamperOutput
 from cablefem.app.kinkout import KinkHistory, KinkOutput
+from cablefem.app.rowbuffer import RowBuffer
 from cablefem.app.touchdownout import TouchdownOutput
 from cablefem.cable import CableModel
 from cablefem.composite import composite_for
 from cablefem.io import anchorcsv
-from cablefem.io.anchorcsv import FORCE_COLUMNS
+from cablefem.io.anchorcsv import FORCE_COLUMNS, INTEGER_COLUMNS
 from cablefem.io.series import (
     MomentsWriter,
     OutputError,
@@ -54,6 +55,14 @@ class Histories:
     touchdown_rows: list | None = None
 
 
+def _column(name: str, rows: RowBuffer) -> np.ndarray:
+    """A moment column's history: ``valid`` as the integers the moment columns give (a
+    resumed run's rows, read back, included), the others as floats."""
+    if name in INTEGER_COLUMNS and np.all(np.isfinite(rows.array)):
+        return rows.array.astype(np.int64)
+    return rows.array.copy()
+
+
 class RunOutput:
     """Writes the output: anchor rows (buffered, their moment columns computed in vectorised
     batches) and, at field times, the string fields and the composite moment field."""
@@ -77,11 +86,12 @@ class RunOutput:
         #: the moment columns from the anchor forces (the numbers; this class writes them)
         self.moment_columns = columns
         self.beam = model.is_beam  # a rod: moments from the model, no composite field
-        self.rod: dict[str, list[np.ndarray]] = {a.name: [] for a in self.clamped}
-        self.times: list[float] = []
-        self.forces: dict[str, list[np.ndarray]] = {a.name: [] for a in model.anchors}
-        self.columns: dict[str, dict[str, list]] = {
-            a.name: {k: [] for k in MOMENT_COLUMNS} for a in self.clamped}
+        # the histories, as the run goes (row buffers: 8 bytes a number)
+        self.rod: dict[str, RowBuffer] = {a.name: RowBuffer((3,)) for a in self.clamped}
+        self.times = RowBuffer()
+        self.forces: dict[str, RowBuffer] = {a.name: RowBuffer((3,)) for a in model.anchors}
+        self.columns: dict[str, dict[str, RowBuffer]] = {
+            a.name: {k: RowBuffer() for k in MOMENT_COLUMNS} for a in self.clamped}
         #: per clamped anchor: why each row of this process is invalid ("" when valid)
         self.reasons: dict[str, list[str]] = {}
         #: per clamped anchor with a virtual hinge: the rows outside the tension range the
@@ -135,14 +145,15 @@ class RunOutput:
             raise OutputError(error)
         if not data:
             return
-        self.times = data[self._names[0]]["time"].tolist()
+        self.times = RowBuffer((), data[self._names[0]]["time"])
         for name in self._names:
             d = data[name]
-            self.forces[name] = list(np.column_stack([d[c] for c in FORCE_COLUMNS]))
+            self.forces[name] = RowBuffer((3,), np.column_stack([d[c] for c in FORCE_COLUMNS]))
             if name in self.rod:  # a rod's own moment: the moment vector it wrote
-                self.rod[name] = list(np.column_stack([d[c] for c in ("Mx", "My", "Mz")]))
+                self.rod[name] = RowBuffer((3,), np.column_stack([d[c] for c in
+                                                                 ("Mx", "My", "Mz")]))
             if name in self.columns:
-                self.columns[name] = {k: d[k].tolist() for k in MOMENT_COLUMNS}
+                self.columns[name] = {k: RowBuffer((), d[k]) for k in MOMENT_COLUMNS}
 
     def _moments(self, anc, times: np.ndarray, N: np.ndarray) -> dict:
         """The moment columns of clamped anchor ``anc`` (:class:`AnchorMoments`)."""
@@ -157,7 +168,7 @@ class RunOutput:
                 self.fallback.setdefault(name, []).append(flag)
         for name, N in zip(self._names, F):
             self.forces[name].append(N[:3])
-            if name in self.rod:
+            if self.beam and name in self.rod:  # a rod's own moment
                 self.rod[name].append(N[3:6])
         self.kinkout.add(t)
         self.touchdown.add(t)
@@ -175,7 +186,7 @@ class RunOutput:
         n = self._pending
         if n == 0:
             return
-        times = np.array(self.times[-n:])
+        times = self.times[-n:].copy()
         N = np.array([self.forces[name][-n:] for name in self._names])  # (anchor, time, 3)
         A = len(self._names)
         table = {"time": np.repeat(times, A), "anchor": self._names * n,
@@ -192,7 +203,7 @@ class RunOutput:
                                              anc.direction)
                 self.reasons.setdefault(anc.name, []).extend(res["invalid_reason"].tolist())
                 for k in MOMENT_COLUMNS:
-                    self.columns[anc.name][k].extend(res[k].tolist())
+                    self.columns[anc.name][k].extend(res[k])
                     cols[k][:, self._index[anc.name]] = res[k]
                 self._last[anc.name] = res
             table.update({k: v.ravel() for k, v in cols.items()})
@@ -264,9 +275,9 @@ class RunOutput:
         """What was recorded, as arrays (every rank); call it after :meth:`close`."""
         td = self.touchdown
         return Histories(
-            np.array(self.times),
-            {k: np.array(v).reshape(-1, 3) for k, v in self.forces.items()},
-            {name: {k: np.array(v) for k, v in cols.items()}
+            self.times.array.copy(),
+            {k: v.array.copy() for k, v in self.forces.items()},
+            {name: {k: _column(k, v) for k, v in cols.items()}
              for name, cols in self.columns.items()},
             self.reasons, self.fallback, self.kinkout.history(),
             td.summary() if td.active and td.rows else None, self.dampers.history(),
