@@ -24,7 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike
-from scipy.optimize import brentq
+from cablefem.roots import brent
 
 __all__ = ["Catenary2D", "Catenary3D", "solve_catenary", "catenary_between",
            "length_for_horizontal_tension", "length_for_sag_ratio", "irvine_lambda2",
@@ -133,7 +133,7 @@ class Catenary2D:
     def sag(self) -> float:
         """Mid-span sag [m]: chord height minus cable height at ``x = span/2`` (> 0 below)."""
         l, half = self.length, 0.5 * self.span
-        s = brentq(lambda t: self.x(t) - half, 0.0, l, xtol=1e-15 * l, rtol=4 * _EPS)
+        s = brent(lambda t: self.x(t) - half, 0.0, l, xtol=1e-15 * l, rtol=4 * _EPS)
         T = self.tension(s)  # one Newton polish, dx/ds = H/T + H/EA
         s -= (self.x(s) - half) / (self.H / T + self.H / self.EA)
         return 0.5 * self.rise - self.z(min(max(s, 0.0), l))
@@ -163,7 +163,7 @@ def _initial_guess(L: float, h: float, l: float, w: float, EA: float) -> tuple[f
             break
         hi *= 2.0
     if parts(lo)[1] < 0 < parts(hi)[1]:
-        lam = brentq(lambda t: parts(t)[1], lo, hi, rtol=1e-10)
+        lam = brent(lambda t: parts(t)[1], lo, hi, rtol=1e-10)
     else:  # very extensible cable (w l ~ EA): start from a moderate sag
         lam = 0.5
     H = w * L / (2 * lam)
@@ -277,14 +277,14 @@ def _expand(g, x0: float, step: float) -> tuple[float, float]:
 
 
 def _bisect(L, h, l, w, EA) -> np.ndarray:
-    """Robust ``(ln H, V_q)``: for each H, ``z(l)`` increases with ``V_q`` (root by brentq);
+    """Robust ``(ln H, V_q)``: for each H, ``z(l)`` increases with ``V_q`` (root by Brent's method);
     ``x(l)`` then increases with ``H`` (the flexibility matrix is positive definite)."""
     def V_of(lnH):
         zf = lambda V: _xz(l, math.exp(lnH), V, l, w, EA)[1] - h  # noqa: E731
-        return brentq(zf, *_expand(zf, 0.5 * w * l, w * l), xtol=1e-300, rtol=4 * _EPS)
+        return brent(zf, *_expand(zf, 0.5 * w * l, w * l), xtol=1e-300, rtol=4 * _EPS)
 
     xf = lambda lnH: _xz(l, math.exp(lnH), V_of(lnH), l, w, EA)[0] - L  # noqa: E731
-    lnH = brentq(xf, *_expand(xf, math.log(w * l), 2.0), xtol=1e-15, rtol=4 * _EPS)
+    lnH = brent(xf, *_expand(xf, math.log(w * l), 2.0), xtol=1e-15, rtol=4 * _EPS)
     return np.array([lnH, V_of(lnH)])
 
 
@@ -307,7 +307,7 @@ def _solve_length(fun, target: float, name: str, c: float, EA: float, sign: floa
     if lo is None or hi is None:
         raise ValueError(f"{name}={target!r} cannot be reached: lengths from {los[-1]!r} to "
                          f"{his[-1]!r} give {name} from {fun(los[-1])!r} to {fun(his[-1])!r}")
-    return brentq(g, lo, hi, xtol=1e-15 * lo, rtol=4 * _EPS)
+    return brent(g, lo, hi, xtol=1e-15 * lo, rtol=4 * _EPS)
 
 
 def length_for_horizontal_tension(span: float, rise: float, H: float, w: float,
@@ -541,6 +541,6 @@ def irvine_symmetric_frequency(lambda2: float, n: int = 1) -> float:
         raise ValueError(f"n must be an integer >= 1, got {n!r}")
     c = 0.0 if math.isinf(lam2) else 4.0 / lam2
     G = lambda x: math.sin(x) - (x - c * x**3) * math.cos(x)  # noqa: E731
-    x = brentq(G, (2 * n - 1) * math.pi / 2, (2 * n + 1) * math.pi / 2, xtol=1e-15,
+    x = brent(G, (2 * n - 1) * math.pi / 2, (2 * n + 1) * math.pi / 2, xtol=1e-15,
                rtol=4 * _EPS)
     return 2.0 * x

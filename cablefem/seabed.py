@@ -30,7 +30,7 @@ import numpy as np
 import ufl
 from dolfinx import fem
 from petsc4py import PETSc
-from scipy.optimize import brentq
+from cablefem.roots import brent
 
 from cablefem.fluid import medium_dx
 from cablefem.terms import Term
@@ -81,7 +81,7 @@ class GroundedCatenary:
         lo = 1e-12 * hi
         if gap(lo) * gap(hi) > 0 or self.suspended_length(hi) > self.l:
             raise ValueError("no grounded catenary through the anchors")
-        self.H = brentq(gap, lo, hi, xtol=1e-14 * hi, rtol=1e-14)
+        self.H = brent(gap, lo, hi, xtol=1e-14 * hi, rtol=1e-14)
         self.ls = self.suspended_length(self.H)
         if self.ls >= self.l:
             raise ValueError("the line is not long enough to touch the seabed")
