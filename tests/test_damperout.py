@@ -159,9 +159,10 @@ def _toml(d: dict) -> str:
 
 @pytest.mark.serial  # a SIGKILL in a subprocess
 def test_dampers_csv_survives_a_kill(tmp_path):
-    """Killed between checkpoints and restarted: dampers.csv holds the uninterrupted run's
-    rows (those after the checkpoint dropped and written again: round-off) and the summary's
-    peaks are the whole run's."""
+    """Killed between checkpoints and restarted: dampers.csv and kinks.csv (the damper's
+    kink) hold the uninterrupted run's rows (those after the checkpoint dropped and written
+    again: round-off) and the summary's peaks are the whole run's (the kink's history read
+    back from kinks.csv at the restart, then continued)."""
     case = tmp_path / "taut.toml"
     case.write_text(_toml(taut(direction=None)))
     ref, out = tmp_path / "ref", tmp_path / "out"
@@ -185,6 +186,17 @@ def test_dampers_csv_survives_a_kill(tmp_path):
     sb = json.loads((ref / "summary.json").read_text())["dampers"]["damper0"]
     for key in ("force_peak", "force_rms", "stroke_peak", "velocity_rms"):
         assert sa[key] == pytest.approx(sb[key], rel=1e-12)
+    ka, kb = (np.genfromtxt(d / "kinks.csv", delimiter=",", names=True, dtype=None,
+                            encoding="utf-8") for d in (out, ref))
+    assert ka.size == kb.size == 101
+    for col in ("time", "tension", "delta", "moment", "layer_length", "valid"):
+        np.testing.assert_allclose(ka[col], kb[col], rtol=1e-12, atol=1e-15)
+    sa, sb = (json.loads((d / "summary.json").read_text())["kinks"]["damper0"]
+              for d in (out, ref))
+    assert sa["valid_fraction"] == sb["valid_fraction"] == 1.0
+    for key in ("peak", "rms", "run_peak", "mean"):
+        assert sa["steady_state_moment"][key] == pytest.approx(
+            sb["steady_state_moment"][key], rel=1e-12)
 
 
 def test_network_damper_cell_is_the_single_cables_damper(mpi_tmp_path):
@@ -224,3 +236,33 @@ def test_network_damper_cell_is_the_single_cables_damper(mpi_tmp_path):
                                    atol=1e-9 * np.max(np.abs(ref[:, j])))
     np.testing.assert_allclose(got[:, 0], c * got[:, 2] + k * got[:, 1], rtol=0,
                                atol=1e-12 * np.max(np.abs(got[:, 0])))
+
+
+def test_the_kinks_history_holds_about_8_bytes_a_number(tmp_path):
+    """What a run keeps of its kinks' rows until the reports (8 columns a kink and time),
+    in row buffers: below 20 bytes a number (8 a float64, 16 just after its buffer doubled,
+    the first 64 rows' buffer and each time's own 8 bytes beside). In lists (before) each
+    number was a Python float and its pointer, 32 bytes. Rows of the damper's kink at its
+    static state, recorded 2000 times as a run records them."""
+    import tracemalloc
+
+    from cablefem.app import kinkout
+
+    case = parse_case(taut(direction=None))
+    model = CableModel(MPI.COMM_SELF, case)
+    solve_static(model)
+    out = kinkout.KinkOutput(model, tmp_path, None)
+    assert len(out.kinks) == 1
+    tracemalloc.start(8)
+    try:
+        for k in range(2000):
+            out.add(1e-3 * k)
+        out.close()
+        snap = tracemalloc.take_snapshot().filter_traces(
+            [tracemalloc.Filter(True, kinkout.__file__, all_frames=True)])
+        held = sum(s.size for s in snap.statistics("filename"))
+    finally:
+        tracemalloc.stop()
+    h = out.history()
+    assert len(h.times) == 2000 and np.asarray(h.rows["damper0"]["moment"]).shape == (2000,)
+    assert held / (2000 * 8) < 20

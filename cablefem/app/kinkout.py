@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from cablefem.app.report import steady_state_stats
+from cablefem.app.rowbuffer import RowBuffer
 from cablefem.io import anchorcsv
 from cablefem.kinks import KINK_COLUMNS, KinkMoments
 from cablefem.rod_kinks import rod_kink_moments
@@ -29,9 +30,11 @@ class KinkOutput:
         self.moments = KinkMoments(model, omega)
         self.kinks = self.moments.kinks
         self.beam = model.is_beam
-        self.rows: dict[str, dict[str, list]] = {k.name: {c: [] for c in KINK_COLUMNS[3:]}
-                                                 for k in self.kinks}
-        self.times: list[float] = []
+        # the history: per column a row of every kink at each output time (row buffers:
+        # 8 bytes a number, one append a column and time)
+        n = len(self.kinks)
+        self.cols: dict[str, RowBuffer] = {c: RowBuffer((n,)) for c in KINK_COLUMNS[3:]}
+        self.times = RowBuffer()
         self.static = self._columns() if self.kinks else None  # model.u: the static state
         self.csv = None
         self._pending = []
@@ -54,14 +57,21 @@ class KinkOutput:
 
     def _load(self, path: Path) -> None:
         """The rows written before a restart (every rank reads them: small)."""
+        index = {k.name: i for i, k in enumerate(self.kinks)}
+        times, rows = [], {c: [] for c in KINK_COLUMNS[3:]}
         for row in anchorcsv.read_rows(self.model.comm, path):
-            name = row["kink"]
-            if name not in self.rows:
+            i = index.get(row["kink"])
+            if i is None:
                 continue
-            if name == self.kinks[0].name:
-                self.times.append(float(row["time"]))
-            for c in KINK_COLUMNS[3:]:
-                self.rows[name][c].append(float(row[c]) if row[c] else np.nan)
+            if i == 0:  # a new time: a row of every kink
+                times.append(float(row["time"]))
+                for c in rows:
+                    rows[c].append(np.full(len(self.kinks), np.nan))
+            for c in rows:
+                rows[c][-1][i] = float(row[c]) if row[c] else np.nan
+        self.times = RowBuffer((), times)
+        n = len(self.kinks)
+        self.cols = {c: RowBuffer((n,), np.reshape(v, (-1, n))) for c, v in rows.items()}
 
     def add(self, t: float) -> None:
         """Record the kinks at ``t`` (collective): a rod's moments now; a string's state,
@@ -87,9 +97,8 @@ class KinkOutput:
             rows = [(t, {c: v[j] for c, v in cols.items()})
                     for j, (t, _) in enumerate(self._pending)]
         for _, cols in rows:
-            for i, k in enumerate(self.kinks):
-                for c in KINK_COLUMNS[3:]:
-                    self.rows[k.name][c].append(float(cols[c][i]))
+            for c in KINK_COLUMNS[3:]:
+                self.cols[c].append(cols[c])
         if self.csv is not None:
             labels = {"kink": [k.name for k in self.kinks], "s": [k.s for k in self.kinks]}
             self.csv.write(anchorcsv.stacked_rows(rows, labels, KINK_COLUMNS[3:]))
@@ -102,7 +111,9 @@ class KinkOutput:
 
     def history(self) -> KinkHistory:
         """What was recorded (this run's rows and a resumed run's), for the reports."""
-        return KinkHistory(list(self.kinks), self.static, list(self.times), self.rows)
+        return KinkHistory(list(self.kinks), self.static, self.times.array.copy(),
+                           {k.name: {c: buf.array[:, i] for c, buf in self.cols.items()}
+                            for i, k in enumerate(self.kinks)})
 
     def summary(self, start: float | None = None) -> dict:
         """:meth:`KinkHistory.summary` of what was recorded."""
@@ -116,8 +127,8 @@ class KinkHistory:
 
     kinks: list
     static: dict | None
-    times: list[float]
-    rows: dict[str, dict[str, list]]
+    times: np.ndarray
+    rows: dict[str, dict[str, np.ndarray]]
 
     def summary(self, start: float | None = None) -> dict:
         """Per kink: its station (a network's: its node and section), the static moment,
