@@ -24,6 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike
+
 from cablefem.roots import brent
 
 __all__ = ["Catenary2D", "Catenary3D", "solve_catenary", "catenary_between",

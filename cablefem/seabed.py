@@ -30,9 +30,9 @@ import numpy as np
 import ufl
 from dolfinx import fem
 from petsc4py import PETSc
-from cablefem.roots import brent
 
 from cablefem.fluid import medium_dx
+from cablefem.roots import brent
 from cablefem.terms import Term
 
 __all__ = ["PENETRATION_BLEND", "GroundedCatenary", "add_seabed_terms", "network_contact",
