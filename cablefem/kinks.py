@@ -269,6 +269,16 @@ class KinkMoments:
     def names(self) -> list[str]:
         return [k.name for k in self.kinks]
 
+    def _load_kinds(self) -> tuple[list, np.ndarray]:
+        """The distinct (mass, diameter) of the kinks' sections, and each kink's index
+        among them (found once: the sections do not change)."""
+        if getattr(self, "_kinds", None) is None:
+            keys: dict = {}
+            which = [keys.setdefault((m, d), len(keys)) for m, d in zip(self.m.tolist(),
+                                                                      self.D)]
+            self._kinds = (list(keys), np.array(which, np.int64))
+        return self._kinds
+
     def _in_hinge_region(self) -> np.ndarray:
         """Kinks next to an element whose law a virtual hinge changed (its stress-free
         length is not the mesh's there, so the tension above would be off): invalid."""
@@ -277,10 +287,10 @@ class KinkMoments:
         if not hinges:
             return out
         cells = np.array([k.cells for k in self.kinks], np.int64).reshape(-1, 2)
-        for hg in hinges.items:
-            region = np.asarray(hg.elements[:hg.touched], np.int64)
-            out |= np.isin(cells, region).any(axis=1)
-        return out
+        # every hinge's region at once (one membership test, not one per hinge)
+        region = np.concatenate([np.asarray(hg.elements[:hg.touched], np.int64)
+                                 for hg in hinges.items] + [np.zeros(0, np.int64)])
+        return np.isin(cells, region).any(axis=1)
 
     def _nodal(self, f) -> np.ndarray:
         """(n_kinks, 3, 3) the translational part of the function ``f`` at each kink's
@@ -319,8 +329,11 @@ class KinkMoments:
         """What :meth:`columns` takes of the model's current state at time ``t``:
         ``r``, ``a``, ``v`` at each kink's three nodes, the distributed ``load`` and the
         ``medium`` forces (collective; the same on every rank)."""
-        load = np.array([self._loads.load_at(t, m, d) for m, d in zip(self.m, self.D)]
-                        ).reshape(-1, 3)
+        # the load of each kind of section (its mass and diameter) once, then per kink:
+        # the same numbers as one evaluation per kink
+        kinds, which = self._load_kinds()
+        load = np.array([self._loads.load_at(t, m, d) for m, d in kinds]
+                        ).reshape(-1, 3)[which]
         r = self.positions() if r is None else r
         if self.damping[0] == "rayleigh_k0" and self._static is None:
             self._static = (self._nodal(self.model.u_static)  # collective, once: here

@@ -413,6 +413,27 @@ def test_kink_next_to_a_hinge_region_is_invalid():
         assert KinkMoments(model).measure()["valid"][0] == valid, s
 
 
+def test_kinks_next_to_either_clamps_hinge_region_are_invalid():
+    """Both anchors clamped, each with its virtual hinge, and four point loads: on the node
+    that ends each clamp's hinge region (invalid: the kink's elements are those of the
+    hinge's own law, whichever hinge) and two elements further in from each (valid). The
+    regions of all hinges are one set (KinkMoments._in_hinge_region tests them at once)."""
+    d = taut(100.0, elements=40)
+    length = d["geometry"]["length"]
+    for a, e in zip(d["anchors"], ([1.0, 0, 0], [-1.0, 0, 0])):
+        a.update({"type": "clamped", "direction": e})
+    d["solver"]["outer_correction"] = "hinge"
+    d["point_loads"] = [{"s": s, "value": [0.0, 0.0, -100.0]} for s in
+                        (0.25, 0.75, length - 0.75, length - 0.25)]
+    model = CableModel(comm, parse_case(d))
+    solve_static(model)
+    assert len(model.hinges.items) == 2 and all(h.touched >= 1 for h in model.hinges.items)
+    km = KinkMoments(model)
+    assert [k.s for k in km.kinks] == pytest.approx([0.25, 0.75, length - 0.75,
+                                                     length - 0.25])
+    assert km.measure()["valid"].tolist() == [0, 1, 1, 0]
+
+
 def test_composite_field_rounds_the_kink(mpi_tmp_path):
     """moments.xdmf of a pinned-pinned cable with a point load (no clamp: it had no
     composite field before) carries the kink's layers:

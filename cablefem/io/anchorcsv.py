@@ -132,8 +132,9 @@ def format_rows(cols: Sequence[str], table: Mapping[str, Sequence]) -> str:
         v = table.get(c)
         if v is None:
             cells.append([""] * n)
-        elif c in _TEXT:
-            cells.append([_text(str(s)) for s in v])
+        elif c in _TEXT:  # names repeat (every anchor, kink at every time): quoted once
+            quoted = {s: _text(str(s)) for s in dict.fromkeys(v)}
+            cells.append([quoted[s] for s in v])
         else:
             cells.append(_numbers(np.asarray(v, float).ravel(), c in INTEGER_COLUMNS))
     return "\n".join(map(",".join, zip(*cells))) + "\n"
