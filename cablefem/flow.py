@@ -261,13 +261,20 @@ class WaveField:
         return (a + b) * self.amp_den, (a - b) * self.amp_den
 
     def at(self, points: np.ndarray, t: float):
-        """``(velocity, acceleration)``, each (n, 3), at ``points`` (n, 3) at time ``t``."""
+        """``(velocity, acceleration)``, each (n, 3), at ``points`` (n, 3) at time ``t``.
+        What depends on the points alone (the depth ratios, the phase's part ``x·D k``) is
+        kept for the next call at the same points (a time step evaluates the waves at two
+        times at the positions of the last converged state): the same numbers."""
         points = np.asarray(points, dtype=float).reshape(-1, 3)
         r, dr, _ = ramp_factors(t, self.ramp)
         if (r == 0.0 and dr == 0.0) or self.k.size == 0:
             return np.zeros_like(points), np.zeros_like(points)
-        ach, ash = self._depth_ratios(np.minimum(points @ self.up - self.surface, 0.0))
-        theta = points @ self.Dk - (self.omega * t - self.phase)
+        key = points.tobytes()
+        if getattr(self, "_at", None) is None or self._at[0] != key:
+            self._at = (key, *self._depth_ratios(np.minimum(points @ self.up - self.surface,
+                                                            0.0)), points @ self.Dk)
+        _, ach, ash, xk = self._at
+        theta = xk - (self.omega * t - self.phase)
         c, s = np.cos(theta), np.sin(theta)
         hc, hs, vs, vc = ach * c, ach * s, ash * s, ash * c
         u = hc @ self.D + np.multiply.outer(vs.sum(axis=1), self.up)

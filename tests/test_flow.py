@@ -132,6 +132,25 @@ def test_deep_water_is_the_limit_of_finite_depth():
         assert np.allclose(a, b, rtol=1e-12, atol=1e-15)
 
 
+def test_the_wave_field_at_the_same_points_again_is_a_fresh_fields():
+    """WaveField keeps what depends on the points alone for the next call at the same
+    points: at other times, and after the points changed in place (the same array, other
+    values: the kept part is found by the values), every value is the one a fresh field
+    gives, to the last bit."""
+    waves = [AiryWave(0.5, 4.0, np.array([0.6, 0.8, 0.0]), 1.1), WAVE]
+    rng = np.random.default_rng(5)
+    pts = rng.uniform([-50.0, -20.0, -40.0], [50.0, 20.0, 0.0], (32, 3))
+    field = WaveField(waves, UP, 0.0, 30.0, G, ramp=5.0)
+    for t in (2.0, 2.5, 11.0):
+        fresh = WaveField(waves, UP, 0.0, 30.0, G, ramp=5.0).at(pts, t)
+        for a, b in zip(field.at(pts, t), fresh):
+            assert a.tobytes() == b.tobytes()
+        pts[:, 2] -= 0.25  # moved in place
+        fresh = WaveField(waves, UP, 0.0, 30.0, G, ramp=5.0).at(pts, t + 0.1)
+        for a, b in zip(field.at(pts, t + 0.1), fresh):
+            assert a.tobytes() == b.tobytes()
+
+
 @pytest.mark.parametrize("depth", [None, 30.0, 2000.0])
 def test_the_wave_field_sums_its_components_at_once(depth):
     """WaveField (every component at once, its wave numbers found once) against the Airy
