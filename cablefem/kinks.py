@@ -250,6 +250,10 @@ class KinkMoments:
         #: the fluid's terms are not assembled), None without a fluid
         self.D = [None if fluid is None or self._medium is not None else
                   fluid.diameter_on(sec) for sec in secs]
+        kinds: dict = {}  # the distinct (mass, diameter): state() finds a load once a kind
+        self._kind = np.array([kinds.setdefault(md, len(kinds)) for md in zip(
+            self.m.tolist(), self.D)], np.int64)
+        self._kinds = list(kinds)
         self.nodes = np.array([k.nodes for k in self.kinks], dtype=np.int64).reshape(-1, 3)
         self.h = np.array([k.h for k in self.kinks], float).reshape(-1, 2)
         self.spacing = np.array([k.spacing for k in self.kinks], float)
@@ -269,27 +273,15 @@ class KinkMoments:
     def names(self) -> list[str]:
         return [k.name for k in self.kinks]
 
-    def _load_kinds(self) -> tuple[list, np.ndarray]:
-        """The distinct (mass, diameter) of the kinks' sections, and each kink's index
-        among them (found once: the sections do not change)."""
-        if getattr(self, "_kinds", None) is None:
-            keys: dict = {}
-            which = [keys.setdefault((m, d), len(keys)) for m, d in zip(self.m.tolist(),
-                                                                      self.D)]
-            self._kinds = (list(keys), np.array(which, np.int64))
-        return self._kinds
-
     def _in_hinge_region(self) -> np.ndarray:
         """Kinks next to an element whose law a virtual hinge changed (its stress-free
         length is not the mesh's there, so the tension above would be off): invalid."""
-        out = np.zeros(len(self.kinks), bool)
         hinges = self.model.hinges
         if not hinges:
-            return out
+            return np.zeros(len(self.kinks), bool)
         cells = np.array([k.cells for k in self.kinks], np.int64).reshape(-1, 2)
-        # every hinge's region at once (one membership test, not one per hinge)
-        region = np.concatenate([np.asarray(hg.elements[:hg.touched], np.int64)
-                                 for hg in hinges.items] + [np.zeros(0, np.int64)])
+        region = np.concatenate([np.zeros(0, np.int64)] + [  # every hinge's: one test
+            np.asarray(hg.elements[:hg.touched], np.int64) for hg in hinges.items])
         return np.isin(cells, region).any(axis=1)
 
     def _nodal(self, f) -> np.ndarray:
@@ -329,11 +321,8 @@ class KinkMoments:
         """What :meth:`columns` takes of the model's current state at time ``t``:
         ``r``, ``a``, ``v`` at each kink's three nodes, the distributed ``load`` and the
         ``medium`` forces (collective; the same on every rank)."""
-        # the load of each kind of section (its mass and diameter) once, then per kink:
-        # the same numbers as one evaluation per kink
-        kinds, which = self._load_kinds()
-        load = np.array([self._loads.load_at(t, m, d) for m, d in kinds]
-                        ).reshape(-1, 3)[which]
+        load = np.array([self._loads.load_at(t, m, d) for m, d in self._kinds]
+                        ).reshape(-1, 3)[self._kind]
         r = self.positions() if r is None else r
         if self.damping[0] == "rayleigh_k0" and self._static is None:
             self._static = (self._nodal(self.model.u_static)  # collective, once: here
