@@ -278,8 +278,9 @@ def _expand(g, x0: float, step: float) -> tuple[float, float]:
 
 
 def _bisect(L, h, l, w, EA) -> np.ndarray:
-    """Robust ``(ln H, V_q)``: for each H, ``z(l)`` increases with ``V_q`` (root by Brent's method);
-    ``x(l)`` then increases with ``H`` (the flexibility matrix is positive definite)."""
+    """Robust ``(ln H, V_q)``: for each H, ``z(l)`` increases with ``V_q`` (its root by
+    Brent's method); ``x(l)`` then increases with ``H`` (the flexibility matrix is positive
+    definite)."""
     def V_of(lnH):
         zf = lambda V: _xz(l, math.exp(lnH), V, l, w, EA)[1] - h  # noqa: E731
         return brent(zf, *_expand(zf, 0.5 * w * l, w * l), xtol=1e-300, rtol=4 * _EPS)

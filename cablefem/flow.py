@@ -247,6 +247,7 @@ class WaveField:
         # non-positive arguments (no overflow in deep water, no loss of accuracy), the
         # amplitude ½ H ω folded in; in deep water (no depth) both e^{kζ}
         self.amp_den = self.amp
+        self._at = None  # (the points' bytes, what depends on them alone): see at()
         if depth is not None:
             self.amp_den = self.amp / (1.0 - np.exp(-2.0 * self.k * depth))
             self.two_kh = 2.0 * self.k * depth
@@ -270,7 +271,7 @@ class WaveField:
         if (r == 0.0 and dr == 0.0) or self.k.size == 0:
             return np.zeros_like(points), np.zeros_like(points)
         key = points.tobytes()
-        if getattr(self, "_at", None) is None or self._at[0] != key:
+        if self._at is None or self._at[0] != key:
             self._at = (key, *self._depth_ratios(np.minimum(points @ self.up - self.surface,
                                                             0.0)), points @ self.Dk)
         _, ach, ash, xk = self._at
