@@ -241,8 +241,7 @@ class KinkMoments:
         self.EI = np.array([sec.EI for sec in secs], float)
         self.EA = np.array([sec.EA for sec in secs], float)
         self.m = np.array([sec.mass for sec in secs], float)
-        #: the fluid's and the seabed's terms, assembled (their share of the kink nodes'
-        #: equations, buoyancy included): None without them
+        #: the fluid's and seabed's terms assembled (the kink nodes' share), None without
         self._medium = _medium_form(model) if n else None
         self._medium_out = None  # its vector and field (medium_forces)
         fluid = getattr(model.case, "fluid", None)
@@ -250,10 +249,9 @@ class KinkMoments:
         #: the fluid's terms are not assembled), None without a fluid
         self.D = [None if fluid is None or self._medium is not None else
                   fluid.diameter_on(sec) for sec in secs]
-        kinds: dict = {}  # the distinct (mass, diameter): state() finds a load once a kind
-        self._kind = np.array([kinds.setdefault(md, len(kinds)) for md in zip(
-            self.m.tolist(), self.D)], np.int64)
-        self._kinds = list(kinds)
+        self._kinds: dict = {}  # the distinct (mass, diameter): state() loads each once
+        self._kind = np.array([self._kinds.setdefault(md, len(self._kinds)) for md in
+                               zip(self.m.tolist(), self.D)], np.int64)
         self.nodes = np.array([k.nodes for k in self.kinks], dtype=np.int64).reshape(-1, 3)
         self.h = np.array([k.h for k in self.kinks], float).reshape(-1, 2)
         self.spacing = np.array([k.spacing for k in self.kinks], float)
