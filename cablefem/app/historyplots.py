@@ -70,19 +70,19 @@ def tension_figure(outdir, times, forces: dict[str, np.ndarray], units: str) -> 
     return _save(fig, outdir, "anchor_tensions.png", f"Anchor tension{which}", tu, axes)
 
 
-def touchdown_figure(outdir, rows: list, units: str) -> str | None:
-    """The touchdown (rows of ``touchdown.csv``): a single cable's station ``s`` of the
-    point where it leaves the seabed (and its grounded length where that differs: a line
-    not grounded from its first anchor); a network's grounded length per cable group. None
-    without rows."""
-    if not rows:
+def touchdown_figure(outdir, rows, units: str) -> str | None:
+    """The touchdown (the rows of ``touchdown.csv``, a :class:`cablefem.app.touchdownout.
+    TouchdownRows`): a single cable's station ``s`` of the point where it leaves the seabed
+    (and its grounded length where that differs: a line not grounded from its first
+    anchor); a network's grounded length per cable group. None without rows."""
+    if not len(rows):
         return None
     lu, tu = unit(units, "length"), unit(units, "time")
     fig, axes = _figure(1, 3.2)
     ax = axes[0]
-    lines = list(dict.fromkeys(r[1] for r in rows))
+    lines = list(dict.fromkeys(rows.lines))
     if lines == ["cable"]:
-        t, s, g = (np.array([r[k] for r in rows], float) for k in (0, 2, 6))
+        t, s, g = (rows.values.array[:, k] for k in (0, 1, 5))
         ax.plot(t, s, lw=0.8, label="touchdown station s (stress-free arc length)")
         if np.isfinite(s).any():
             ax.set_title(f"excursion along the line {np.nanmax(s) - np.nanmin(s):.4g} {lu}",
@@ -92,7 +92,7 @@ def touchdown_figure(outdir, rows: list, units: str) -> str | None:
         ax.set_ylabel(f"s, length [{lu}]")
     else:
         for line in lines[:MAX_PANELS]:
-            g = {r[0]: r[6] for r in rows if r[1] == line}  # a row per touchdown point
+            g = dict(rows.of(line)[:, [0, 5]].tolist())  # a row per touchdown point
             ax.plot(list(g), list(g.values()), lw=0.8, label=line)
         ax.set_ylabel(f"grounded length [{lu}]")
     ax.legend(loc="upper left", fontsize=7)

@@ -16,7 +16,7 @@ import numpy as np
 from cablefem.app.damperout import DamperHistory, DamperOutput
 from cablefem.app.kinkout import KinkHistory, KinkOutput
 from cablefem.app.rowbuffer import RowBuffer
-from cablefem.app.touchdownout import TouchdownOutput
+from cablefem.app.touchdownout import TouchdownOutput, TouchdownRows
 from cablefem.cable import CableModel
 from cablefem.composite import composite_for
 from cablefem.io import anchorcsv
@@ -51,8 +51,9 @@ class Histories:
     touchdown: dict | None
     #: the dampers' columns (dampers.csv; none recorded: no names)
     dampers: DamperHistory | None = None
-    #: the touchdown's rows (touchdown.csv's, (time, line, s, x, y, z, grounded length))
-    touchdown_rows: list | None = None
+    #: the touchdown's rows (touchdown.csv's: :class:`cablefem.app.touchdownout.
+    #: TouchdownRows`)
+    touchdown_rows: TouchdownRows | None = None
 
 
 def _column(name: str, rows: RowBuffer) -> np.ndarray:
@@ -280,5 +281,5 @@ class RunOutput:
             {name: {k: _column(k, v) for k, v in cols.items()}
              for name, cols in self.columns.items()},
             self.reasons, self.fallback, self.kinkout.history(),
-            td.summary() if td.active and td.rows else None, self.dampers.history(),
-            list(td.rows) if td.active else None)
+            td.summary() if td.active and len(td.rows) else None, self.dampers.history(),
+            td.rows if td.active else None)

@@ -7,14 +7,16 @@ static summary only (docs/seabed.md)."""
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from cablefem.app.kinkout import KinkOutput
+from cablefem.app.rowbuffer import RowBuffer
 from cablefem.io import anchorcsv
 
-__all__ = ["TOUCHDOWN_COLUMNS", "TouchdownOutput"]
+__all__ = ["TOUCHDOWN_COLUMNS", "TouchdownOutput", "TouchdownRows"]
 
 #: the columns of ``touchdown.csv``: a single cable's ``line`` is "cable" and ``s`` its
 #: touchdown's stress-free station; a network's rows name the cable group (``s`` empty),
@@ -22,6 +24,28 @@ __all__ = ["TOUCHDOWN_COLUMNS", "TouchdownOutput"]
 #: without a point). A line that does not touch the seabed has a row with grounded length 0
 #: and no point (single cable) or no row (network).
 TOUCHDOWN_COLUMNS = ["time", "line", "s", "x", "y", "z", "grounded_length"]
+
+
+@dataclass
+class TouchdownRows:
+    """The rows of ``touchdown.csv`` recorded in a run: each row's line (``lines``) and its
+    numbers (``values``, (n, 6): time, s, x, y, z, grounded length; a row buffer while the
+    run goes: 8 bytes a number, not a tuple of Python floats)."""
+
+    lines: list
+    values: RowBuffer
+
+    def __len__(self) -> int:
+        return len(self.lines)
+
+    def extend(self, rows: list[tuple]) -> None:
+        """Add rows ``(time, line, s, x, y, z, grounded length)``."""
+        self.lines += [r[1] for r in rows]
+        self.values.extend([(r[0],) + tuple(r[2:]) for r in rows])
+
+    def of(self, line: str) -> np.ndarray:
+        """The numbers of ``line``'s rows, (k, 6)."""
+        return self.values.array[np.array(self.lines, dtype=object) == line]
 
 
 class TouchdownOutput:
@@ -35,7 +59,7 @@ class TouchdownOutput:
         self.model = model
         self.active = getattr(model.case, "seabed", None) is not None
         self.network = model.is_network
-        self.rows: list[tuple] = []  # (time, line, s, x, y, z, grounded length)
+        self.rows = TouchdownRows([], RowBuffer((6,)))  # the rows so far
         self._pending: list[tuple] = []
         self.csv = None
         if not self.active:
@@ -45,9 +69,9 @@ class TouchdownOutput:
 
     def _load(self, path: Path) -> None:
         """The rows written before a restart (every rank reads them: small)."""
-        self.rows = [(float(r["time"]), r["line"]) + tuple(
+        self.rows.extend([(float(r["time"]), r["line"]) + tuple(
             float(r[c]) if r[c] else np.nan for c in TOUCHDOWN_COLUMNS[2:])
-            for r in anchorcsv.read_rows(self.model.comm, path)]
+            for r in anchorcsv.read_rows(self.model.comm, path)])
 
     def _network_rows(self, t: float) -> list[tuple]:
         """A network's rows at the model's current state, time ``t`` (collective): per
@@ -84,7 +108,7 @@ class TouchdownOutput:
             return
         if self.network:
             rows = self._network_rows(t)
-            self.rows += rows
+            self.rows.extend(rows)
             self._pending += rows
         else:
             self._pending.append((t, positions(self.model)))
@@ -96,7 +120,7 @@ class TouchdownOutput:
             return
         if not self.network:
             self._pending = self._rows(self._pending)
-            self.rows += self._pending
+            self.rows.extend(self._pending)
         cols = list(zip(*self._pending))
         self.csv.write({c: list(v) for c, v in zip(TOUCHDOWN_COLUMNS, cols)})
         self._pending = []
@@ -108,13 +132,13 @@ class TouchdownOutput:
         single cable, of the touchdown's station ``s`` (its excursion along the line) and
         the number of output times at which the line did not touch the seabed."""
         out = {}
-        for line in dict.fromkeys(r[1] for r in self.rows):
-            rows = [r for r in self.rows if r[1] == line]
-            g = np.array([r[6] for r in rows], float)
+        for line in dict.fromkeys(self.rows.lines):
+            rows = self.rows.of(line)
+            g = rows[:, 5]
             entry = {"grounded_length_min": float(np.min(g)),
                      "grounded_length_max": float(np.max(g))}
             if not self.network:
-                s = np.array([r[2] for r in rows], float)
+                s = rows[:, 1]
                 ok = np.isfinite(s)
                 entry["times_off_the_seabed"] = int(np.count_nonzero(g == 0.0))
                 if np.any(ok):
