@@ -7,7 +7,6 @@ from __future__ import annotations
 import numpy as np
 
 from cablefem.app.historyplots import touchdown_figure
-from cablefem.app.rowbuffer import RowBuffer
 from cablefem.app.touchdownout import TouchdownRows
 
 
@@ -25,7 +24,7 @@ def rows_of_a_network() -> list[tuple]:
 
 def test_the_rows_come_back_and_a_lines_rows_are_its_own():
     rows = rows_of_a_network()
-    rec = TouchdownRows([], RowBuffer((6,)))
+    rec = TouchdownRows()
     rec.extend(rows[:100])
     rec.extend(rows[100:])
     assert len(rec) == len(rows) and rec.lines == [r[1] for r in rows]
@@ -37,13 +36,13 @@ def test_the_rows_come_back_and_a_lines_rows_are_its_own():
 
 
 def test_the_touchdown_figure_of_a_network_and_of_a_cable(tmp_path):
-    rec = TouchdownRows([], RowBuffer((6,)))
+    rec = TouchdownRows()
     rec.extend(rows_of_a_network())
     (tmp_path / "net").mkdir()
     (tmp_path / "one").mkdir()
     assert (tmp_path / "net" / touchdown_figure(tmp_path / "net", rec, "SI")).is_file()
-    cable = TouchdownRows([], RowBuffer((6,)))
+    cable = TouchdownRows()
     cable.extend([(0.1 * k, "cable", 300.0 + np.sin(0.1 * k), 0.0, 0.0, -100.0,
                    300.0 + np.sin(0.1 * k)) for k in range(200)])
     assert (tmp_path / "one" / touchdown_figure(tmp_path / "one", cable, "SI")).is_file()
-    assert touchdown_figure(tmp_path / "one", TouchdownRows([], RowBuffer((6,))), "SI") is None
+    assert touchdown_figure(tmp_path / "one", TouchdownRows(), "SI") is None

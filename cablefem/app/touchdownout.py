@@ -7,7 +7,7 @@ static summary only (docs/seabed.md)."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -32,8 +32,8 @@ class TouchdownRows:
     numbers (``values``, (n, 6): time, s, x, y, z, grounded length; a row buffer while the
     run goes: 8 bytes a number, not a tuple of Python floats)."""
 
-    lines: list
-    values: RowBuffer
+    lines: list = field(default_factory=list)
+    values: RowBuffer = field(default_factory=lambda: RowBuffer((6,)))
 
     def __len__(self) -> int:
         return len(self.lines)
@@ -59,7 +59,7 @@ class TouchdownOutput:
         self.model = model
         self.active = getattr(model.case, "seabed", None) is not None
         self.network = model.is_network
-        self.rows = TouchdownRows([], RowBuffer((6,)))  # the rows so far
+        self.rows = TouchdownRows()  # the rows so far
         self._pending: list[tuple] = []
         self.csv = None
         if not self.active:

@@ -187,8 +187,8 @@ class Series:
         the file does not end as this writer left it) the whole file, to a temporary file,
         then renamed; afterwards the frames not yet listed, written where the closing
         lines begin, then the closing lines again."""
-        new = b"".join(self._xml[self._listed:])
         if self._end is not None and self._appendable():
+            new = b"".join(self._xml[self._listed:])
             with open(self.xdmf, "r+b") as fh:
                 fh.seek(self._end)
                 fh.write(new)
