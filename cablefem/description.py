@@ -313,6 +313,7 @@ class SolverSpec:
         outer_correction: 'hinge' or 'none'.
         span_bending: True, False or "auto".
         model: "string", "beam" or "auto".
+        ranks: "auto" or "all" (the command line's ranks).
     """
 
     tension_only: bool = True
@@ -325,6 +326,9 @@ class SolverSpec:
     #: cables) or "auto" (the string, and the rod where the string's estimate says it is
     #: outside its range: cablefem.app.automodel); ``--model`` overrides it
     model: str = "string"
+    #: the command line's ranks: "auto" (as many as pay off for the size, at least
+    #: cablefem.app.resources.MIN_DOFS_PER_RANK unknowns each: cablefem.app.ranks) or "all"
+    ranks: str = "auto"
 
 
 @dataclass

@@ -498,7 +498,17 @@ def _post(args, case) -> int:
 
 
 def _solve(args, case) -> int:
-    """``cablefem run`` and ``cablefem modes`` on a loaded case."""
+    """``cablefem run`` and ``cablefem modes`` on as many of the launched ranks as pay off
+    for the case's size (:func:`cablefem.app.ranks.run_sized`); every rank returns the
+    code."""
+    from cablefem.app.ranks import run_sized
+
+    model = (args.model or "string") if args.command == "run" else "string"
+    return run_sized(case, model, lambda comm, ranks: _solve_on(args, case, comm, ranks))
+
+
+def _solve_on(args, case, comm, ranks: dict | None) -> int:
+    """:func:`_solve` on ``comm`` (``ranks``: ``run_case``'s, when fewer run)."""
     from cablefem.app.run import RunError, RunInterrupted, run_case
     from cablefem.case import CaseError
     from cablefem.io.outdir import OutdirError
@@ -506,13 +516,15 @@ def _solve(args, case) -> int:
 
     try:
         if args.command == "run":
-            result = run_case(case, args.output, t_end=args.t_end, form=args.moment_form,
-                     dynamics=not args.static_only, figures=not args.no_figures,
-                     progress=not args.quiet, restart=args.restart is not None,
-                     model=args.model or "string", refine=args.refine or 1.0)
+            result = run_case(case, args.output, comm, t_end=args.t_end,
+                              form=args.moment_form, dynamics=not args.static_only,
+                              figures=not args.no_figures, progress=not args.quiet,
+                              restart=args.restart is not None, model=args.model or "string",
+                              refine=args.refine or 1.0, ranks=ranks)
         else:
-            result = run_case(case, args.output, modes=args.n, dynamics=False,
-                              figures=False, progress=not args.quiet, model="string")
+            result = run_case(case, args.output, comm, modes=args.n, dynamics=False,
+                              figures=False, progress=not args.quiet, model="string",
+                              ranks=ranks)
     except CaseError as err:
         sys.stderr.write(str(err) + "\n")
         return EXIT_INPUT
@@ -525,9 +537,7 @@ def _solve(args, case) -> int:
         sys.stderr.write(f"cablefem: {err}\n")
         return 128 + (err.signal or 2)
     warned = result.summary.get("warnings") or []
-    from mpi4py import MPI
-
-    if warned and MPI.COMM_WORLD.rank == 0:  # once, as the log's warnings (rank 0)
+    if warned and comm.rank == 0:  # once, as the log's warnings (rank 0)
         sys.stderr.write(f"cablefem: {len(warned)} warning(s), listed under 'warnings' in "
                          f"{Path(args.output) / 'summary.json'}\n")
     if warned and args.strict:

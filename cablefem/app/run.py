@@ -140,8 +140,8 @@ class _StopOnSignal:
 def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *,
               modes: int | None = None, dynamics: bool = True, t_end: float | None = None,
               form: str = "exact", progress: bool = True, figures: bool = True,
-              restart: bool = False, model: str = "string", refine: float = 1.0
-              ) -> RunResult:
+              restart: bool = False, model: str = "string", refine: float = 1.0,
+              ranks: dict | None = None) -> RunResult:
     """Run a case: statics, modes, and dynamics when the case has a ``[dynamics]`` table.
 
     Writes ``summary.json``, ``anchors.csv``, ``string.xdmf``, ``modes.xdmf`` and, with a
@@ -154,6 +154,8 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
     the run ends, ``summary.json`` says ``"status": "running"`` with the last checkpoint.
     ``model="beam"`` runs the reference rod (:mod:`cablefem.rod`) instead of the string,
     its mesh density scaled by ``refine``; the anchor moments are then the rod's own.
+    ``ranks``: ``{"launched": N, "note": text}`` when the command line runs the case on
+    fewer ranks than it was launched on (:mod:`cablefem.app.ranks`), for ``summary.json``.
 
     The stages (each returns a dataclass; :func:`cablefem.app.summary.assemble` makes
     ``summary.json`` of them): :func:`~cablefem.app.stages.build`,
@@ -180,6 +182,9 @@ def _run_case(case: Case, outdir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *
 
     n_asked = case.modal.modes if modes is None else modes
     b = stages.build(comm, case, model, refine, n_asked, wall0, clean)
+    if ranks:
+        b.launched = ranks["launched"]
+        b.notes = [ranks["note"], *b.notes]
     r = StageResults(b)
 
     def save() -> None:  # a folder found after a kill says how far the run got

@@ -72,6 +72,7 @@ class Built:
     beam: dict | None = None  #: the rod's mesh and section
     notes: list = field(default_factory=list)
     warnings: Warnings = field(default_factory=Warnings)
+    launched: int | None = None  #: the ranks launched, when the run uses fewer
 
     @property
     def elements(self) -> int:

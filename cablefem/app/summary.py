@@ -47,6 +47,8 @@ def assemble(r: StageResults) -> dict:
                "elements": b.elements, "degrees_of_freedom": b.dofs,
                "dimensionless": b.groups, "wall_time": {"build": b.wall_time},
                "warnings": r.warnings()}
+    if b.launched is not None:
+        s["mpi_ranks_launched"] = b.launched
     for key, value in (("bending", b.bending), ("beam", b.beam), ("notes", b.notes)):
         if value:
             s[key] = value

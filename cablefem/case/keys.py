@@ -400,6 +400,11 @@ CASE_KEYS: dict[str, KeyDoc | TableDoc] = {
             "the string's estimated moment error at a clamped anchor exceeds 2 % (the rod's "
             "numbers reported, model_auto in summary.json; docs/rod.md). '--model' "
             "overrides it."),
+        "ranks": KeyDoc(
+            "string", "auto", "", "MPI ranks of 'cablefem run' and 'cablefem modes' started "
+            "on several: 'auto' (default) as many as pay off, at least 10 000 unknowns each "
+            "(a single cable: 3 (mesh.elements + 1); a network: 3 per mesh node), the others "
+            "wait (a note in summary.json; docs/running.md) | 'all' every rank."),
         "petsc_options": KeyDoc(
             "table of options", {}, "",
             "PETSc options without '-' (values string/number/boolean), e.g. ts_type, "

@@ -19,7 +19,6 @@ from cablefem.case.schema import (
     NetworkSpec,
     PointLoad,
     PointMass,
-    SolverSpec,
 )
 from cablefem.case.tables import (
     any_missing,
@@ -27,8 +26,8 @@ from cablefem.case.tables import (
     parse_dynamics,
     parse_fatigue,
     parse_motion,
-    parse_petsc_options,
     parse_section,
+    parse_solver,
     parse_time,
 )
 from cablefem.description import BEAM_BOUNDS, BeamSpec, DamperLink
@@ -125,11 +124,7 @@ def parse_network_case(data: dict, base_dir: Path, source: str) -> Case:
     beam_r = table("beam")
     beam = BeamSpec(*(beam_r.integer(k, **BEAM_BOUNDS[k][0]) if k == "span_elements"
                       else beam_r.number(k, **BEAM_BOUNDS[k][0]) for k in BEAM_BOUNDS))
-    solver_r = table("solver")
-    solver = SolverSpec(solver_r.boolean("tension_only"), parse_petsc_options(solver_r),
-                        solver_r.string("outer_correction", ("none", "hinge")),
-                        solver_r.boolean_or("span_bending", "auto"),
-                        solver_r.string("model", ("string", "beam", "auto")))
+    solver = parse_solver(table("solver"))
     first = sections.get(cables[0].section) if cables else None
     fatigue = parse_fatigue(top.table("fatigue"), first)
     fluid_r = top.table("fluid")

@@ -27,7 +27,6 @@ from cablefem.case.schema import (
     ModalSpec,
     PointLoad,
     PointMass,
-    SolverSpec,
 )
 from cablefem.case.tables import (
     any_missing,
@@ -36,8 +35,8 @@ from cablefem.case.tables import (
     parse_fatigue,
     parse_geometry,
     parse_motion,
-    parse_petsc_options,
     parse_section,
+    parse_solver,
     parse_time,
 )
 from cablefem.description import BEAM_BOUNDS, NAME, Damper
@@ -177,11 +176,7 @@ def parse_case(data: dict, base_dir: str | os.PathLike = Path("."),
     beam_r = table("beam")
     beam = BeamSpec(*(beam_r.integer(k, **BEAM_BOUNDS[k][0]) if k == "span_elements"
                       else beam_r.number(k, **BEAM_BOUNDS[k][0]) for k in BEAM_BOUNDS))
-    solver_r = table("solver")
-    solver = SolverSpec(solver_r.boolean("tension_only"), parse_petsc_options(solver_r),
-                        solver_r.string("outer_correction", ("none", "hinge")),
-                        solver_r.boolean_or("span_bending", "auto"),
-                        solver_r.string("model", ("string", "beam", "auto")))
+    solver = parse_solver(table("solver"))
     if problems:
         raise CaseError(problems, source)
     parts = [title, section, gravity, geometry, mesh.elements, mesh.grading, damping,

@@ -22,7 +22,7 @@ from cablefem.case.schema import (
     Geometry,
     rayleigh_coefficients,
 )
-from cablefem.description import GEOMETRY_BOUNDS, GEOMETRY_KINDS
+from cablefem.description import GEOMETRY_BOUNDS, GEOMETRY_KINDS, SolverSpec
 from cablefem.motion import (
     EllipseMotion,
     HarmonicMotion,
@@ -282,6 +282,22 @@ def parse_dynamics(r: Reader | None) -> DynamicsSpec | None:
     if r.has("statistics_start") and start is None:
         bad_start = True
     return None if any_missing(*parts) or bad_start else DynamicsSpec(*parts, start)
+
+
+def parse_solver(r: Reader) -> SolverSpec:
+    """``[solver]`` of a single cable's or a network's case.
+
+    Args:
+        r: The table's reader (problems go to its list).
+
+    Returns:
+        The solver's settings.
+    """
+    return SolverSpec(r.boolean("tension_only"), parse_petsc_options(r),
+                      r.string("outer_correction", ("none", "hinge")),
+                      r.boolean_or("span_bending", "auto"),
+                      r.string("model", ("string", "beam", "auto")),
+                      r.string("ranks", ("auto", "all")))
 
 
 def parse_petsc_options(r: Reader) -> dict:
