@@ -52,6 +52,39 @@ def level_case(EA=17857.14, EI=4e-4, mass=1.0, g=1.0, length=1.0, chord=1.001333
     return d
 
 
+def toml_text(d: dict) -> str:
+    """A case dict (:func:`level_case`'s) as the TOML text of a case file: scalars and
+    lists of numbers or strings, tables and arrays of tables (one level of nesting in
+    each, as case files have)."""
+
+    def value(v) -> str:
+        if isinstance(v, bool):
+            return "true" if v else "false"
+        if isinstance(v, str):
+            return '"' + v + '"'
+        if isinstance(v, (list, tuple)):
+            return "[" + ", ".join(value(x) for x in v) + "]"
+        return repr(v)
+
+    def body(table: dict, name: str) -> list[str]:
+        lines = [f"{k} = {value(v)}" for k, v in table.items() if not isinstance(v, dict)]
+        for k, v in table.items():
+            if isinstance(v, dict):
+                lines += [f"[{name}.{k}]", *body(v, f"{name}.{k}")]
+        return lines
+
+    out = [f"{k} = {value(v)}" for k, v in d.items()
+           if not isinstance(v, (dict, list)) or (isinstance(v, list) and v
+                                                   and not isinstance(v[0], dict))]
+    for k, v in d.items():
+        if isinstance(v, dict):
+            out += [f"[{k}]", *body(v, k)]
+        elif isinstance(v, list) and v and isinstance(v[0], dict):
+            for item in v:
+                out += [f"[[{k}]]", *body(item, k)]
+    return "\n".join(out) + "\n"
+
+
 @pytest.fixture
 def make_case():
     """Factory: ``make_case(**overrides)`` -> a validated Case of a level clamped cable."""

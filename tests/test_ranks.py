@@ -10,6 +10,7 @@ import json
 from pathlib import Path
 
 import pytest
+from conftest import level_case, toml_text
 from mpi4py import MPI
 
 from cablefem.app.ranks import estimate_dofs, mesh_nodes, ranks_for
@@ -18,42 +19,18 @@ from cablefem.app.resources import MIN_DOFS_PER_RANK
 comm = MPI.COMM_WORLD
 ROOT = Path(__file__).resolve().parents[1]
 
-CASE = """
-title = "ranks test"
-[section]
-EA = 17857.14
-EI = 4.0e-4
-mass = 1.0
-[gravity]
-g = 1.0
-[geometry]
-length = 1.0
-[mesh]
-elements = 12
-[[anchors]]
-name = "p"
-position = [0, 0, 0]
-[[anchors]]
-name = "q"
-position = [1.0013333, 0, 0]
-[anchors.motion]
-type = "harmonic"
-amplitude = [2e-4, 0, 0]
-omega = 32.814
-[dynamics]
-t_end = 0.05
-dt = 0.005
-fields_every = 5
-[modal]
-modes = 1
-{solver}
-"""
+#: a 12-element cable (39 unknowns), 10 steps, one mode
+SMALL = level_case(elements=12, motion={"type": "harmonic", "amplitude": [2e-4, 0, 0],
+                                        "omega": 32.814},
+                   dynamics={"t_end": 0.05, "dt": 0.005, "fields_every": 5},
+                   modal={"modes": 1})
 
 
-def _write(folder: Path, solver: str = "") -> Path:
-    path = folder / f"case{len(solver)}.toml"
+def _write(folder: Path, ranks: str | None = None) -> Path:
+    path = folder / f"case_{ranks}.toml"
     if comm.rank == 0:
-        path.write_text(CASE.format(solver=solver))
+        solver = {**SMALL["solver"], **({"ranks": ranks} if ranks else {})}
+        path.write_text(toml_text({**SMALL, "solver": solver}))
     comm.Barrier()
     return path
 
@@ -133,7 +110,7 @@ def test_all_keeps_every_rank_and_the_numbers(mpi_tmp_path):
     relative, as the other partitioned runs are compared)."""
     from cablefem.app.cli import main
 
-    path = _write(mpi_tmp_path, '[solver]\nranks = "all"')
+    path = _write(mpi_tmp_path, "all")
     one = _write(mpi_tmp_path)
     assert main(["run", str(path), "-o", str(mpi_tmp_path / "all"), "-q",
                  "--no-figures"]) == 0
