@@ -402,9 +402,10 @@ CASE_KEYS: dict[str, KeyDoc | TableDoc] = {
             "overrides it."),
         "ranks": KeyDoc(
             "string", "auto", "", "MPI ranks of 'cablefem run' and 'cablefem modes' started "
-            "on several: 'auto' (default) as many as pay off, at least 10 000 unknowns each "
-            "(a single cable: 3 (mesh.elements + 1); a network: 3 per mesh node), the others "
-            "wait (a note in summary.json; docs/running.md) | 'all' every rank."),
+            "on several: 'auto' (default) a case of fewer than 20 000 unknowns (a single "
+            "cable: 3 (mesh.elements + 1); a network: 3 per mesh node) runs on rank 0 alone, "
+            "the others wait (a note in summary.json; docs/running.md), larger ones on "
+            "every rank | 'all' every rank."),
         "petsc_options": KeyDoc(
             "table of options", {}, "",
             "PETSc options without '-' (values string/number/boolean), e.g. ts_type, "
