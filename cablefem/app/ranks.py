@@ -18,7 +18,6 @@ from __future__ import annotations
 import logging
 import signal
 import time
-from pathlib import Path
 
 import numpy as np
 from mpi4py import MPI
@@ -55,15 +54,10 @@ def estimate_dofs(case, model: str = "string") -> int | None:
     file's nodes for a network; None when not known before the build (the rod)."""
     if model not in ("string", "auto"):
         return None
-    network = getattr(case, "network", None)
-    if network is not None:
-        mesh = getattr(network, "mesh", None)
-        nodes = mesh_nodes(Path(mesh)) if mesh is not None else None
+    if case.network is not None:
+        nodes = mesh_nodes(case.network.mesh)
         return None if nodes is None else 3 * nodes
-    mesh = getattr(case, "mesh", None)
-    if mesh is None or getattr(mesh, "elements", None) is None:
-        return None
-    return 3 * (int(mesh.elements) + 1)
+    return 3 * (int(case.mesh.elements) + 1)
 
 
 def ranks_for(dofs: int | None, size: int) -> int:
@@ -79,8 +73,7 @@ def ranks_for(dofs: int | None, size: int) -> int:
 def choose_ranks(case, comm: MPI.Comm, model: str = "string") -> tuple[int, str | None]:
     """How many of ``comm``'s ranks run ``case`` and the note that says why when fewer
     than all (collective: rank 0 reads the mesh file, every rank gets its answer)."""
-    setting = getattr(case.solver, "ranks", "auto")
-    if comm.size == 1 or setting == "all":
+    if comm.size == 1 or case.solver.ranks == "all":
         return comm.size, None
     dofs = comm.bcast(estimate_dofs(case, model) if comm.rank == 0 else None, root=0)
     used = ranks_for(dofs, comm.size)
