@@ -101,7 +101,6 @@ import math
 
 import numpy as np
 from mpi4py import MPI
-from scipy.spatial import cKDTree
 
 from cablefem.asymptotics import far_field_second_order, layer, virtual_hinge
 from cablefem.errors import CaseError, HingeError, StaticError
@@ -160,16 +159,12 @@ class VirtualHinges:
             return
         mesh = model.mesh
         geo = model.geometry
-        x = mesh.geometry.x
-        gdofs = mesh.geometry.dofmap
         X = model.V.tabulate_dof_coordinates()
         n_cells = mesh.topology.index_map(1).size_local + mesh.topology.index_map(1).num_ghosts
         pts = np.asarray(geo.points, float)
         n_el = len(pts) - 1
-        # the element of every local cell, by its midpoint (the mesh is the reference)
-        mid = np.array([x[gdofs.links(c)].mean(axis=0) for c in range(n_cells)]).reshape(-1, 3)
-        elem_of = (cKDTree(0.5 * (pts[1:] + pts[:-1])).query(mid)[1] if n_cells
-                   else np.zeros(0, int))
+        # the element of every local cell (a single cable's element k: its cell k)
+        elem_of = model.line.reference_cells()
         cell_of = np.full(n_el, -1, np.int64)
         cell_of[elem_of] = np.arange(n_cells)
         s_all = np.abs(np.diff(np.asarray(geo.stations, float)))

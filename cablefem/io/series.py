@@ -317,17 +317,20 @@ class StringWriter(_SeriesWriter):
         S = f.function_space
         key = id(S)
         if key not in self._maps:
-            from scipy.spatial import cKDTree
-
             geo = m.geometry
             cellwise = S.ufl_element().degree() == 0
             n_owned = S.dofmap.index_map.size_local
-            if cellwise:  # by midpoints (the cells' are distinct)
+            if cellwise:  # a cell's dof: its reference cell, checked by the midpoints
                 targets = 0.5 * (geo.points[geo.cells[:, 0]] + geo.points[geo.cells[:, 1]])
+                dofs = np.asarray(S.dofmap.list.array, np.int64)
+                ref = m.line.reference_cells()
+                owned = dofs < n_owned  # one dof a cell; an owned cell's is owned
+                idx = np.full(n_owned, -1, np.int64)
+                idx[dofs[owned]] = ref[:dofs.size][owned]
                 xyz = S.tabulate_dof_coordinates()[:n_owned]
-                dist, idx = cKDTree(targets).query(xyz)
                 scale = max(1.0, float(np.max(np.abs(geo.points))))
-                ok = not (dist.size and dist.max() > 1e-8 * scale)
+                ok = dofs.size == ref.size and not (idx.size and (
+                    idx.min() < 0 or np.max(np.abs(xyz - targets[idx])) > 1e-8 * scale))
             else:  # by the cells (a split clamp's nodes share a point)
                 targets = geo.points
                 try:
