@@ -130,3 +130,20 @@ def test_a_cables_run_imports_no_scipy(tmp_path):
         "print(code, sorted({m.split('.')[0] for m in sys.modules} & {'scipy'}))")
     assert out.splitlines()[-1] == "0 []"
     assert (tmp_path / "out" / "string.xdmf").exists()
+
+
+def test_versions_read_without_importlib_metadata():
+    """UFL's and FFCx's versions come from their ``METADATA`` files' ``Version`` lines:
+    importing ``importlib.metadata`` (its e-mail parser) cost every command about 35 ms,
+    half of ``cablefem --help``'s imports. A distribution described otherwise (an egg's
+    metadata, as Debian's NumPy) is left to ``importlib.metadata``, with its answer."""
+    out = _run(
+        "import sys\n"
+        "import cablefem.app.cli, ufl, ffcx\n"
+        "loaded = 'importlib.metadata' in sys.modules\n"
+        "import importlib.metadata as md\n"
+        "from cablefem.startup import _dist_info_version as v\n"
+        "print(loaded, ufl.__version__ == md.version('fenics-ufl'),"
+        " ffcx.__version__ == md.version('fenics-ffcx'),"
+        " v('fenics-ufl') == md.version('fenics-ufl'), v('no-such-distribution'))")
+    assert out == "False True True True None"
