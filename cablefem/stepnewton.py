@@ -17,7 +17,10 @@ Here, on the steps of a run of equal steps:
   ``e_k <= η |x_k - x_n|`` (``η``: ``-cable_newton_increment_rtol``, default
   :data:`INCREMENT_RTOL`; 0: the residual tests alone). After an iteration with a fresh
   Jacobian ``e_k = |δx_k| |F_k| / |F_{k-1}|``, the size of the next Newton correction at
-  the observed contraction (an upper bound once Newton converges quadratically). After an
+  the observed contraction: mostly above the next correction, not always (at paper case
+  A's stops the next correction was 5 % of the tolerance at the median, above it at 13 of
+  287, at most twice it; docs/benchmarks.md, "The grounded line's second iteration
+  found"). After an
   iteration with a kept Jacobian (modified Newton, linear convergence) that ratio is no
   estimate: an axially stiff line's residual is ruled by its stiff directions, and the
   last iterations meet its round-off floor, so ``|F_k|/|F_{k-1}|`` overstated the

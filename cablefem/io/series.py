@@ -324,13 +324,14 @@ class StringWriter(_SeriesWriter):
                 targets = 0.5 * (geo.points[geo.cells[:, 0]] + geo.points[geo.cells[:, 1]])
                 dofs = np.asarray(S.dofmap.list.array, np.int64)
                 ref = m.line.reference_cells()
-                owned = dofs < n_owned  # one dof a cell; an owned cell's is owned
                 idx = np.full(n_owned, -1, np.int64)
-                idx[dofs[owned]] = ref[:dofs.size][owned]
+                if dofs.size == ref.size:  # one dof a cell; an owned cell's is owned
+                    owned = dofs < n_owned
+                    idx[dofs[owned]] = ref[owned]
                 xyz = S.tabulate_dof_coordinates()[:n_owned]
                 scale = max(1.0, float(np.max(np.abs(geo.points))))
-                ok = dofs.size == ref.size and not (idx.size and (
-                    idx.min() < 0 or np.max(np.abs(xyz - targets[idx])) > 1e-8 * scale))
+                ok = not (idx.size and (idx.min() < 0 or np.max(np.abs(xyz - targets[idx]))
+                                        > 1e-8 * scale))
             else:  # by the cells (a split clamp's nodes share a point)
                 targets = geo.points
                 try:
