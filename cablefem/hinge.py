@@ -157,16 +157,15 @@ class VirtualHinges:
         if model.is_network:
             self._network()
             return
-        mesh = model.mesh
         geo = model.geometry
         X = model.V.tabulate_dof_coordinates()
-        n_cells = mesh.topology.index_map(1).size_local + mesh.topology.index_map(1).num_ghosts
         pts = np.asarray(geo.points, float)
         n_el = len(pts) - 1
-        # the element of every local cell (a single cable's element k: its cell k)
+        # the element of every local cell, owned then ghosts (a single cable's element k:
+        # its cell k)
         elem_of = model.line.reference_cells()
         cell_of = np.full(n_el, -1, np.int64)
-        cell_of[elem_of] = np.arange(n_cells)
+        cell_of[elem_of] = np.arange(elem_of.size)
         s_all = np.abs(np.diff(np.asarray(geo.stations, float)))
         for i, anc in enumerate(model.anchors):
             if anc.kind != "clamped":
