@@ -130,9 +130,16 @@ def create_line_mesh(comm: MPI.Comm, points: np.ndarray, cells: np.ndarray) -> d
     """A dolfinx mesh of interval cells embedded in 3D, partitioned over ``comm``.
 
     Rank 0 passes all cells and points, the other ranks empty arrays (dolfinx 0.5.2).
+
+    The coordinate element is declared with the point spacing FFCx 0.5 gives it anyway
+    ("equispaced"; the same element at degree 1): FFCx sets it on the mesh's element in
+    place when it compiles a form, which changed the signature (the cache key) of every form
+    made on the mesh afterwards, so that each run whose forms came from the cache compiled
+    the next form again under a new key (tests/test_jit.py).
     """
     cell = ufl.Cell("interval", geometric_dimension=3)
-    domain = ufl.Mesh(ufl.VectorElement("Lagrange", cell, 1, dim=3))
+    domain = ufl.Mesh(ufl.VectorElement(
+        ufl.FiniteElement("Lagrange", cell, 1, variant="equispaced"), dim=3))
     if comm.rank == 0:
         x = np.ascontiguousarray(points, dtype=np.float64)
         c = np.ascontiguousarray(cells, dtype=np.int64)

@@ -45,3 +45,23 @@ def test_a_cached_form_loads_without_listing_the_cache(monkeypatch):
     A2.assemble()
     assert np.array_equal(A1.convert("dense").getDenseArray(),
                           A2.convert("dense").getDenseArray())
+
+
+def test_a_forms_cache_key_does_not_depend_on_what_was_compiled_before():
+    """FFCx 0.5 sets the point spacing of the mesh's coordinate element in place when it
+    analyses a form ("equispaced" where none was given). On a mesh made without it, every
+    form's signature (FFCx's cache key) changed once any form of the mesh had been
+    compiled: a run whose first forms came from the cache compiled a later one again, under
+    a new key, at every run until each variant was cached (1-1.5 s each for case B)."""
+    from ffcx.analysis import _analyze_form
+    from ffcx.parameters import get_parameters
+
+    from cablefem.geometry import create_line_mesh
+
+    points = np.array([[0.0, 0.0, 0.0], [0.5, 0.2, 0.0], [1.0, 0.0, 0.1]])
+    cells = np.array([[0, 1], [1, 2]])
+    domain = create_line_mesh(MPI.COMM_WORLD, points, cells)
+    before = _ufl_form(domain, SCALE).signature()
+    _analyze_form(_ufl_form(domain, 2 * SCALE), get_parameters())  # what compiling does first
+    after = _ufl_form(domain, SCALE).signature()  # a new form object: no cached signature
+    assert after == before
