@@ -398,7 +398,7 @@ def _forwarded(name: str) -> property:
     return property(get, refuse, doc=f"``{name}`` of :attr:`CableModel.forms` (read-only).")
 
 
-for _name in forms.COMPILED + ("F_static", "J_static", "F_static_bilateral",
+for _name in forms.COMPILED + forms.ON_DEMAND + ("F_static", "J_static", "F_static_bilateral",
                                "J_static_bilateral", "F_dynamic", "J_dynamic", "M_form"):
     setattr(CableModel, _name, _forwarded(_name))
 for _name, _term in (("F_internal", "internal"), ("F_external", "external"),

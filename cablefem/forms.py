@@ -253,13 +253,14 @@ def end_moment_work(u, du, t0, EI, T, q, direction, ds):
 
 
 # ----------------------------------------------------------------------------- the residuals
-#: names of the model's own terms (reserved)
-MODEL_TERMS = ("internal", "external", "inertia", "damping")
+MODEL_TERMS = ("internal", "external", "inertia", "damping")  #: the model's own (reserved)
 #: the compiled objects, as :meth:`CableForms.compile` names them
-COMPILED = ("f_static", "j_static", "f_static_bilateral", "j_static_bilateral", "f_dynamic",
-            "j_dynamic", "m_form", "tension_expr", "strain_expr", "energy_forms")
-#: compiled on first use (the modal analysis' stiffness and damping of the motion)
-ON_DEMAND = ("k_dynamic", "c_form")
+COMPILED = ("f_static", "j_static", "f_dynamic", "j_dynamic", "m_form", "tension_expr",
+            "strain_expr")
+#: compiled on first use: the modal analysis' stiffness and damping, the statics' twins
+#: with compression allowed and the energies (a run needing none compiles none)
+ON_DEMAND = ("k_dynamic", "c_form", "f_static_bilateral", "j_static_bilateral",
+             "energy_forms")
 
 
 class CableForms:
@@ -511,40 +512,39 @@ class CableForms:
         from cablefem.jit import quiet_compiler
 
         with quiet_compiler():
-            out = {"f_static": fem.form(self.F_static), "j_static": fem.form(self.J_static)}
-            if self.internal_bilateral is None:  # the same forms: compiled once
-                out["f_static_bilateral"], out["j_static_bilateral"] = \
-                    out["f_static"], out["j_static"]
-            else:
-                out["f_static_bilateral"] = fem.form(self.F_static_bilateral)
-                out["j_static_bilateral"] = fem.form(self.J_static_bilateral)
-            out["f_dynamic"] = fem.form(self.F_dynamic)
-            out["j_dynamic"] = fem.form(self.J_dynamic)
+            out = {name: fem.form(getattr(self, name[0].upper() + name[1:]))
+                   for name in ("f_static", "j_static", "f_dynamic", "j_dynamic")}
             out["m_form"] = fem.form(self.M_form)
             for name, expr in self.outputs.items():
                 out[f"{name}_expr"] = fem.Expression(expr, self.points)
-            out["energy_forms"] = tuple(fem.form(e) for e in self.energies)
         self._compiled = out
         self._compiled_at = self._changes
 
     def __getattr__(self, name: str):
-        # the compiled objects (f_static, j_dynamic, tension_expr, ...): compiled again
-        # first when a term changed since; the modal analysis' k_dynamic and c_form on
-        # their first use (None: no damping)
+        # the compiled objects (f_static, tension_expr, ...): compiled again first when a
+        # term changed since; those of ON_DEMAND on their first use
         if name.startswith("_") or not (name in COMPILED or name in ON_DEMAND
                                         or name.endswith("_expr")):
             raise AttributeError(name)
         if self.stale:
             self.compile()
         if name in ON_DEMAND and name not in self._compiled:
-            from dolfinx import fem
-
-            from cablefem.jit import quiet_compiler
-
-            form = self.K_dynamic if name == "k_dynamic" else self.C_form
-            with quiet_compiler():
-                self._compiled[name] = None if form is None else fem.form(form)
+            self._compiled[name] = self._compile_on_demand(name)
         try:
             return self._compiled[name]
         except KeyError:
             raise AttributeError(f"no compiled {name!r}") from None
+
+    def _compile_on_demand(self, name: str):
+        """One of :data:`ON_DEMAND` compiled (``c_form`` None: no damping)."""
+        from dolfinx import fem
+
+        from cablefem.jit import quiet_compiler
+
+        if name.endswith("_bilateral") and self.internal_bilateral is None:
+            return self._compiled[name[:-len("_bilateral")]]  # the same forms
+        with quiet_compiler():
+            if name == "energy_forms":
+                return tuple(fem.form(e) for e in self.energies)
+            form = getattr(self, name[0].upper() + name[1:])  # K_dynamic, C_form, ...
+            return None if form is None else fem.form(form)

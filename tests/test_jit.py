@@ -65,3 +65,26 @@ def test_a_forms_cache_key_does_not_depend_on_what_was_compiled_before():
     _analyze_form(_ufl_form(domain, 2 * SCALE), get_parameters())  # what compiling does first
     after = _ufl_form(domain, SCALE).signature()  # a new form object: no cached signature
     assert after == before
+
+
+def test_forms_a_run_may_not_need_are_compiled_on_first_use():
+    """The statics' twins with compression allowed, the energies and the modal analysis'
+    forms are compiled when first asked for, not with the model: a run that never needs
+    them (most) does not pay for their compilation (three energy forms and the two twins:
+    2.2 s of case B's first run on an empty form cache)."""
+    from conftest import level_case
+
+    from cablefem.case import parse_case
+    from cablefem.create import model_from_case
+    from cablefem.statics import solve_static
+
+    model = model_from_case(MPI.COMM_WORLD, parse_case(level_case()))
+    solve_static(model)
+    lazy = ("energy_forms", "f_static_bilateral", "j_static_bilateral", "k_dynamic", "c_form")
+    assert not set(lazy) & set(model.forms._compiled)
+    e = model.energies()  # compiled now
+    assert "energy_forms" in model.forms._compiled
+    assert e["kinetic"] == 0.0  # at rest: v = 0 exactly
+    assert e["strain"] > 0.0  # taut
+    if model.forms.internal_bilateral is None:  # the twins are the static forms
+        assert model.f_static_bilateral is model.f_static
