@@ -512,17 +512,14 @@ class CableForms:
         from cablefem.jit import quiet_compiler
 
         with quiet_compiler():
-            out = {name: fem.form(getattr(self, name[0].upper() + name[1:]))
-                   for name in ("f_static", "j_static", "f_dynamic", "j_dynamic")}
-            out["m_form"] = fem.form(self.M_form)
+            out = {n: fem.form(self._ufl(n)) for n in COMPILED if not n.endswith("_expr")}
             for name, expr in self.outputs.items():
                 out[f"{name}_expr"] = fem.Expression(expr, self.points)
         self._compiled = out
         self._compiled_at = self._changes
 
     def __getattr__(self, name: str):
-        # the compiled objects (f_static, tension_expr, ...): compiled again first when a
-        # term changed since; those of ON_DEMAND on their first use
+        # compiled again first when a term changed since; those of ON_DEMAND on first use
         if name.startswith("_") or not (name in COMPILED or name in ON_DEMAND
                                         or name.endswith("_expr")):
             raise AttributeError(name)
@@ -540,11 +537,14 @@ class CableForms:
         from dolfinx import fem
 
         from cablefem.jit import quiet_compiler
-
         if name.endswith("_bilateral") and self.internal_bilateral is None:
             return self._compiled[name[:-len("_bilateral")]]  # the same forms
         with quiet_compiler():
             if name == "energy_forms":
                 return tuple(fem.form(e) for e in self.energies)
-            form = getattr(self, name[0].upper() + name[1:])  # K_dynamic, C_form, ...
+            form = self._ufl(name)
             return None if form is None else fem.form(form)
+
+    def _ufl(self, name: str):
+        """The UFL form compiled as ``name`` (``f_static``: ``F_static``, ...)."""
+        return getattr(self, name[0].upper() + name[1:])
