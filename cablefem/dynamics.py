@@ -154,8 +154,12 @@ def _make_ts(model, dt: float, rho_inf: float, history: SNESHistory,
     # a term's time law may set its Functions (not only Constants) at a new time
     timed = (any(model.forms.term(n).set_time is not None for n in model.forms.user)
              or any(model.u_bc._cpp_object is c for c in F.coefficients))
+    # the Jacobian in a fast and a slow part (a fluid's: Term.slow_jacobian), the slow one
+    # kept longer; None: whole
+    parts = model.forms.J_dynamic_part(slow=True) is not None and (model.j_dynamic_fast,
+                                                                    model.j_dynamic_slow)
     rows = RowsAssembler(F, model.j_dynamic, model.bcs, bc_rows, kappa, model.comm, extra,
-                         (model.u, model.v, model.a), timed)
+                         (model.u, model.v, model.a), timed, parts or None)
     serial = model.comm.size == 1
     u, v, a = model.u, model.v, model.a
 
@@ -175,7 +179,7 @@ def _make_ts(model, dt: float, rho_inf: float, history: SNESHistory,
             model.shift_v.value = shifts[0] = shift_v
             model.shift_a.value = shifts[1] = shift_a
         # SNES evaluates the residual at the same state just before: model.u/v/a are current
-        rows.jacobian(J)
+        rows.jacobian(J, slow=newton.slow)
 
     newton = None  # the StepNewton, made once the options are read
     ts = PETSc.TS().create(model.comm)
@@ -202,6 +206,7 @@ def _make_ts(model, dt: float, rho_inf: float, history: SNESHistory,
             n_dofs, reuse=not model.is_beam)
         newton = StepNewton(ts, prefix, costly,
                             history)  # the norms kept by its test: no monitor callback
+        newton.split = rows.parts is not None
     return ts, (F_vec, J_mat, newton), rows
 
 
@@ -497,6 +502,7 @@ class DynamicProblem:
         self.ts.destroy()
         for obj in self._work:
             obj.destroy()
+        self._rows.destroy()
         self.reactions.destroy()
 
     def __enter__(self):

@@ -253,7 +253,7 @@ def add_fluid_terms(model) -> None:
     if fl.buoyancy:  # ramped with the weight where statics ramps it (a network)
         ramp = model.load_factor if model.ramp_weight else 1.0
         static += ramp * ufl.inner(wet * rho * A * model.gravity, du) * lam * dx
-    model.forms.add(Term("fluid_static", static, "static", medium=True))
+    model.forms.add(Term("fluid_static", static, "static", medium=True, slow_jacobian=True))
     u_fluid = factor * uf + motion.velocity()
     drag_change = _drag(rho, k, t, u_fluid - v) - _drag(rho, k, t, uf)
     an = a - ufl.dot(a, t) * t
@@ -268,4 +268,5 @@ def add_fluid_terms(model) -> None:
         motion.update(time)  # waves at the nodes' positions of the last converged state
 
     model.forms.add(Term("fluid_dynamic", dynamic, "dynamic", set_time=set_time,
-                         linearised=lambda: steady_flow(factor, motion), medium=True))
+                         linearised=lambda: steady_flow(factor, motion), medium=True,
+                         slow_jacobian=True))

@@ -35,9 +35,7 @@ from cablefem.terms import KINDS, Term, checked, depends_on
 __all__ = ["CableForms", "reference_tangent", "ds_", "stretch_vector", "stretch", "axial_strain",
            "tension", "layer_law_tension", "layer_stretch_vector",
            "internal_force", "internal_work", "inertia_work", "load_work",
-           "strain_rate", "axial_damping_work", "strain_energy_density",
-           "turning_cosine", "span_bending_energy", "span_bending_form", "span_bending_work",
-           "end_moment_work", "end_moment_density"]
+           "strain_rate", "axial_damping_work", "strain_energy_density"]
 
 
 def reference_tangent(mesh) -> ufl.core.expr.Expr:
@@ -182,76 +180,6 @@ def strain_energy_density(u, t0, EA, tension_only: bool = True, c=1.0):
     return 0.5 * c * EA * v3 * v3
 
 
-# ----------------------------------------------------------------------------- span bending
-def turning_cosine(u, t0):
-    """Cosine of the angle between the deformed tangents of the two elements meeting at an
-    interior vertex, ``cos θ = σ e+ · e−`` with ``e = ∂s r / λ`` on each side (restricted
-    to ``("+")``/``("-")``: for a ``dS`` integral). ``σ = sign(t0+ · t0−)`` makes it
-    independent of how each cell of the mesh is oriented (``t0`` and ``e`` flip together)."""
-    g = stretch_vector(u, t0)
-    gp, gm = g("+"), g("-")
-    sigma = ufl.sign(ufl.dot(t0("+"), t0("-")))
-    return sigma * ufl.dot(gp, gm) / ufl.sqrt(ufl.dot(gp, gp) * ufl.dot(gm, gm))
-
-
-def span_bending_energy(u, t0, EI, mesh, c=1.0):
-    """Bending energy of the span at an interior vertex (integrate with ``dS``):
-    ``EI (1 − cos θ) / h̄`` with ``θ`` the turning angle between the neighbouring elements'
-    deformed tangents and ``h̄`` the mean stress-free length of the two elements (``EI``
-    a number or a cell field: then the mean of the two elements'), ``c``
-    (a cell field or a number) times the mesh length (``docs/theory.md`` §6.1; the model
-    passes the outer string's, c = 1, also in a hinge's region). It is ``EI θ² / (2 h̄)``
-    to ``O(θ⁴)``: the energy ``∫ EI κ² / 2 ds`` of a curvature ``κ = θ / h̄`` lumped at the
-    vertex."""
-    J = ufl.Jacobian(mesh)
-    h = ufl.sqrt(ufl.dot(J[:, 0], J[:, 0]))  # mesh length of the cell (reference cell [0, 1])
-    def side(f, s):  # a cell field takes the side's value; a constant is the same on both
-        return f(s) if isinstance(f, ufl.Coefficient) else f
-
-    hp, hm = h("+") * side(c, "+"), h("-") * side(c, "-")
-    EIm = 0.5 * (side(EI, "+") + side(EI, "-"))  # a network's cell field: the sides' mean
-    return EIm * (1.0 - turning_cosine(u, t0)) / (0.5 * (hp + hm))
-
-
-def span_bending_form(u, t0, EI, mesh, dS=ufl.dS, c=1.0, skip=()):
-    """:func:`span_bending_energy` summed over the interior vertices of ``dS``, less those
-    tagged ``skip`` in it (a kink's vertex, whose turn belongs to its own layer)."""
-    energy = span_bending_energy(u, t0, EI, mesh, c)
-    form = energy * dS
-    for tag in skip:
-        form = form - energy * dS(tag)
-    return form
-
-
-def span_bending_work(u, du, t0, EI, mesh, dS=ufl.dS, c=1.0, skip=()):
-    """Virtual work of the span's bending: the Gateaux derivative of
-    :func:`span_bending_form` (its tangent is symmetric)."""
-    return ufl.derivative(span_bending_form(u, t0, EI, mesh, dS, c, skip), u, du)
-
-
-def end_moment_density(u, du, t0, EI, T, q, direction):
-    """The integrand of :func:`end_moment_work` (no measure): to be restricted to a side of
-    an interior vertex (a kink, ``docs/theory.md`` §6.1) or integrated over an end vertex."""
-    g = stretch_vector(u, t0)
-    lam = ufl.sqrt(ufl.dot(g, g))
-    e = g / lam
-    sgn = ufl.sign(ufl.dot(t0, direction))
-    q_perp = q - ufl.dot(q, e) * e
-    coeff = ufl.conditional(ufl.gt(T, 0.0), EI / T, 0.0)
-    return sgn * coeff * ufl.dot(q_perp, ds_(du, t0)) / lam
-
-
-def end_moment_work(u, du, t0, EI, T, q, direction, ds):
-    """The residual term of the moment ``EI κ_s`` that a clamp's boundary layer hands to the
-    span at its end (``docs/theory.md`` §6.1), on the first element (``ds``: its anchor
-    vertex). ``κ_s = e × q / T`` is the string's own curvature at the anchor
-    (:func:`cablefem.asymptotics.string_curvature`, ``q = m a − f`` per stress-free length,
-    ``e`` the tangent into the span, ``T`` the first element's tension); its virtual work on
-    the element's rotation ``e × δe`` is ``(EI/T) q⊥ · δe``. ``direction`` (the clamp's,
-    into the span) orients the element. A slack element (``T = 0``) gets none."""
-    return end_moment_density(u, du, t0, EI, T, q, direction) * ds
-
-
 # ----------------------------------------------------------------------------- the residuals
 MODEL_TERMS = ("internal", "external", "inertia", "damping")  #: the model's own (reserved)
 #: the compiled objects, as :meth:`CableForms.compile` names them
@@ -260,7 +188,7 @@ COMPILED = ("f_static", "j_static", "f_dynamic", "j_dynamic", "m_form", "tension
 #: compiled on first use: the modal analysis' stiffness and damping, the statics' twins
 #: with compression allowed and the energies (a run needing none compiles none)
 ON_DEMAND = ("k_dynamic", "c_form", "f_static_bilateral", "j_static_bilateral",
-             "energy_forms")
+             "energy_forms", "j_dynamic_fast", "j_dynamic_slow")
 
 
 class CableForms:
@@ -423,9 +351,9 @@ class CableForms:
         out.update(self.user)
         return out
 
-    def _sum(self, start, kinds):
+    def _sum(self, start, kinds, keep=None):
         for term in self._terms.values():
-            if term.kind in kinds:
+            if term.kind in kinds and (keep is None or keep(term)):
                 start = start + term.form
         return start
 
@@ -450,21 +378,30 @@ class CableForms:
 
     @property
     def F_dynamic(self):
+        return self._dynamic()
+
+    def _dynamic(self, keep=None):
         F = self.inertia + self.internal - self.external
         if self.damping is not None:
             F = F + self.damping
-        return self._sum(F, KINDS)
+        return self._sum(F, KINDS, keep)
 
     @property
     def J_dynamic(self):
         """``∂F/∂u + shift_a ∂F/∂a + shift_v ∂F/∂v``, a rate's part where F depends on it."""
-        F, dw = self.F_dynamic, self.trial
-        J = ufl.derivative(F, self.u, dw)
-        if self._dynamic_depends_on(self.a):
-            J = J + self.shift_a * ufl.derivative(F, self.a, dw)
-        if self._dynamic_depends_on(self.v):
-            J = J + self.shift_v * ufl.derivative(F, self.v, dw)
-        return J
+        return _rates_jacobian(self, self.F_dynamic)
+
+    def J_dynamic_part(self, slow: bool):
+        """The part of ``J_dynamic`` of the terms of ``slow_jacobian`` (``slow``) or of all
+        the others, None when no term is slow: a time integrator refreshes the fast part
+        while it keeps the slow one (:mod:`cablefem.stepnewton`; compiled on demand as
+        ``j_dynamic_slow``, ``j_dynamic_fast``)."""
+        terms = [t for t in self._terms.values() if t.slow_jacobian and t.kind in KINDS]
+        if not terms:
+            return None
+        if slow:
+            return _rates_jacobian(self, sum((t.form for t in terms[1:]), terms[0].form))
+        return _rates_jacobian(self, self._dynamic(lambda t: not t.slow_jacobian))
 
     def _dynamic_depends_on(self, w) -> bool:
         """``F_dynamic`` depends on ``w`` (v, a): one of its parts does; remembered."""
@@ -547,4 +484,18 @@ class CableForms:
 
     def _ufl(self, name: str):
         """The UFL form compiled as ``name`` (``f_static``: ``F_static``, ...)."""
+        if name.startswith("j_dynamic_"):  # j_dynamic_fast, j_dynamic_slow
+            return self.J_dynamic_part(name == "j_dynamic_slow")
         return getattr(self, name[0].upper() + name[1:])
+
+
+def _rates_jacobian(forms: CableForms, F):
+    """``∂F/∂u + shift_a ∂F/∂a + shift_v ∂F/∂v`` of ``F`` (``forms.F_dynamic`` or a part
+    of it), a rate's part wherever ``F_dynamic`` depends on that rate."""
+    dw = forms.trial
+    J = ufl.derivative(F, forms.u, dw)
+    if forms._dynamic_depends_on(forms.a):
+        J = J + forms.shift_a * ufl.derivative(F, forms.a, dw)
+    if forms._dynamic_depends_on(forms.v):
+        J = J + forms.shift_v * ufl.derivative(F, forms.v, dw)
+    return J

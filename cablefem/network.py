@@ -27,7 +27,7 @@ from dolfinx import fem
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from cablefem import forms, junctions
+from cablefem import bending_forms, junctions
 from cablefem.anchor import AnchorBC
 from cablefem.cable import CableModel, string_bcs
 from cablefem.contract import Builders
@@ -475,7 +475,7 @@ class NetworkModel(CableModel):
         self.EI = self.section_field("EI", lambda sec: sec.EI)
         c0 = fem.Function(self.W, name="c_outer")
         c0.x.array[:] = np.asarray(geo.cell_c, float)[self.cell_index]
-        energy = (forms.span_bending_energy(self.u, self.t0, self.EI, self.mesh, c0)
+        energy = (bending_forms.span_bending_energy(self.u, self.t0, self.EI, self.mesh, c0)
                   * self.dS(self.line.bend_tag))
         self.forms.add("span_bending", ufl.derivative(energy, self.u, self.du),
                        kind="static")
@@ -494,7 +494,8 @@ class NetworkModel(CableModel):
             q = -(self.m * self.gravity + sum((f for f, _ in self.loads), 0.0 * self.gravity))
             J = ufl.Jacobian(self.mesh)
             h = ufl.sqrt(ufl.dot(J[:, 0], J[:, 0]))
-            density = forms.end_moment_density(self.u, self.du, self.t0, self.EI, T, q, away)
+            density = bending_forms.end_moment_density(self.u, self.du, self.t0, self.EI, T, q,
+                                                       away)
             self.forms.add("end_moments", density / h * ufl.dx, kind="static")
         return energy
 

@@ -242,13 +242,18 @@ class RowsAssembler:
     ``kappa`` on the Jacobian's diagonal)."""
 
     def __init__(self, F: fem.FormMetaClass, J: fem.FormMetaClass, bcs, rows: np.ndarray,
-                 kappa: float, comm, extra=None, state=(), timed: bool = True) -> None:
+                 kappa: float, comm, extra=None, state=(), timed: bool = True,
+                 parts=None) -> None:
         #: ``extra``: (residual(array), jacobian(A)) of terms assembled outside UFL, or None
         self.extra = extra
         self.F, self.J, self.bcs = F, J, list(bcs)
         self.rows, self.kappa = rows, kappa
         self.serial = comm.size == 1
         self.cols = jacobian_columns(F, J)
+        #: ``J`` as two forms whose sum it is, (fast, slow) (``CableForms.J_dynamic_fast``,
+        #: ``J_dynamic_slow``), each with its columns of the packing; None: ``J`` whole
+        self.parts = None if parts is None else [(p, jacobian_columns(F, p)) for p in parts]
+        self.A_slow: PETSc.Mat | None = None  # the slow part as last assembled
         self.packed: dict | None = None  # the residual's packed coefficients, last call
         #: where the ``state`` Functions' values sit in the packed coefficients
         #: (:func:`state_gather`; None: always packed whole)
@@ -322,24 +327,44 @@ class RowsAssembler:
         dcpp.fem.set_bc(arr, self.bcs, x.array_r, -1.0)
         arr[self.rows] *= self.kappa
 
-    def jacobian(self, A: PETSc.Mat) -> None:
+    def jacobian(self, A: PETSc.Mat, slow: bool = True) -> None:
         """The Jacobian into ``A``, its Dirichlet rows ``kappa`` times identity rows, at
         the state of the last :meth:`residual` (SNES evaluates the residual at a state
         before its Jacobian; the coefficients have not changed since): the Jacobian's
-        packed coefficients are columns of the residual's (:func:`jacobian_columns`)."""
-        J = self.J
-        if self.cols is not None and self.packed is not None:
-            coeffs = {key: self.packed[key][:, cols] for key, cols in self.cols.items()}
-        else:
-            coeffs = dcpp.fem.pack_coefficients(J)
+        packed coefficients are columns of the residual's (:func:`jacobian_columns`).
+        With :attr:`parts`, ``slow`` False adds the slow part as last assembled to the fast
+        part assembled now (a Jacobian with a kept part)."""
         A.zeroEntries()
-        dcpp.fem.petsc.assemble_matrix(A, J, dcpp.fem.pack_constants(J), coeffs, [])
+        self._assemble(A, *(self.parts[0] if self.parts else (self.J, self.cols)))
         A.assemblyBegin(PETSc.Mat.AssemblyType.FLUSH)  # as dolfinx's wrapper does
         A.assemblyEnd(PETSc.Mat.AssemblyType.FLUSH)
         if self.extra is not None:
             self.extra[1](A)
         A.assemble()
+        if self.parts is not None:
+            if slow or self.A_slow is None:
+                if self.A_slow is None:  # A's pattern (assembled: it can be duplicated)
+                    self.A_slow = A.duplicate()
+                self.A_slow.zeroEntries()
+                self._assemble(self.A_slow, *self.parts[1])
+                self.A_slow.assemble()
+            A.axpy(1.0, self.A_slow, structure=PETSc.Mat.Structure.SAME_NONZERO_PATTERN)
         A.zeroRowsLocal(self.rows, diag=self.kappa)
+
+    def _assemble(self, A: PETSc.Mat, J: fem.FormMetaClass, cols: dict | None) -> None:
+        """``J``'s kernels added into ``A`` (not assembled), its coefficients taken from
+        the residual's packing where ``cols`` says they sit."""
+        if cols is not None and self.packed is not None:
+            coeffs = {key: self.packed[key][:, c] for key, c in cols.items()}
+        else:
+            coeffs = dcpp.fem.pack_coefficients(J)
+        dcpp.fem.petsc.assemble_matrix(A, J, dcpp.fem.pack_constants(J), coeffs, [])
+
+    def destroy(self) -> None:
+        """Free the kept part's matrix."""
+        if self.A_slow is not None:
+            self.A_slow.destroy()
+            self.A_slow = None
 
 
 def _other_functions(F: fem.FormMetaClass, state) -> list | None:

@@ -3,7 +3,7 @@
 
 The string leaves the span's ``EI`` out (``solver.span_bending = false``); the term that
 puts it in is a bending energy on the turning angle at the vertices
-(:func:`cablefem.forms.span_bending_energy`). To first order in that energy, mode ``i``
+(:func:`cablefem.bending_forms.span_bending_energy`). To first order in that energy, mode ``i``
 (circular frequency ``omega_i``, shape ``phi_i`` about the static state) moves by
 
     d omega_i / omega_i = (phi_i' K_b phi_i) / (2 omega_i^2 phi_i' M phi_i),
@@ -46,7 +46,7 @@ def vertex_energy(points: np.ndarray, vertices: np.ndarray, EI: np.ndarray,
                   hbar: np.ndarray) -> float:
     """``sum EI (1 - cos theta) / hbar`` over the ``vertices`` (n, 3) (node before, node,
     node after) of a chain of nodes at ``points``: the span-bending energy of
-    :func:`cablefem.forms.span_bending_energy`, J."""
+    :func:`cablefem.bending_forms.span_bending_energy`, J."""
     if not len(vertices):
         return 0.0
     a, k, b = (points[vertices[:, j]] for j in range(3))

@@ -20,7 +20,9 @@ Here, on the steps of a run of equal steps:
   the observed contraction: mostly above the next correction, not always (at paper case
   A's stops the next correction was 5 % of the tolerance at the median, above it at 13 of
   287, at most twice it; docs/benchmarks.md, "The grounded line's second iteration
-  found"). After an
+  found"); where that estimate does not stop Newton, the next correction itself is
+  computed with the factorisation just used, as below (one triangular solve instead of
+  an iteration: an axially stiff line's residual ratio overstates the error). After an
   iteration with a kept Jacobian (modified Newton, linear convergence) that ratio is no
   estimate: an axially stiff line's residual is ruled by its stiff directions, and the
   last iterations meet its round-off floor, so ``|F_k|/|F_{k-1}|`` overstated the
@@ -40,6 +42,15 @@ Here, on the steps of a run of equal steps:
   with it, 1.2e3 dofs 9.7 ms against 6.2 ms), 0 without (the string's Jacobian costs
   about a residual; kept, the extra iterations cost what it saves: paper case B 176
   against 180 µs a step).
+* *A split Jacobian*: when the model has terms of ``slow_jacobian`` (a fluid's drag and
+  added mass: their Jacobian is most of the whole one's cost and changes slowly), the
+  caller keeps their part apart; an assembly refreshes the other terms' part and adds the
+  slow part as assembled at most ``-cable_newton_slow_jacobian_reuse`` steps ago
+  (default :data:`SLOW_REUSE`; 0: assembled whole every time). With it, after a step that
+  a kept Jacobian did not finish in one iteration, the next steps assemble the fast part
+  at their first iteration (*rough* steps, with a back-off:
+  :meth:`StepNewton.keep_jacobian`): a wet line whose touchdown slaps the seabed took two
+  iterations and a whole Jacobian a step otherwise.
 
 On the steps PETSc takes inside a restart of ``alpha2`` (two backward Euler half steps that
 estimate the start acceleration, after ``TSRestartStep``), whose start is not ``x_n``, all
@@ -50,7 +61,7 @@ from __future__ import annotations
 
 from petsc4py import PETSc
 
-__all__ = ["INCREMENT_RTOL", "JACOBIAN_REUSE", "StepNewton"]
+__all__ = ["INCREMENT_RTOL", "JACOBIAN_REUSE", "SLOW_REUSE", "StepNewton"]
 
 #: η: Newton stops once its estimated error is below this fraction of the step's
 #: displacement increment. Generalised-α's local error is about (ω h)²/12 of the increment
@@ -63,6 +74,11 @@ INCREMENT_RTOL = 1.0e-7
 
 #: steps over which a Jacobian of the same shifts is kept for a step's first iteration
 JACOBIAN_REUSE = 10
+
+#: steps over which a split Jacobian's slow part (a fluid's) is kept when the rest is
+#: assembled again (measured on the mooring demo: docs/benchmarks.md, "The grounded line's
+#: rough steps")
+SLOW_REUSE = 5
 
 #: a kept Jacobian serves the next iteration while Newton's residual falls by this factor
 #: or more per iteration; otherwise it is assembled afresh
@@ -128,6 +144,9 @@ class StepNewton:
         self.eta = opts.getReal(prefix + "newton_increment_rtol", INCREMENT_RTOL)
         self.reuse = opts.getInt(prefix + "newton_jacobian_reuse",
                                  JACOBIAN_REUSE if costly_jacobian else 0)
+        #: steps over which a split Jacobian's slow part is kept (0: assembled with the rest)
+        self.slow_reuse = opts.getInt(prefix + "newton_slow_jacobian_reuse",
+                                      min(SLOW_REUSE, self.reuse))
         self.divtol = opts.getReal(prefix + "snes_divergence_tolerance", 1.0e4)
         self.rtol, self.atol, self.stol, _ = snes.getTolerances()
         self.h: float | None = None  # the step size of the step being taken
@@ -140,9 +159,20 @@ class StepNewton:
         self.f_before = self.f_last = 0.0  # the last two residual norms of the solve
         self.kept: tuple[float, float] | None = None  # the shifts of the Jacobian in J
         self.age = 0  # steps since it was assembled
+        #: steps whose first iteration assembles afresh (a kept Jacobian failed to finish
+        #: a step in one iteration), and the length of the last such run
+        self.rough = self.backoff = 0
+        #: the caller's Jacobian has a slow part kept apart (set by the caller): an
+        #: assembly then refreshes the fast part alone while the slow one is young
+        self.split = False
+        #: the last assembly's slow part is assembled too; its shifts and age in steps
+        self.slow = True
+        self.slow_kept: tuple[float, float] | None = None
+        self.slow_age = 0
         self.stale = False  # the last iteration solved with a kept Jacobian
         self.next: PETSc.Vec | None = None  # the simplified Newton correction
-        self.assemblies = self.residuals = 0  # counts, for the statistics
+        #: counts, for the statistics (a split Jacobian's slow part: ``slow_assemblies``)
+        self.assemblies = self.residuals = self.slow_assemblies = 0
         if predictor == "velocity":
             snes.setInitialGuess(self.guess)
         snes.setConvergenceTest(self.test)
@@ -157,7 +187,8 @@ class StepNewton:
             for vec in self.last[2:]:
                 vec.destroy()
         self.last = None
-        self.kept = None
+        self.kept = self.slow_kept = None
+        self.rough = self.backoff = 0
 
     def destroy(self) -> None:
         self.reset()
@@ -172,18 +203,46 @@ class StepNewton:
     def keep_jacobian(self, shift_v: float, shift_a: float) -> bool:
         """True when the Jacobian already in the matrix serves this call: assembled with
         the same shifts at most ``reuse`` steps ago, and Newton contracted by at least
-        :data:`CONTRACTION` in the step's last iteration (always true at its first);
-        otherwise the caller assembles it, and it is kept from now on."""
+        :data:`CONTRACTION` in the step's last iteration (always true at its first), and
+        the step is not a *rough* one; otherwise the caller assembles it (its slow part
+        too when :attr:`slow`), and it is kept from now on.
+
+        Rough steps, with a split Jacobian (:attr:`split`: its fast part is what an
+        assembly then costs): when a kept Jacobian did not finish a step in one iteration
+        (a line landing on the seabed: the contact's stiffness comes and goes within a
+        step), the next ``b`` steps assemble it at their first iteration (Newton's own
+        convergence from a good predictor: mostly one iteration); then a kept one is tried
+        again, and ``b`` doubles (1, 2, 4, ... up to ``reuse``) while it fails, and is 0
+        again once a kept Jacobian finishes a step in one iteration. Without a split a
+        whole Jacobian costs too much for that (a roof's kink corners and factorisation:
+        its step 24 -> 38 ms with 1.4 instead of 2.5 iterations)."""
         first = self.ts.getSNES().getIterationNumber() == 0
+        own = self._own_step()
         fast = first or self.f_last <= CONTRACTION * self.f_before
+        if self.split and not first and self.stale and own:  # a kept one did not finish it
+            self.backoff = min(max(1, 2 * self.backoff), self.reuse)
+            self.rough = self.backoff
+        if first and own:
+            self.slow_age += 1
+            if self.rough > 0:
+                self.rough -= 1
+                fast = False
         if (fast and self.reuse > 0 and self.kept is not None
                 and _same(self.kept[0], shift_v) and _same(self.kept[1], shift_a)
-                and self.age + first <= self.reuse and self._own_step()):
+                and self.age + first <= self.reuse and own):
             self.age += first
             self.stale = True
             return True
         self.kept, self.age, self.stale = (shift_v, shift_a), 0, False
         self.assemblies += 1
+        # a split Jacobian's slow part: assembled too unless kept under the same rule
+        kept_slow = self.slow_kept
+        self.slow = not (self.split and self.slow_reuse > 0 and own and kept_slow is not None
+                         and _same(kept_slow[0], shift_v) and _same(kept_slow[1], shift_a)
+                         and self.slow_age <= self.slow_reuse)
+        if self.slow:
+            self.slow_kept, self.slow_age = (shift_v, shift_a), 0
+            self.slow_assemblies += self.split
         return False
 
     def guess(self, snes: PETSc.SNES, x: PETSc.Vec) -> None:
@@ -245,7 +304,11 @@ class StepNewton:
                 error = self._error_left(snes, ynorm)
             else:  # at the residual's round-off floor (no contraction left) the step itself
                 error = ynorm * min(1.0, fnorm / f_prev)
+                if error > self.eta * self.work.norm():  # the residual's ratio can overstate
+                    error = min(error, self._error_left(snes, ynorm))
             if error <= self.eta * self.work.norm():
+                if it == 1 and self.stale:
+                    self.backoff = 0  # a kept Jacobian finished the step in one iteration
                 return _SNORM  # the error left small against the step's increment
         return 0
 

@@ -16,7 +16,7 @@ from dolfinx import fem
 from petsc4py import PETSc
 from ufl.algorithms import expand_derivatives
 
-from cablefem import forms
+from cablefem import bending_forms, forms
 from cablefem.dampers import damper_work, layer_length
 from cablefem.fluid import add_fluid_terms
 from cablefem.jit import quiet_compiler
@@ -124,7 +124,7 @@ def add_span_bending(model):
     # nodes tagged in dS): its turn belongs to the kink's own layer (cablefem.kinks),
     # as a clamp's to the clamp's; the span's moment is handed over on both sides.
     kinks = sorted(set(model.line.node_tag.values()))
-    model.forms.add("span_bending", forms.span_bending_work(
+    model.forms.add("span_bending", bending_forms.span_bending_work(
         model.u, model.du, model.t0, model.EI, model.mesh, model.dS, c=1.0, skip=kinks),
         kind="static")
     T = model.forms.outputs["tension"]
@@ -134,18 +134,18 @@ def add_span_bending(model):
     if clamped:
         ds = ufl.Measure("ds", domain=model.mesh, subdomain_data=model.line.vertex_tags(
             {anc.node: tag for tag, anc in clamped}))
-        work += [forms.end_moment_work(
+        work += [bending_forms.end_moment_work(
             model.u, model.du, model.t0, model.EI, T, q,
             fem.Constant(model.mesh, np.asarray(anc.direction, dtype=PETSc.ScalarType)),
             ds(tag)) for tag, anc in clamped]
     if kinks:
-        density = forms.end_moment_density(model.u, model.du, model.t0, model.EI, T, q,
+        density = bending_forms.end_moment_density(model.u, model.du, model.t0, model.EI, T, q,
                                            away_from_kinks(model))
         work += [density(side) * model.dS(tag) for tag in kinks for side in ("+", "-")]
     if work:
         model.forms.add("end_moments", sum(work[1:], work[0]), kind="static")
-    return forms.span_bending_form(model.u, model.t0, model.EI, model.mesh, model.dS, c=1.0,
-                                   skip=kinks)
+    return bending_forms.span_bending_form(model.u, model.t0, model.EI, model.mesh, model.dS,
+                                           c=1.0, skip=kinks)
 
 
 def away_from_kinks(model):

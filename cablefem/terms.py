@@ -58,6 +58,11 @@ class Term:
         medium: True for a force of the surrounding medium (drag, buoyancy, added mass,
             seabed contact): at a kink its cell integrals are the force the two sides
             share (:mod:`cablefem.kinks`).
+        slow_jacobian: True when the term's Jacobian changes slowly with the state and
+            costs much (a fluid's drag and added mass): a time integrator that keeps its
+            Jacobian over steps keeps this part longest and refreshes the others' part
+            alone where that serves (:mod:`cablefem.stepnewton`). Only the cost of Newton's
+            iterations depends on it, never the answer beyond Newton's tolerance.
     """
 
     name: str
@@ -67,6 +72,7 @@ class Term:
     linearised: Callable[[], contextlib.AbstractContextManager] | None = None
     moves_mass: bool | None = None
     medium: bool = False
+    slow_jacobian: bool = False
 
 
 def depends_on(form, w, trial) -> bool:

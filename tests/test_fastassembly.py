@@ -258,3 +258,80 @@ def test_reactions_on_the_steps_packing_are_bit_identical(time_law):
             shared = problem.reactions.compute(problem.time)
             alone = own.compute(problem.time)
             assert np.array_equal(shared, alone)
+
+
+def _wet_moved_model():
+    """demos/mooring.toml on 20 elements (current, swell, seabed with friction), off its
+    static state and moving, at a time within the waves' ramp."""
+    import tomllib
+    from pathlib import Path
+
+    from cablefem.create import model_from_case
+
+    demos = Path(__file__).resolve().parents[1] / "demos"
+    data = tomllib.loads((demos / "mooring.toml").read_text())
+    data["mesh"]["elements"] = 20
+    model = model_from_case(MPI.COMM_WORLD, parse_case(data, base_dir=demos))
+    solve_static(model)
+    rng = np.random.default_rng(5 + model.comm.rank)
+    for f, scale in ((model.u, 1e-2), (model.v, 0.3), (model.a, 1.0)):
+        f.x.array[:] += scale * rng.standard_normal(f.x.array.size)
+        f.x.scatter_forward()
+    model.set_time(3.1)
+    model.shift_v.value, model.shift_a.value = 105.3, 1.1e4
+    return model
+
+
+def test_a_split_jacobian_is_the_whole_one_and_keeps_its_slow_part():
+    """The dynamic Jacobian assembled in two parts (the fluid's terms, ``slow_jacobian``,
+    and the others: ``RowsAssembler(parts=...)``) is the whole one to round-off; with its
+    slow part kept (``slow=False``) after the state moved, it differs from the whole one
+    at the new state by exactly the change of the fluid's part (its kernels summed in
+    another order: 1e-13 of the matrix's norm, round-off of ~10 terms per entry)."""
+    model = _wet_moved_model()
+    assert model.forms.J_dynamic_part(slow=True) is not None
+    n_owned = model.V.dofmap.index_map.size_local
+    rows = np.concatenate([a.flat_dofs for a in model.anchors]).astype(np.int32)
+    rows = rows[rows < model.bs * n_owned]
+    kappa = bc_row_scale(model)
+    state = (model.u, model.v, model.a)
+    whole = RowsAssembler(model.f_dynamic, model.j_dynamic, model.bcs, rows, kappa,
+                          model.comm, state=state)
+    split = RowsAssembler(model.f_dynamic, model.j_dynamic, model.bcs, rows, kappa,
+                          model.comm, state=state,
+                          parts=(model.j_dynamic_fast, model.j_dynamic_slow))
+    b = fpetsc.create_vector(model.f_dynamic)
+    A, A_split = (fpetsc.create_matrix(model.j_dynamic, "baij") for _ in range(2))
+
+    def slow_part():  # the fluid's part, its anchor rows zeroed as the Jacobian's are
+        S = fpetsc.assemble_matrix(model.j_dynamic_slow)
+        S.assemble()
+        S.zeroRowsLocal(rows, diag=0.0)
+        return S
+
+    for asm in (whole, split):
+        asm.residual(b, model.u.vector, 3.1)
+    whole.jacobian(A)
+    split.jacobian(A_split, slow=True)
+    S_old = slow_part()
+    same = PETSc.Mat.Structure.SAME_NONZERO_PATTERN  # both made from j_dynamic's pattern
+    D = A_split.copy()
+    D.axpy(-1.0, A, structure=same)
+    scale = A.norm()
+    assert D.norm() <= 1e-13 * scale, D.norm() / scale
+
+    model.u.x.array[:] += 0.05 * np.random.default_rng(9).standard_normal(model.u.x.array.size)
+    model.u.x.scatter_forward()
+    for asm in (whole, split):
+        asm.residual(b, model.u.vector, 3.1)
+    whole.jacobian(A)
+    split.jacobian(A_split, slow=False)  # the fluid's part as assembled before the move
+    S_new = slow_part()
+    S_old.axpy(-1.0, S_new)  # what keeping it leaves out
+    assert S_old.norm() > 1e-6 * scale  # the move changed the fluid's part: a real test
+    A_split.axpy(-1.0, A, structure=same)
+    A_split.axpy(-1.0, S_old)
+    assert A_split.norm() <= 1e-13 * scale, A_split.norm() / scale
+    split.destroy()
+    for obj in (b, A, A_split, D, S_old, S_new):
+        obj.destroy()
