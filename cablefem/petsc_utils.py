@@ -355,7 +355,7 @@ class RowsAssembler:
         """``J``'s kernels added into ``A`` (not assembled), its coefficients taken from
         the residual's packing where ``cols`` says they sit."""
         if cols is not None and self.packed is not None:
-            coeffs = {key: self.packed[key][:, c] for key, c in cols.items()}
+            coeffs = _take_columns(self.packed, cols)
         else:
             coeffs = dcpp.fem.pack_coefficients(J)
         dcpp.fem.petsc.assemble_matrix(A, J, dcpp.fem.pack_constants(J), coeffs, [])
@@ -471,16 +471,18 @@ def jacobian_columns(F: fem.FormMetaClass, J: fem.FormMetaClass) -> dict | None:
             return None
         cols = {}
         for key, packed in pj.items():
-            if pf[key].shape[0] == 0:  # no cells on this rank: nothing to pack anyway
-                return None
-            owner_f, owner_j = pf[key][0], packed[0]  # coefficient number + 1 per column
+            if pf[key].shape[0] == 0:  # no entity on this rank: any columns of the width
+                cols[key] = np.zeros(_records(packed, key).shape[1], np.int64)
+                continue
+            # coefficient number + 1 per column of an entity's record
+            owner_f, owner_j = _records(pf[key], key)[0], _records(packed, key)[0]
             c = []
             for k in np.unique(owner_j):
                 src, dst = np.flatnonzero(owner_f == k), np.flatnonzero(owner_j == k)
                 if src.size != dst.size:
                     return None
                 c.append((dst, src))
-            idx = np.empty(packed.shape[1], np.int64)
+            idx = np.empty(owner_j.size, np.int64)
             for dst, src in c:
                 idx[dst] = src
             cols[key] = idx
@@ -488,12 +490,33 @@ def jacobian_columns(F: fem.FormMetaClass, J: fem.FormMetaClass) -> dict | None:
         for a in arrays:
             a[:] = rng.standard_normal(a.size)
         pf, pj = dcpp.fem.pack_coefficients(F), dcpp.fem.pack_coefficients(J)
-        if not all(np.array_equal(pj[k], pf[k][:, c]) for k, c in cols.items()):
+        taken = _take_columns(pf, cols)
+        if not all(np.array_equal(pj[k], taken[k]) for k in cols):
             return None
         return cols
     finally:
         for a, s in zip(arrays, saved):
             a[:] = s
+
+
+def _records(packed: np.ndarray, key) -> np.ndarray:
+    """A packing with one row per integration entity: an interior facet's values (both
+    cells') fill two rows of the array dolfinx 0.5 returns, one record of twice the width."""
+    if key[0] == dcpp.fem.IntegralType.interior_facet:
+        return packed.reshape(packed.shape[0] // 2, 2 * packed.shape[1])
+    return packed
+
+
+def _take_columns(packed: dict, cols: dict) -> dict:
+    """The packing of a form whose coefficients are columns ``cols`` (of each entity's
+    record, :func:`jacobian_columns`) of the packing ``packed``, in dolfinx's shapes."""
+    out = {}
+    for key, idx in cols.items():
+        rows, per_row = packed[key].shape[0], idx.size
+        if key[0] == dcpp.fem.IntegralType.interior_facet:
+            per_row //= 2
+        out[key] = _records(packed[key], key)[:, idx].reshape(rows, per_row)
+    return out
 
 
 def assemble_jacobian(A: PETSc.Mat, J: fem.FormMetaClass, bcs, extra=None) -> None:
