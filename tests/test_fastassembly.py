@@ -39,12 +39,18 @@ def _moved_model(**solver):
                                                              damping=DAMPING,
                                                              solver=solver)))
     solve_static(model)
-    rng = np.random.default_rng(3 + model.comm.rank)
-    for f, scale in ((model.u, 1e-4), (model.v, 1e-2), (model.a, 1.0)):
+    return _moved(model, 3, (1e-4, 1e-2, 1.0), 0.0123, (412.0, 8.1e4))
+
+
+def _moved(model, seed: int, scales, t: float, shifts):
+    """``model`` off its state by random ``u``, ``v``, ``a`` of ``scales`` (a seed per
+    rank), at time ``t``, with the time integrator's ``shifts`` (v, a)."""
+    rng = np.random.default_rng(seed + model.comm.rank)
+    for f, scale in zip((model.u, model.v, model.a), scales):
         f.x.array[:] += scale * rng.standard_normal(f.x.array.size)
         f.x.scatter_forward()
-    model.set_time(0.0123)
-    model.shift_v.value, model.shift_a.value = 412.0, 8.1e4
+    model.set_time(t)
+    model.shift_v.value, model.shift_a.value = shifts
     return model
 
 
@@ -277,13 +283,7 @@ def _wet_moved_model():
     data.setdefault("solver", {})["span_bending"] = True
     model = model_from_case(MPI.COMM_WORLD, parse_case(data, base_dir=demos))
     solve_static(model)
-    rng = np.random.default_rng(5 + model.comm.rank)
-    for f, scale in ((model.u, 1e-2), (model.v, 0.3), (model.a, 1.0)):
-        f.x.array[:] += scale * rng.standard_normal(f.x.array.size)
-        f.x.scatter_forward()
-    model.set_time(3.1)
-    model.shift_v.value, model.shift_a.value = 105.3, 1.1e4
-    return model
+    return _moved(model, 5, (1e-2, 0.3, 1.0), 3.1, (105.3, 1.1e4))
 
 
 def test_a_split_jacobian_is_the_whole_one_and_keeps_its_slow_part():
