@@ -250,8 +250,9 @@ class RowsAssembler:
         self.rows, self.kappa = rows, kappa
         self.serial = comm.size == 1
         self.cols = jacobian_columns(F, J)
-        #: ``J`` as two forms whose sum it is, (fast, slow) (``CableForms.J_dynamic_fast``,
-        #: ``J_dynamic_slow``), each with its columns of the packing; None: ``J`` whole
+        #: ``J`` as two forms whose sum it is, (fast, slow) (``CableForms.J_dynamic_part``,
+        #: compiled as ``j_dynamic_fast``, ``j_dynamic_slow``), each with its columns of the
+        #: packing; None: ``J`` whole
         self.parts = None if parts is None else [(p, jacobian_columns(F, p)) for p in parts]
         self.A_slow: PETSc.Mat | None = None  # the slow part as last assembled
         self.packed: dict | None = None  # the residual's packed coefficients, last call

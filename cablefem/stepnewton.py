@@ -46,7 +46,7 @@ Here, on the steps of a run of equal steps:
   added mass: their Jacobian is most of the whole one's cost and changes slowly), the
   caller keeps their part apart; an assembly refreshes the other terms' part and adds the
   slow part as assembled at most ``-cable_newton_slow_jacobian_reuse`` steps ago
-  (default :data:`SLOW_REUSE`; 0: assembled whole every time). With it, after a step that
+  (default :data:`SLOW_REUSE`; 0: both parts assembled every time). With it, after a step that
   a kept Jacobian did not finish in one iteration, the next steps assemble the fast part
   at their first iteration (*rough* steps, with a back-off:
   :meth:`StepNewton.keep_jacobian`): a wet line whose touchdown slaps the seabed took two
@@ -76,8 +76,8 @@ INCREMENT_RTOL = 1.0e-7
 JACOBIAN_REUSE = 10
 
 #: steps over which a split Jacobian's slow part (a fluid's) is kept when the rest is
-#: assembled again (measured on the mooring demo: docs/benchmarks.md, "The grounded line's
-#: rough steps")
+#: assembled again (measured on the mooring demo: docs/benchmarks.md, "The mooring demo's
+#: rough steps, and the fluid's Jacobian kept apart")
 SLOW_REUSE = 5
 
 #: a kept Jacobian serves the next iteration while Newton's residual falls by this factor
@@ -144,7 +144,7 @@ class StepNewton:
         self.eta = opts.getReal(prefix + "newton_increment_rtol", INCREMENT_RTOL)
         self.reuse = opts.getInt(prefix + "newton_jacobian_reuse",
                                  JACOBIAN_REUSE if costly_jacobian else 0)
-        #: steps over which a split Jacobian's slow part is kept (0: assembled with the rest)
+        #: steps over which a split Jacobian's slow part is kept (0: assembled every time)
         self.slow_reuse = opts.getInt(prefix + "newton_slow_jacobian_reuse",
                                       min(SLOW_REUSE, self.reuse))
         self.divtol = opts.getReal(prefix + "snes_divergence_tolerance", 1.0e4)
