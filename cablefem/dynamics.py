@@ -155,11 +155,11 @@ def _make_ts(model, dt: float, rho_inf: float, history: SNESHistory,
     timed = (any(model.forms.term(n).set_time is not None for n in model.forms.user)
              or any(model.u_bc._cpp_object is c for c in F.coefficients))
     # the Jacobian in a fast and a slow part (a fluid's: Term.slow_jacobian), the slow one
-    # kept longer; None: whole
-    parts = model.forms.J_dynamic_part(slow=True) is not None and (model.j_dynamic_fast,
-                                                                    model.j_dynamic_slow)
+    # kept longer; j_dynamic_slow is None without a slow term: the Jacobian whole
+    slow = model.j_dynamic_slow
+    parts = None if slow is None else (model.j_dynamic_fast, slow)
     rows = RowsAssembler(F, model.j_dynamic, model.bcs, bc_rows, kappa, model.comm, extra,
-                         (model.u, model.v, model.a), timed, parts or None)
+                         (model.u, model.v, model.a), timed, parts)
     serial = model.comm.size == 1
     u, v, a = model.u, model.v, model.a
 
