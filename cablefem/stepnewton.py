@@ -147,6 +147,11 @@ class StepNewton:
         #: steps over which a split Jacobian's slow part is kept (0: assembled every time)
         self.slow_reuse = opts.getInt(prefix + "newton_slow_jacobian_reuse",
                                       min(SLOW_REUSE, self.reuse))
+        for name, value in (("newton_increment_rtol", self.eta),
+                            ("newton_jacobian_reuse", self.reuse),
+                            ("newton_slow_jacobian_reuse", self.slow_reuse)):
+            if not value >= 0:  # a negative count or tolerance (or NaN): no meaning here
+                raise ValueError(f"-{prefix}{name} must be 0 or more (0: off), got {value}")
         self.divtol = opts.getReal(prefix + "snes_divergence_tolerance", 1.0e4)
         self.rtol, self.atol, self.stol, _ = snes.getTolerances()
         self.h: float | None = None  # the step size of the step being taken

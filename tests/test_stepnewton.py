@@ -157,3 +157,16 @@ def test_wet_line_surging_at_full_amplitude_fresh_jacobians_on_rough_steps():
     assert slow <= fast / SLOW_REUSE + 2 / n, (slow, fast)
     solver, time_error = _errors(kept, plain, half)
     assert solver < 1e-2 * time_error, (solver, time_error)
+
+
+def test_a_negative_newton_option_is_refused_naming_it():
+    """A negative Jacobian reuse or increment tolerance has no meaning (it was taken as
+    "off" without a word): the problem refuses it, naming the option, before any step."""
+    import pytest
+
+    case = _case("paper_spatial.toml")
+    model = model_from_case(MPI.COMM_WORLD, case)
+    for name, value in (("newton_slow_jacobian_reuse", -1), ("newton_jacobian_reuse", -3),
+                        ("newton_increment_rtol", -1e-7)):
+        with pytest.raises(ValueError, match=f"-cable_{name} must be 0 or more"):
+            DynamicProblem(model, case.dynamics.dt, petsc_options={name: value})
