@@ -256,11 +256,9 @@ class RowsAssembler:
         self.parts = None if parts is None else [(p, jacobian_columns(F, p)) for p in parts]
         self.A_slow: PETSc.Mat | None = None  # the slow part as last assembled
         self.packed: dict | None = None  # the residual's packed coefficients, last call
-        # the state Functions the residual has (an undamped model's lacks the velocity:
-        # asked to gather it too, state_gather refused and every call packed whole)
-        held = list(F.coefficients)
-        state = tuple(f for f in state
-                      if any(getattr(f, "_cpp_object", f) is c for c in held))
+        # the state Functions the residual has (an undamped one has no velocity)
+        state = tuple(f for f in state if any(getattr(f, "_cpp_object", f) is c
+                                              for c in F.coefficients))
         #: where the ``state`` Functions' values sit in the packed coefficients
         #: (:func:`state_gather`; None: always packed whole)
         self.gather = state_gather(F, state) if state else None
