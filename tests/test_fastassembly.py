@@ -54,6 +54,25 @@ def _moved(model, seed: int, scales, t: float, shifts):
     return model
 
 
+def _assemblers(model):
+    """The time integrator's assembler (the state gathered into the packing) and one that
+    packs the form whole at every call."""
+    n_owned = model.V.dofmap.index_map.size_local
+    rows = np.concatenate([a.flat_dofs for a in model.anchors]).astype(np.int32)
+    rows = rows[rows < model.bs * n_owned]
+    args = (model.f_dynamic, model.j_dynamic, model.bcs, rows, bc_row_scale(model),
+            model.comm)
+    return RowsAssembler(*args, state=(model.u, model.v, model.a)), RowsAssembler(*args)
+
+
+def _count_packs(monkeypatch) -> list:
+    """The forms dolfinx packs from now on, in order."""
+    packs = []
+    real = dcpp.fem.pack_coefficients
+    monkeypatch.setattr(dcpp.fem, "pack_coefficients", lambda F: packs.append(F) or real(F))
+    return packs
+
+
 def test_rows_assembler_is_bit_identical_to_the_wrappers():
     """Residual and Jacobian of the fast path equal dolfinx's wrapper route exactly
     (difference 0, not a tolerance: the same floating-point operations)."""
@@ -143,13 +162,7 @@ def test_a_second_residual_at_the_same_time_repacks_only_the_state():
     :meth:`forget` (what a new step calls)."""
     model = _moved_model(outer_correction="hinge")  # the hinges' law: Functions of cells
     assert len(model.f_dynamic.coefficients) > 3  # more than u, v, a
-    n_owned = model.V.dofmap.index_map.size_local
-    rows = np.concatenate([a.flat_dofs for a in model.anchors]).astype(np.int32)
-    rows = rows[rows < model.bs * n_owned]
-    kappa = bc_row_scale(model)
-    args = (model.f_dynamic, model.j_dynamic, model.bcs, rows, kappa, model.comm)
-    part = RowsAssembler(*args, state=(model.u, model.v, model.a))
-    whole = RowsAssembler(*args)
+    part, whole = _assemblers(model)
     if model.mesh.topology.index_map(1).size_local:
         assert part.gather is not None
     x = model.u.vector
@@ -189,25 +202,15 @@ def test_a_new_time_copies_in_what_changed_without_a_whole_packing(monkeypatch):
     (the hinges' law here, as a time law's waves would be): the residual is bit-identical
     to a whole packing's, and dolfinx packs nothing (before: every new time packed the
     whole form, 160 µs of a 200-cell mooring line's 3 ms step)."""
-    from dolfinx import cpp as dcpp
-
     model = _moved_model(outer_correction="hinge")  # the hinges' law: Functions of cells
-    n_owned = model.V.dofmap.index_map.size_local
-    rows = np.concatenate([a.flat_dofs for a in model.anchors]).astype(np.int32)
-    rows = rows[rows < model.bs * n_owned]
-    args = (model.f_dynamic, model.j_dynamic, model.bcs, rows, bc_row_scale(model),
-            model.comm)
-    part = RowsAssembler(*args, state=(model.u, model.v, model.a))
-    whole = RowsAssembler(*args)
+    part, whole = _assemblers(model)
     if not model.mesh.topology.index_map(1).size_local:
         return  # a rank without cells packs nothing either way
     assert part.others is not None and len(part.others) > 0
     x = model.u.vector
     b1, b2 = fpetsc.create_vector(model.f_dynamic), fpetsc.create_vector(model.f_dynamic)
     part.residual(b1, x, 0.0123)  # the first call packs everything
-    packs = []
-    real = dcpp.fem.pack_coefficients
-    monkeypatch.setattr(dcpp.fem, "pack_coefficients", lambda F: packs.append(F) or real(F))
+    packs = _count_packs(monkeypatch)
     rng = np.random.default_rng(5 + model.comm.rank)
     # a new time with the hinges' law changed; the same time after forget() (a new
     # step); a new time with only the state changed
@@ -238,22 +241,14 @@ def test_an_undamped_residual_gathers_its_state_without_the_velocity(monkeypatch
     held = list(model.f_dynamic.coefficients)
     assert not any(model.v._cpp_object is c for c in held)  # undamped: no velocity
     _moved(model, 3, (1e-4, 1e-2, 1.0), 0.0123, (412.0, 8.1e4))
-    n_owned = model.V.dofmap.index_map.size_local
-    rows = np.concatenate([a.flat_dofs for a in model.anchors]).astype(np.int32)
-    rows = rows[rows < model.bs * n_owned]
-    args = (model.f_dynamic, model.j_dynamic, model.bcs, rows, bc_row_scale(model),
-            model.comm)
-    part = RowsAssembler(*args, state=(model.u, model.v, model.a))
-    whole = RowsAssembler(*args)
+    part, whole = _assemblers(model)
     if not model.mesh.topology.index_map(1).size_local:
         return  # a rank without cells packs nothing either way
     assert part.gather is not None
     x = model.u.vector
     b1, b2 = fpetsc.create_vector(model.f_dynamic), fpetsc.create_vector(model.f_dynamic)
     part.residual(b1, x, 0.0123)  # the first call packs everything
-    packs = []
-    real = dcpp.fem.pack_coefficients
-    monkeypatch.setattr(dcpp.fem, "pack_coefficients", lambda F: packs.append(F) or real(F))
+    packs = _count_packs(monkeypatch)
     rng = np.random.default_rng(7 + model.comm.rank)
     for time in (0.0124, 0.0125):  # new times, the state moved
         for f in (model.u, model.a):
