@@ -40,7 +40,7 @@ __all__ = [
     "AnchorLayer", "anchor_frame", "layer", "angle_profile", "curvature_profile",
     "moment_profile", "exact_angle_profile", "exact_curvature_profile", "string_curvature",
     "composite_curvature", "graded_stations", "far_field_offsets", "virtual_hinge",
-    "gradient_integrals", "far_field_second_order", "gradient_moment_factor",
+    "gradient_integrals", "far_field_second_order", "gradient_moment_factor", "wrap_azimuth",
 ]
 
 #: ``|c x t|`` below this: the bending plane (step 4) is undefined.
@@ -130,6 +130,20 @@ def anchor_frame(c: ArrayLike, e1: ArrayLike | None = None) -> tuple[np.ndarray,
         p = np.where(np.linalg.norm(pz, axis=-1, keepdims=True) > 1e-8, pz, px)
     e1 = p / np.linalg.norm(p, axis=-1, keepdims=True)
     return e1, np.cross(c, e1)
+
+
+def wrap_azimuth(psi: ArrayLike, ref: float) -> np.ndarray:
+    """The azimuths ``psi`` on the branch ``(ref - pi, ref + pi]`` (``ref`` NaN: ``(-pi,
+    pi]``, :func:`layer`'s own); a value already on it is returned bit for bit, the others
+    moved by 2 pi. A history's azimuths on the branch centred on its first row's keep
+    their bending plane's swings about that row continuous: ``(-pi, pi]`` put the cut at
+    "down", where a sagging cable's static bending plane lies (case B's anchors' ``psi0``
+    jumped by 2 pi at 208 rows of 6001)."""
+    psi = np.asarray(psi, float)
+    ref = 0.0 if not np.isfinite(ref) else float(ref)
+    with np.errstate(invalid="ignore"):
+        return np.where(psi - ref > np.pi, psi - 2.0 * np.pi,
+                        np.where(psi - ref <= -np.pi, psi + 2.0 * np.pi, psi))
 
 
 def layer(N: ArrayLike, c: ArrayLike, EI: ArrayLike, EA: ArrayLike, *, form: str = "exact",

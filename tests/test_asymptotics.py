@@ -553,3 +553,22 @@ def test_far_field_second_order_against_the_heavy_layer(psi0):
     morder0 = [np.log(a / b) / np.log(2) for a, b in zip(merr0[:-1], merr0[1:])]
     assert min(morder) > 1.7 and max(morder0) < 1.6, (merr, merr0)
     assert merr0[-1] > 3 * merr[-1]
+
+
+def test_wrap_azimuth_keeps_the_branch_values_and_moves_the_others_by_two_pi():
+    """On the branch (ref - pi, ref + pi] a value is returned bit for bit; outside it, moved
+    by exactly 2 pi (the same angle); NaN stays NaN; a NaN reference is (-pi, pi], the
+    layer's own branch."""
+    from cablefem.asymptotics import wrap_azimuth
+
+    psi = np.array([np.pi, -np.pi + 1e-3, 3.0, -3.0, 0.1, np.nan])
+    ref = np.pi  # a sagging cable's static bending plane, "down"
+    out = wrap_azimuth(psi, ref)
+    assert np.all((out[:5] > ref - np.pi) & (out[:5] <= ref + np.pi))
+    assert out[0] == np.pi and out[2] == 3.0  # on the branch: the same bits
+    assert out[1] == psi[1] + 2 * np.pi and out[3] == psi[3] + 2 * np.pi
+    assert out[4] == 0.1 and np.isnan(out[5])
+    np.testing.assert_allclose(np.exp(1j * out[:5]), np.exp(1j * psi[:5]), atol=1e-15)
+    # reference NaN (no bending plane in the first row): the layer's (-pi, pi]
+    np.testing.assert_array_equal(wrap_azimuth(psi, np.nan), psi)
+    assert wrap_azimuth(np.array([3.5]), 0.0)[0] == 3.5 - 2 * np.pi

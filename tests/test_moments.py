@@ -154,3 +154,44 @@ def test_the_first_order_route_scales_the_layer_by_the_tension_gradient():
     assert abs(factor[1] - 1) < 0.25 < abs(factor[2] - 1)
     assert list(first["valid"]) == [1, 1, 0] and list(lead["valid"]) == [1, 1, 1]
     assert first["invalid_reason"][2] == "tension varies along the layer"
+
+
+def test_psi0_follows_a_bending_plane_that_swings_about_down(mpi_tmp_path):
+    """Case B's static bending planes point down (psi0 = pi at the branch cut of the
+    layer's (-pi, pi]); its spatial motion swings them about that. anchors.csv writes
+    psi0 on the branch centred on each anchor's first row, so the column follows the
+    plane: no step between rows larger than pi (the plane turns by about 1e-3 rad a step
+    of 0.005; before, psi0 jumped by 2 pi at 208 of case B's 6001 rows, from t = 0.01
+    on). The angle is the layer's (the same cosine and sine), and 'cablefem post' on the
+    run's forces writes the same psi0 (same formula on the same branch)."""
+    import csv
+    import tomllib
+    from pathlib import Path
+
+    from cablefem import asymptotics
+    from cablefem.app.post import run_post
+    from cablefem.app.run import run_case
+
+    demos = Path(__file__).resolve().parents[1] / "demos"
+    data = tomllib.loads((demos / "paper_spatial.toml").read_text())
+    data["dynamics"]["t_end"] = 1.0
+    case = parse_case(data, demos)
+    out = mpi_tmp_path / "run"
+    run_case(case, out, MPI.COMM_WORLD, figures=False, progress=False, modes=0)
+    run_post(case, out / "anchors.csv", mpi_tmp_path / "post")
+
+    def rows(path):
+        with open(path) as fh:
+            return list(csv.DictReader(fh))
+    ran, posted = rows(out / "anchors.csv"), rows(mpi_tmp_path / "post" / "anchors.csv")
+    layers = {a.name: a for a in case.anchors}
+    for name in ("p", "q"):
+        mine = [r for r in ran if r["anchor"] == name]
+        psi = np.array([float(r["psi0"]) for r in mine])
+        assert np.all(np.isfinite(psi)) and abs(psi[0] - np.pi) < 0.01  # down, statically
+        assert np.max(np.abs(np.diff(psi))) < 0.05  # a step turns the plane by ~1e-3
+        F = np.array([[float(r[c]) for c in ("Nx", "Ny", "Nz")] for r in mine])
+        lay = asymptotics.layer(F, layers[name].direction, case.section.EI, case.section.EA)
+        np.testing.assert_allclose(np.exp(1j * psi), np.exp(1j * lay.psi0), atol=1e-12)
+        psi_post = np.array([float(r["psi0"]) for r in posted if r["anchor"] == name])
+        np.testing.assert_array_equal(psi_post, psi)

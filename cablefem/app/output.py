@@ -17,6 +17,7 @@ from cablefem.app.damperout import DamperHistory, DamperOutput
 from cablefem.app.kinkout import KinkHistory, KinkOutput
 from cablefem.app.rowbuffer import RowBuffer
 from cablefem.app.touchdownout import TouchdownOutput, TouchdownRows
+from cablefem.asymptotics import wrap_azimuth
 from cablefem.cable import CableModel
 from cablefem.composite import composite_for
 from cablefem.io import anchorcsv
@@ -202,6 +203,10 @@ class RunOutput:
                 if self.beam:
                     res = rod_moment_columns(res, np.array(self.rod[anc.name][-n:]),
                                              anc.direction)
+                # psi0 on the branch of the history's first row (its static state)
+                held = self.columns[anc.name]["psi0"]
+                res["psi0"] = wrap_azimuth(res["psi0"], held[0] if len(held) else
+                                           res["psi0"][0])
                 self.reasons.setdefault(anc.name, []).extend(res["invalid_reason"].tolist())
                 for k in MOMENT_COLUMNS:
                     self.columns[anc.name][k].extend(res[k])

@@ -19,6 +19,7 @@ from cablefem import __version__
 from cablefem.app.plots import anchor_figures
 from cablefem.app.report import anchor_validity, max_excitation, steady_state_stats, warn
 from cablefem.app.statistics import warn_drifts
+from cablefem.asymptotics import wrap_azimuth
 from cablefem.case import Case
 from cablefem.description import stress_free_length
 from cablefem.io.anchorcsv import ANCHOR_COLUMNS, MOMENT_COLUMNS, AnchorCSV, read_forces
@@ -89,6 +90,8 @@ def run_post(case: Case, forces_csv: Path, outdir: Path, form: str = "exact",
                          for t in times])
         res = anchor_moments(hist.forces[a.name], a.direction, sec.EI, sec.EA, sec.mass, acc,
                              load, length, omega, form, order)
+        if times.size:  # psi0 on the branch of the first row's, as a run writes it
+            res["psi0"] = wrap_azimuth(res["psi0"], res["psi0"][0])
         backwards = res["delta"] > MAX_ANCHOR_ANGLE
         taut = ~res["slack"]
         if np.count_nonzero(backwards) > MAX_BACKWARDS_SHARE * max(np.count_nonzero(taut), 1):
