@@ -27,7 +27,10 @@ from conftest import read_series
 
 pytestmark = pytest.mark.serial  # subprocesses, signals and mpirun: not under mpirun
 
-# a tiny cable (8 elements): 60 steps, fields every 4 steps, a checkpoint every 10
+# a tiny cable (8 elements): 60 steps, fields every 4 steps, a checkpoint every 10; its
+# anchor moves a little out of the plane, so that psi0 swings about pi ("down"), where
+# anchors.csv's branch of each anchor's first row keeps it continuous (a resumed run must
+# take that branch from the rows it reads back)
 CASE = """
 [section]
 EA = 17857.14
@@ -47,7 +50,7 @@ name = "q"
 position = [1.0013333, 0, 0]
 [anchors.motion]
 type = "harmonic"
-amplitude = [2e-4, 0, 0]
+amplitude = [2e-4, 2e-5, 0]
 omega = 32.814
 [damping]
 ratio = 0.005
