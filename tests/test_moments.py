@@ -188,10 +188,15 @@ def test_psi0_follows_a_bending_plane_that_swings_about_down(mpi_tmp_path):
     for name in ("p", "q"):
         mine = [r for r in ran if r["anchor"] == name]
         psi = np.array([float(r["psi0"]) for r in mine])
-        assert np.all(np.isfinite(psi)) and abs(psi[0] - np.pi) < 0.01  # down, statically
-        assert np.max(np.abs(np.diff(psi))) < 0.05  # a step turns the plane by ~1e-3
+        # the first row is the quasi-static start: the static plane (down, pi) tilted by
+        # the damping force of the anchor's out-of-plane velocity (measured 2e-3 rad at q)
+        assert np.all(np.isfinite(psi)) and abs(psi[0] - np.pi) < 0.01
+        # a step turns the plane by ~1e-3 rad (1.4e-3 at most here); a 2 pi jump fails
+        assert np.max(np.abs(np.diff(psi))) < 0.05
         F = np.array([[float(r[c]) for c in ("Nx", "Ny", "Nz")] for r in mine])
         lay = asymptotics.layer(F, layers[name].direction, case.section.EI, case.section.EA)
+        # the layer's own azimuth, moved by 2 pi at most: equal angles to round-off (the
+        # CSV's repr round-trips; 2 pi added costs 1e-15)
         np.testing.assert_allclose(np.exp(1j * psi), np.exp(1j * lay.psi0), atol=1e-12)
         psi_post = np.array([float(r["psi0"]) for r in posted if r["anchor"] == name])
         np.testing.assert_array_equal(psi_post, psi)
