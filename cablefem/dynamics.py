@@ -12,18 +12,17 @@ motion ``g(t)`` enters as the rows ``U − g(t)`` at the stage time.
 
 A step whose Newton solve fails is retried from its start (displacement, velocity and the
 integrator's acceleration: :func:`cablefem.alpha2.retry_from_start`) as 4, 16, ... equal
-sub-steps up to the next point of the nominal time grid (at most ``max_cuts`` times;
-PETSc's ``alpha2`` with its default adaptor would retry with the same step). The first step
-after a change of step size is a backward Euler step (:class:`cablefem.alpha2.BackwardEuler`),
-which leaves the acceleration the equations of motion give at its end: generalised-α's
-acceleration belongs to its step size, and carried into a smaller step it set off a spike in
-the anchor forces (a mooring line's fairlead force 6 % low at the cut). The run then goes on
-with the sub-steps: returning to the larger step from a state the smaller one made set the
-fairlead force zigzagging by ±10 % from step to step (``cooldown``, off by default, allows
-it after that many calm nominal steps). Outputs stay on the nominal grid. When it cannot
-continue, :class:`DynamicsError` says at which time, with the last Newton history, and
-leaves the last converged state in ``model.u`` and ``model.v``; everything written up to
-then stays valid.
+sub-steps up to the next point of the nominal time grid (at most ``max_cuts`` times). The
+first step after a change of step size is a backward Euler step
+(:class:`cablefem.alpha2.BackwardEuler`): generalised-α's acceleration belongs to its step
+size, and carried into a smaller one it set off a spike in the anchor forces. The run then
+goes on with the sub-steps (``cooldown``, off by default, allows the larger step again after
+that many calm nominal steps; docs/theory.md §2). Outputs stay on the nominal grid. When it
+cannot continue, :class:`DynamicsError` says at which time, with the last Newton history,
+and leaves the last converged state in ``model.u`` and ``model.v``.
+
+On one rank, a model whose residual is its UFL forms alone has its residual and Jacobian
+assembled in C (:mod:`cablefem.native_rows`; the same numbers to the last bit).
 
 Options prefix: the model's (``cable_``): ``-cable_ts_type``, ``-cable_snes_rtol``, ...
 """
@@ -47,6 +46,7 @@ from cablefem.alpha2 import BackwardEuler, retry_from_start
 from cablefem.errors import DynamicsError, Interrupted
 from cablefem.hinge import HingeError
 from cablefem.initial import initial_velocity
+from cablefem.native_rows import native_rows
 from cablefem.petsc_utils import (
     RowsAssembler,
     SNESHistory,
@@ -164,10 +164,11 @@ def _make_ts(model, dt: float, rho_inf: float, history: SNESHistory,
     u, v, a = model.u, model.v, model.a
 
     def I2Function(ts, t, U, V, A, F):
+        if rows.native is not None:  # the same numbers in C (cablefem.native_rows)
+            return rows.native.residual(t, U, V, A, F)
         model.set_time(t)
-        copy_in(U, u, serial)
-        copy_in(V, v, serial)
-        copy_in(A, a, serial)
+        for X, f in ((U, u), (V, v), (A, a)):
+            copy_in(X, f, serial)
         rows.residual(F, U, t)
 
     shifts = [None, None]  # the shifts the Constants hold (set here only)
@@ -175,9 +176,12 @@ def _make_ts(model, dt: float, rho_inf: float, history: SNESHistory,
     def I2Jacobian(ts, t, U, V, A, shift_v, shift_a, J, P):
         if newton.keep_jacobian(shift_v, shift_a):  # J and its factorisation kept
             return
-        if shifts[0] != shift_v or shifts[1] != shift_a:  # equal steps: the same shifts
+        changed = shifts[0] != shift_v or shifts[1] != shift_a  # equal steps: the same
+        if changed:
             model.shift_v.value = shifts[0] = shift_v
             model.shift_a.value = shifts[1] = shift_a
+        if rows.native is not None:  # at the residual's state, just before (SNES)
+            return rows.native.jacobian(J, changed)
         # SNES evaluates the residual at the same state just before: model.u/v/a are current
         rows.jacobian(J, slow=newton.slow)
 
@@ -204,14 +208,14 @@ def _make_ts(model, dt: float, rho_inf: float, history: SNESHistory,
         # on 2 ranks"), and so is a large model's factorisation (linear_solver_options)
         costly = bool(model.forms.medium_forms or model.node_terms) or keeps_factorisation(
             n_dofs, reuse=not model.is_beam)
-        newton = StepNewton(ts, prefix, costly,
-                            history)  # the norms kept by its test: no monitor callback
+        newton = StepNewton(ts, prefix, costly, history)  # its test keeps the norms
         newton.split = rows.parts is not None
+        if newton.reuse == 0:  # a Jacobian assembled at every iteration: C may do both
+            rows.native = native_rows(model, rows, prefix)
     return ts, (F_vec, J_mat, newton), rows
 
 
-#: the TS's end time when none is given: PETSc's TSStep refuses to run without one
-_NO_END = 1e300
+_NO_END = 1e300  #: the TS's end time when none is given: TSStep refuses to run without
 
 
 class _StopPoll:

@@ -12,6 +12,13 @@ from dolfinx.fem import petsc as fpetsc
 from petsc4py import PETSc
 
 from cablefem.gathered_lu import PYTHON_TYPE as GATHERED
+from cablefem.packing import (
+    copy_changed,
+    jacobian_columns,
+    other_functions,
+    state_gather,
+    take_columns,
+)
 
 __all__ = ["default_options", "case_options", "assemble_residual", "assemble_jacobian",
            "assemble_residual_rows", "assemble_jacobian_rows",
@@ -265,39 +272,49 @@ class RowsAssembler:
         #: the other Functions of ``F``: [(their values (a view), their bytes last packed,
         #: where they sit)], compared at a new time and copied in where they changed
         #: (None: ``F`` is packed whole at a new time)
-        self.others = _other_functions(F, state) if self.gather is not None else None
+        self.others = other_functions(F, state) if self.gather is not None else None
         #: ``timed``: setting the model's time may change a Function of ``F`` besides the
         #: state (a term's time law): the packing is then kept for one time only
         self.timed = timed
         self._packed_at = None  # the time the packing was last brought up to date
+        #: the same residual and Jacobian in C (:mod:`cablefem.native_rows`), or None
+        self.native = None
 
     def forget(self) -> None:
         """The next :meth:`residual` brings every coefficient up to date, not only the
-        state (a new step: anything may have changed since)."""
+        state (a new step: anything may have changed since); :attr:`native` too."""
         self._packed_at = None
+        if self.native is not None:
+            self.native.time = None
 
     def coefficients(self, time):
         """``F``'s packed coefficients at the current state, the numbers a whole packing
-        gives. At the ``time`` of the last call (not None; any time when not
-        :attr:`timed`) and no :meth:`forget` since, only the state Functions' values are
-        copied in. At a new time (or after :meth:`forget`) the other Functions are also
-        compared with the values they were packed with, and those that changed (a time
-        law's waves, a hinge's law) are copied in. ``time`` None, or Functions whose
-        places in the packing are not known: all packed."""
-        if time is not None and not self.timed:
-            time = 0.0  # the Functions but the state do not change with time
-        if time is not None and self.gather is not None and self.packed is not None:
-            if time != self._packed_at:
-                if self.others is None:
-                    return self._pack_whole(time)
-                _copy_changed(self.packed, self.others)
-                self._packed_at = time
+        gives: :meth:`others_at`, and the state Functions' values copied in. ``time`` None,
+        or Functions whose places in the packing are not known: all packed."""
+        packed, whole = self.others_at(time)
+        if not whole:
             for key, items in self.gather.items():
-                flat = self.packed[key].reshape(-1)
+                flat = packed[key].reshape(-1)
                 for pos, arr, src in items:
                     flat[pos] = arr[src]
-            return self.packed
-        return self._pack_whole(time)
+        return packed
+
+    def others_at(self, time) -> tuple[dict, bool]:
+        """``F``'s packing with every coefficient but the state up to date, and whether it
+        was packed whole (the state too). At the ``time`` of the last call (not None; any
+        time when not :attr:`timed`) and no :meth:`forget` since, as it was. At a new time
+        (or after :meth:`forget`) the other Functions are compared with the values they
+        were packed with, and those that changed (a time law's waves, a hinge's law) are
+        copied in."""
+        if time is not None and not self.timed:
+            time = 0.0  # the Functions but the state do not change with time
+        if time is None or self.gather is None or self.packed is None or (
+                time != self._packed_at and self.others is None):
+            return self._pack_whole(time), True
+        if time != self._packed_at:
+            copy_changed(self.packed, self.others)
+            self._packed_at = time
+        return self.packed, False
 
     def _pack_whole(self, time):
         """Every coefficient packed by dolfinx (the others' values noted)."""
@@ -359,7 +376,7 @@ class RowsAssembler:
         """``J``'s kernels added into ``A`` (not assembled), its coefficients taken from
         the residual's packing where ``cols`` says they sit."""
         if cols is not None and self.packed is not None:
-            coeffs = _take_columns(self.packed, cols)
+            coeffs = take_columns(self.packed, cols)
         else:
             coeffs = dcpp.fem.pack_coefficients(J)
         dcpp.fem.petsc.assemble_matrix(A, J, dcpp.fem.pack_constants(J), coeffs, [])
@@ -369,158 +386,6 @@ class RowsAssembler:
         if self.A_slow is not None:
             self.A_slow.destroy()
             self.A_slow = None
-
-
-def _other_functions(F: fem.FormMetaClass, state) -> list | None:
-    """``F``'s Functions other than ``state``, each as (its values (a view), [their bytes
-    as last packed], [(key, flat positions in the packing, indices into the values)]), for
-    :meth:`RowsAssembler.coefficients`; [] when there are none, None when their places in
-    the packing are not found exactly (:func:`state_gather`)."""
-    held = [getattr(f, "_cpp_object", f) for f in state]
-    others = [c for c in F.coefficients if all(c is not h for h in held)]
-    if not others:
-        return []
-    where = state_gather(F, others)
-    if where is None:
-        return None
-    out = []
-    for i, c in enumerate(others):
-        arr = c.x.array
-        items = [(key, items[i][0], items[i][2]) for key, items in where.items()
-                 if items[i][0].size]
-        out.append((arr, [arr.tobytes()], items))
-    return out
-
-
-def _copy_changed(packed: dict, others: list) -> None:
-    """Copy into ``packed`` the values of those of ``others`` (:func:`_other_functions`)
-    that changed since they were last packed, and note them. Compared byte for byte
-    (14 arrays of 200 values: 5 µs, where ``np.array_equal`` took 60 µs)."""
-    for arr, last, items in others:
-        now = arr.tobytes()
-        if now == last[0]:
-            continue
-        for key, pos, src in items:
-            packed[key].reshape(-1)[pos] = arr[src]
-        last[0] = now
-
-
-def state_gather(F: fem.FormMetaClass, functions) -> dict | None:
-    """Where each of ``functions`` (coefficients of ``F``) sits in ``F``'s packed
-    coefficients: ``{key: [(flat positions, the function's local array (a view), indices
-    into it)]}``, such that copying ``array[indices]`` to those positions of a packed array gives
-    what packing afresh gives when only these functions changed; None when that does not
-    hold (checked with random values; the values are restored). Found in one packing of
-    every function's local indices, numbered on from one function to the next (the other
-    coefficients -1)."""
-    coeffs = list(F.coefficients)  # dolfinx's C++ Functions
-    if not functions or any(all(getattr(f, "_cpp_object", f) is not c for c in coeffs)
-                            for f in functions):
-        return None
-    arrays = [c.x.array for c in coeffs]
-    saved = [a.copy() for a in arrays]
-    try:
-        out: dict = {}
-        for a in arrays:
-            a[:] = -1.0
-        first = np.zeros(len(functions), np.int64)  # each function's first number
-        total = 0
-        for i, f in enumerate(functions):
-            first[i] = total
-            f.x.array[:] = np.arange(total, total + f.x.array.size, dtype=float)
-            total += f.x.array.size
-        for key, packed in dcpp.fem.pack_coefficients(F).items():
-            flat = packed.reshape(-1)
-            pos = np.flatnonzero(flat >= 0.0)
-            number = flat[pos].astype(np.int64)
-            owner = np.searchsorted(first, number, side="right") - 1
-            out[key] = [(pos[owner == i], f, number[owner == i] - first[i])
-                        for i, f in enumerate(functions)]
-        # the Functions' arrays: views of their storage, held (an access costs 1 µs)
-        out = {key: [(pos, f.x.array, src) for pos, f, src in items]
-               for key, items in out.items()}
-        rng = np.random.default_rng(1)
-        for a in arrays:
-            a[:] = rng.standard_normal(a.size)
-        stale = {k: v.copy() for k, v in dcpp.fem.pack_coefficients(F).items()}
-        for f in functions:
-            f.x.array[:] = rng.standard_normal(f.x.array.size)
-        fresh = dcpp.fem.pack_coefficients(F)
-        for key, items in out.items():
-            flat = stale[key].reshape(-1)
-            for pos, arr, src in items:
-                flat[pos] = arr[src]
-        if set(stale) != set(fresh) or not all(np.array_equal(stale[k], fresh[k])
-                                                for k in fresh):
-            return None
-        return out
-    finally:
-        for a, s in zip(arrays, saved):
-            a[:] = s
-
-
-def jacobian_columns(F: fem.FormMetaClass, J: fem.FormMetaClass) -> dict | None:
-    """Where the Jacobian form ``J``'s packed coefficients sit in the residual form ``F``'s,
-    per integral: ``{key: column indices}`` with ``pack(J)[key] == pack(F)[key][:, cols]``
-    exactly whatever the coefficients' values, or None when that does not hold (then the
-    Jacobian packs its own). Found by packing each coefficient's number, then checked with
-    random values (the coefficients' values are restored)."""
-    arrays = [c.x.array for c in F.coefficients]
-    saved = [a.copy() for a in arrays]
-    try:
-        for k, a in enumerate(arrays):
-            a[:] = k + 1.0
-        pf, pj = dcpp.fem.pack_coefficients(F), dcpp.fem.pack_coefficients(J)
-        if not set(pj) <= set(pf) or any(pf[k].shape[0] != pj[k].shape[0] for k in pj):
-            return None
-        cols = {}
-        for key, packed in pj.items():
-            if pf[key].shape[0] == 0:  # no entity on this rank: any columns of the width
-                cols[key] = np.zeros(_records(packed, key).shape[1], np.int64)
-                continue
-            # coefficient number + 1 per column of an entity's record
-            owner_f, owner_j = _records(pf[key], key)[0], _records(packed, key)[0]
-            c = []
-            for k in np.unique(owner_j):
-                src, dst = np.flatnonzero(owner_f == k), np.flatnonzero(owner_j == k)
-                if src.size != dst.size:
-                    return None
-                c.append((dst, src))
-            idx = np.empty(owner_j.size, np.int64)
-            for dst, src in c:
-                idx[dst] = src
-            cols[key] = idx
-        rng = np.random.default_rng(0)
-        for a in arrays:
-            a[:] = rng.standard_normal(a.size)
-        pf, pj = dcpp.fem.pack_coefficients(F), dcpp.fem.pack_coefficients(J)
-        taken = _take_columns(pf, cols)
-        if not all(np.array_equal(pj[k], taken[k]) for k in cols):
-            return None
-        return cols
-    finally:
-        for a, s in zip(arrays, saved):
-            a[:] = s
-
-
-def _records(packed: np.ndarray, key) -> np.ndarray:
-    """A packing with one row per integration entity: an interior facet's values (both
-    cells') fill two rows of the array dolfinx 0.5 returns, one record of twice the width."""
-    if key[0] == dcpp.fem.IntegralType.interior_facet:
-        return packed.reshape(packed.shape[0] // 2, 2 * packed.shape[1])
-    return packed
-
-
-def _take_columns(packed: dict, cols: dict) -> dict:
-    """The packing of a form whose coefficients are columns ``cols`` (of each entity's
-    record, :func:`jacobian_columns`) of the packing ``packed``, in dolfinx's shapes."""
-    out = {}
-    for key, idx in cols.items():
-        rows, per_row = packed[key].shape[0], idx.size
-        if key[0] == dcpp.fem.IntegralType.interior_facet:
-            per_row //= 2
-        out[key] = _records(packed[key], key)[:, idx].reshape(rows, per_row)
-    return out
 
 
 def assemble_jacobian(A: PETSc.Mat, J: fem.FormMetaClass, bcs, extra=None) -> None:

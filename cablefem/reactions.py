@@ -148,6 +148,10 @@ class AnchorReactions:
         :class:`~cablefem.petsc_utils.RowsAssembler` does: the same sums)."""
         F = self.model.f_dynamic
         packer = self.packer
+        native = getattr(packer, "native", None)
+        if native is not None and packer.F is F and self._time is not None:
+            m = self.model  # the same sums in C (cablefem.native_rows), one rank
+            return native.cells(self._time, m.u.vector, m.v.vector, m.a.vector, self.R)
         coeffs = (packer.coefficients(self._time) if packer is not None and packer.F is F
                   else dcpp.fem.pack_coefficients(F))
         consts = dcpp.fem.pack_constants(F)

@@ -1,0 +1,149 @@
+/* The time integrator's residual and Jacobian of a model on one rank, assembled in C: the
+ * compiled form kernels (FFCx's tabulate_tensor) called cell by cell, the same sums in the
+ * same order as dolfinx's assemblers, and the anchors' rows as cablefem.petsc_utils.
+ * RowsAssembler writes them. Python sets the time, the constants and every coefficient but
+ * the state (cablefem/native_rows.py); this file copies the state (u, v, a) into the packed
+ * coefficients and does the cell loops. It declares the few PETSc functions it calls instead
+ * of including PETSc's headers: it is compiled with the C compiler alone and linked against
+ * the PETSc library petsc4py uses. PETSC_INT is PETSc's integer (int32_t or int64_t). */
+
+#include <stdint.h>
+#include <string.h>
+
+#ifndef PETSC_INT
+#define PETSC_INT int32_t
+#endif
+typedef PETSC_INT PetscInt;
+typedef int PetscErrorCode;
+typedef void *Vec;
+typedef void *Mat;
+
+extern PetscErrorCode VecGetArrayRead(Vec, const double **);
+extern PetscErrorCode VecRestoreArrayRead(Vec, const double **);
+extern PetscErrorCode VecGetArray(Vec, double **);
+extern PetscErrorCode VecRestoreArray(Vec, double **);
+extern PetscErrorCode MatZeroEntries(Mat);
+extern PetscErrorCode MatSetValuesBlocked(Mat, PetscInt, const PetscInt *, PetscInt,
+                                          const PetscInt *, const double *, int);
+extern PetscErrorCode MatAssemblyBegin(Mat, int);
+extern PetscErrorCode MatAssemblyEnd(Mat, int);
+extern PetscErrorCode MatZeroRows(Mat, PetscInt, const PetscInt *, double, Vec, Vec);
+
+enum { ADD_VALUES_ = 2, MAT_FLUSH_ = 1, MAT_FINAL_ = 0 };
+
+typedef void (*kernel_t)(double *, const double *, const double *, const double *,
+                         const int *, const uint8_t *);
+
+/* Filled by native_rows.py; every array is owned by the Python object (kept alive there). */
+typedef struct {
+    int32_t n_cells, nodes, bs, coord_stride; /* cells; nodes and unknowns per node */
+    const int32_t *dofmap;                     /* nodes of each cell, in the cells' order */
+    const double *coords;                      /* each cell's coordinate dofs */
+    kernel_t kernel_f, kernel_j;
+    double *w_f;                               /* the residual's packed coefficients */
+    int32_t stride_f, stride_j;
+    const int32_t *cols_j;                     /* the Jacobian's columns of w_f */
+    const double *const_f, *const_j;
+    int32_t n_state[3];                        /* u, v, a: how many values each packs */
+    const int64_t *pos[3];                     /* where in w_f */
+    const int32_t *src[3];                     /* from which entry of the state vector */
+    int32_t n_bc;                              /* the anchors' dofs x - g */
+    const int32_t *bc_dofs;
+    const double *g;                           /* the prescribed values' array */
+    int32_t n_rows;                            /* the rows weighted by kappa */
+    const PetscInt *rows;
+    double kappa;
+    int32_t n_local;                           /* the vectors' length */
+    double *be, *ae, *wj;                      /* work: a cell's vector, matrix, coeffs */
+    PetscInt *cell_dofs;
+} rows_ctx;
+
+#define CHECK(call) do { PetscErrorCode ierr_ = (call); if (ierr_) return (int)ierr_; } while (0)
+
+static int gather(rows_ctx *c, int s, Vec X) {
+    if (c->n_state[s] == 0 || X == NULL)
+        return 0;
+    const double *x;
+    CHECK(VecGetArrayRead(X, &x));
+    const int64_t *pos = c->pos[s];
+    const int32_t *src = c->src[s];
+    for (int32_t k = 0; k < c->n_state[s]; ++k)
+        c->w_f[pos[k]] = x[src[k]];
+    CHECK(VecRestoreArrayRead(X, &x));
+    return 0;
+}
+
+/* The cell loop of dolfinx's assemble_vector into b (not zeroed here). */
+static void add_cells(rows_ctx *c, double *b) {
+    const int32_t nd = c->nodes * c->bs;
+    for (int32_t i = 0; i < c->n_cells; ++i) {
+        memset(c->be, 0, sizeof(double) * nd);
+        c->kernel_f(c->be, c->w_f + (int64_t)i * c->stride_f, c->const_f,
+                    c->coords + (int64_t)i * c->coord_stride, NULL, NULL);
+        const int32_t *dofs = c->dofmap + (int64_t)i * c->nodes;
+        for (int32_t j = 0; j < c->nodes; ++j)
+            for (int32_t k = 0; k < c->bs; ++k)
+                b[c->bs * dofs[j] + k] += c->be[c->bs * j + k];
+    }
+}
+
+/* The residual with the state U, V, A (V, A may be NULL when the form lacks them) into F:
+ * the cells' sum, then the anchors' rows kappa (x - g). */
+int cablefem_residual(rows_ctx *c, Vec U, Vec V, Vec A, Vec F) {
+    CHECK(gather(c, 0, U));
+    CHECK(gather(c, 1, V));
+    CHECK(gather(c, 2, A));
+    double *b;
+    const double *x;
+    CHECK(VecGetArray(F, &b));
+    memset(b, 0, sizeof(double) * c->n_local);
+    add_cells(c, b);
+    CHECK(VecGetArrayRead(U, &x));
+    for (int32_t i = 0; i < c->n_bc; ++i) { /* dolfinx's set_bc with scale -1 */
+        const int32_t d = c->bc_dofs[i];
+        b[d] = -1.0 * (c->g[d] - x[d]);
+    }
+    CHECK(VecRestoreArrayRead(U, &x));
+    for (int32_t i = 0; i < c->n_rows; ++i)
+        b[c->rows[i]] *= c->kappa;
+    CHECK(VecRestoreArray(F, &b));
+    return 0;
+}
+
+/* The cells' sum alone at the state already packed (the anchor forces' residual). */
+int cablefem_cells(rows_ctx *c, Vec U, Vec V, Vec A, Vec F) {
+    CHECK(gather(c, 0, U));
+    CHECK(gather(c, 1, V));
+    CHECK(gather(c, 2, A));
+    double *b;
+    CHECK(VecGetArray(F, &b));
+    memset(b, 0, sizeof(double) * c->n_local);
+    add_cells(c, b);
+    CHECK(VecRestoreArray(F, &b));
+    return 0;
+}
+
+/* The Jacobian at the state of the last residual into J (its pattern kept), then the
+ * anchors' rows kappa times identity rows. One rank: the local numbers are the global ones
+ * (dolfinx's local-to-global map is then the identity), so no map is applied. */
+int cablefem_jacobian(rows_ctx *c, Mat J) {
+    const int32_t nd = c->nodes * c->bs;
+    CHECK(MatZeroEntries(J));
+    for (int32_t i = 0; i < c->n_cells; ++i) {
+        const double *w = c->w_f + (int64_t)i * c->stride_f;
+        for (int32_t k = 0; k < c->stride_j; ++k)
+            c->wj[k] = w[c->cols_j[k]];
+        memset(c->ae, 0, sizeof(double) * nd * nd);
+        c->kernel_j(c->ae, c->wj, c->const_j, c->coords + (int64_t)i * c->coord_stride,
+                    NULL, NULL);
+        const int32_t *dofs = c->dofmap + (int64_t)i * c->nodes;
+        for (int32_t j = 0; j < c->nodes; ++j)
+            c->cell_dofs[j] = (PetscInt)dofs[j];
+        CHECK(MatSetValuesBlocked(J, c->nodes, c->cell_dofs, c->nodes, c->cell_dofs, c->ae,
+                                  ADD_VALUES_));
+    }
+    CHECK(MatAssemblyBegin(J, MAT_FINAL_));
+    CHECK(MatAssemblyEnd(J, MAT_FINAL_));
+    CHECK(MatZeroRows(J, c->n_rows, c->rows, c->kappa, NULL, NULL));
+    return 0;
+}

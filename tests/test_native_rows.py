@@ -1,0 +1,108 @@
+"""The time integrator's residual and Jacobian assembled in C (:mod:`cablefem.native_rows`)
+are :class:`~cablefem.petsc_utils.RowsAssembler`'s numbers bit for bit: the same compiled
+kernels with the same packed constants and coefficients, their terms added in the same
+order. So a whole run gives the same anchor forces to the last bit with it and without it,
+and a model outside its range (several ranks, terms outside UFL, no compiler) keeps the
+Python route."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from conftest import level_case
+from dolfinx.fem import petsc as fpetsc
+from mpi4py import MPI
+from petsc4py import PETSc
+from test_fastassembly import _assemblers, _moved_model
+
+from cablefem import native_rows as nr
+from cablefem.cable import CableModel
+from cablefem.case import parse_case
+from cablefem.dynamics import DynamicProblem
+from cablefem.statics import solve_static
+
+MOTION = {"type": "harmonic", "amplitude": [2e-4, 1e-4, 0], "omega": 32.814}
+DAMPING = {"ratio": 0.005, "frequencies": [16.407, 32.814]}
+T = 0.0123  # the time _moved_model sets
+
+
+def _dense(A: PETSc.Mat) -> np.ndarray:
+    return A.copy().convert("dense").getDenseArray()  # convert() alone works in place
+
+
+def test_the_c_residual_and_jacobian_are_the_python_ones_bit_for_bit():
+    """At a random state (every term of the residual non-zero, the anchors' rows ``x - g``
+    too), residual and Jacobian equal RowsAssembler's exactly: difference 0, not a
+    tolerance, since the floating-point operations are the same."""
+    model = _moved_model()
+    rows, _ = _assemblers(model)
+    native = nr.native_rows(model, rows, model.prefix)
+    if model.comm.size > 1:  # one rank only: the Python route
+        assert native is None
+        return
+    assert native is not None, "the C route should be available on one rank"
+    U, V, A = (f.vector.copy() for f in (model.u, model.v, model.a))
+    F_py, F_c = U.duplicate(), U.duplicate()
+    rows.residual(F_py, model.u.vector, T)
+    J_py = fpetsc.create_matrix(model.j_dynamic)
+    rows.jacobian(J_py)
+    F_c.set(np.nan)  # every entry must be written
+    native.residual(T, U, V, A, F_c)
+    J_c = fpetsc.create_matrix(model.j_dynamic)
+    native.jacobian(J_c, constants=True)
+    assert np.abs(F_py.array).min() < np.abs(F_py.array).max()  # not a trivial vector
+    assert np.array_equal(F_c.array, F_py.array)
+    assert np.array_equal(_dense(J_c), _dense(J_py))
+    # the state comes from the vectors given, not from the model's Functions
+    V.scale(2.0)
+    native.residual(T, U, V, A, F_c)
+    assert not np.array_equal(F_c.array, F_py.array)
+
+
+def _forces(native: bool, steps: int = 40) -> np.ndarray:
+    model = CableModel(MPI.COMM_WORLD, parse_case(level_case(elements=8, motion=MOTION,
+                                                             damping=DAMPING)))
+    solve_static(model)
+    with DynamicProblem(model, 2e-3, petsc_options={"native_assembly": native}) as problem:
+        assert (problem._rows.native is not None) == (native and model.comm.size == 1)
+        return np.array([f for _, f in problem.run(steps * 2e-3)])
+
+
+def test_a_run_gives_the_same_anchor_forces_with_the_c_route_and_without():
+    """40 steps of a moving, damped cable, the anchor forces at every step (the C route
+    also assembles their residual): equal to the last bit."""
+    c, py = _forces(True), _forces(False)
+    assert c.shape == py.shape == (41, 2, 3)
+    assert np.array_equal(c, py)
+
+
+def test_terms_outside_ufl_and_a_split_jacobian_keep_the_python_route():
+    model = _moved_model()
+    rows, _ = _assemblers(model)
+    rows.extra = (lambda arr: None, lambda A: None)  # a network's kink corners
+    assert nr.native_rows(model, rows, model.prefix) is None
+    rows.extra, rows.parts = None, [(rows.J, rows.cols), (rows.J, rows.cols)]  # a fluid's
+    assert nr.native_rows(model, rows, model.prefix) is None
+
+
+def test_without_a_c_compiler_the_python_route(monkeypatch):
+    """No compiler: no library, the Python route, the run the same."""
+    monkeypatch.setenv("CC", "/nonexistent/cc")
+    monkeypatch.setattr(nr, "_LIB", [])
+    assert nr.library() is None
+    model = _moved_model()
+    rows, _ = _assemblers(model)
+    assert nr.native_rows(model, rows, model.prefix) is None
+    monkeypatch.setattr(nr, "_LIB", [])  # the next test loads it again
+
+
+@pytest.mark.parametrize("value", ["false", "0"])
+def test_the_option_asks_for_the_python_route(value):
+    model = _moved_model()
+    rows, _ = _assemblers(model)
+    opts = PETSc.Options()
+    opts[model.prefix + "native_assembly"] = value
+    try:
+        assert nr.native_rows(model, rows, model.prefix) is None
+    finally:
+        opts.delValue(model.prefix + "native_assembly")
