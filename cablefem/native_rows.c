@@ -28,6 +28,10 @@ extern PetscErrorCode MatSetValuesBlocked(Mat, PetscInt, const PetscInt *, Petsc
 extern PetscErrorCode MatAssemblyBegin(Mat, int);
 extern PetscErrorCode MatAssemblyEnd(Mat, int);
 extern PetscErrorCode MatZeroRows(Mat, PetscInt, const PetscInt *, double, Vec, Vec);
+extern PetscErrorCode MatMult(Mat, Vec, Vec);
+extern PetscErrorCode VecAXPY(Vec, double, Vec);
+extern PetscErrorCode KSPSolve(void *, Vec, Vec);
+extern PetscErrorCode KSPGetConvergedReason(void *, int *);
 
 enum { ADD_VALUES_ = 2, MAT_FLUSH_ = 1, MAT_FINAL_ = 0 };
 
@@ -145,5 +149,35 @@ int cablefem_jacobian(rows_ctx *c, Mat J) {
     CHECK(MatAssemblyBegin(J, MAT_FINAL_));
     CHECK(MatAssemblyEnd(J, MAT_FINAL_));
     CHECK(MatZeroRows(J, c->n_rows, c->rows, c->kappa, NULL, NULL));
+    return 0;
+}
+
+/* The anchor forces' residual at t_{n+1} (cablefem.reactions.AnchorReactions.compute, its
+ * dynamic part, the same operations in the same order): with A holding the anchors'
+ * prescribed accelerations and zeros elsewhere, R = F(u, v, a_b); the mass solve
+ * M da = -R (the anchors' rows zeroed) with the KSP given; A += da; R += M_full da, so that
+ * R = F(u, v, a). *reason: the KSP's converged reason (negative: failed, A and R as far as
+ * they got). */
+int cablefem_forces(rows_ctx *c, void *ksp, Mat M_full, Vec U, Vec V, Vec A, Vec R,
+                    Vec rhs, Vec da, Vec Mda, int32_t n_zero, const PetscInt *zero,
+                    int *reason) {
+    CHECK(cablefem_cells(c, U, V, A, R));
+    const double *r;
+    double *b;
+    CHECK(VecGetArrayRead(R, &r));
+    CHECK(VecGetArray(rhs, &b));
+    for (int32_t i = 0; i < c->n_local; ++i)
+        b[i] = -r[i];
+    for (int32_t i = 0; i < n_zero; ++i)
+        b[zero[i]] = 0.0;
+    CHECK(VecRestoreArray(rhs, &b));
+    CHECK(VecRestoreArrayRead(R, &r));
+    CHECK(KSPSolve(ksp, rhs, da));
+    CHECK(KSPGetConvergedReason(ksp, reason));
+    if (*reason < 0)
+        return 0;
+    CHECK(VecAXPY(A, 1.0, da));
+    CHECK(MatMult(M_full, da, Mda));
+    CHECK(VecAXPY(R, 1.0, Mda));
     return 0;
 }

@@ -111,6 +111,9 @@ def _load():
         getattr(lib, name).restype = ctypes.c_int
     lib.cablefem_jacobian.argtypes = [ctypes.c_void_p] * 2
     lib.cablefem_jacobian.restype = ctypes.c_int
+    lib.cablefem_forces.argtypes = [ctypes.c_void_p] * 10 + [ctypes.c_int32, ctypes.c_void_p,
+                                                             ctypes.POINTER(ctypes.c_int)]
+    lib.cablefem_forces.restype = ctypes.c_int
     return lib
 
 
@@ -252,6 +255,25 @@ class NativeRows:
         err = self.lib.cablefem_cells(self._ref, U.handle, V.handle, A.handle, F.handle)
         if err:
             raise PETSc.Error(err)
+
+    def forces(self, t: float, ksp: PETSc.KSP, M_full: PETSc.Mat, R: PETSc.Vec,
+               work: tuple, zero: np.ndarray) -> int:
+        """The dynamic part of :meth:`cablefem.reactions.AnchorReactions.compute` in one
+        call, the same operations: with ``model.a`` holding the anchors' prescribed
+        accelerations and zeros elsewhere, ``R = F(u, v, a_b)``, the mass solve ``M da =
+        -R`` (rows ``zero`` of the right-hand side zeroed) with ``ksp``, ``a += da`` and
+        ``R += M_full da``. ``work``: the vectors ``(rhs, da, M da)``. Returns the KSP's
+        converged reason."""
+        self.at(t)
+        m, reason = self.model, ctypes.c_int(0)
+        rhs, da, Mda = work
+        err = self.lib.cablefem_forces(
+            self._ref, ksp.handle, M_full.handle, m.u.vector.handle, m.v.vector.handle,
+            m.a.vector.handle, R.handle, rhs.handle, da.handle, Mda.handle, zero.size,
+            zero.ctypes.data, ctypes.byref(reason))
+        if err:
+            raise PETSc.Error(err)
+        return reason.value
 
     def jacobian(self, J: PETSc.Mat, constants: bool = False) -> None:
         """The Jacobian at the state of the last :meth:`residual` into ``J``:

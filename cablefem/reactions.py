@@ -196,11 +196,7 @@ class AnchorReactions:
         self._time = t
         if self._mass_moves:
             self._assemble_mass()
-        arr = m.a.x.array
-        arr[:] = 0.0
-        for anc, a in zip(m.anchors, acc):
-            if anc.dofs.size and a is not None:  # the others: zero, set above
-                arr[anc.flat_dofs] = anc.prescribed_from(a)
+        self._anchors_only(acc)
         self._assemble()
         rhs = self.rhs.array_w
         np.negative(self.R.array_r, out=rhs)
@@ -218,6 +214,30 @@ class AnchorReactions:
         if m.comm.size > 1:
             m.a.vector.ghostUpdate(addv=INSERT, mode=FORWARD)
 
+    def _anchors_only(self, acc: list) -> None:
+        """``model.a``: the anchors' accelerations ``acc``, zero elsewhere."""
+        arr = self.model.a.x.array
+        arr[:] = 0.0
+        for anc, a in zip(self.model.anchors, acc):
+            if anc.dofs.size and a is not None:  # the others: zero, set above
+                arr[anc.flat_dofs] = anc.prescribed_from(a)
+
+    def _native(self, t: float, acc: list) -> bool:
+        """:meth:`compute`'s dynamic part in one C call where the residual has one
+        (:mod:`cablefem.native_rows`: the same operations, the same numbers); False
+        otherwise (nothing done)."""
+        native = getattr(self.packer, "native", None)
+        if (native is None or self._mass_moves or not self._zero_rows
+                or self.packer.F is not self.model.f_dynamic):
+            return False
+        self._time = t
+        self._anchors_only(acc)
+        reason = native.forces(t, self.ksp, self.M_full, self.R, (self.rhs, self.da, self.Mda),
+                               self._bc_rows)
+        if reason < 0:
+            raise RuntimeError(f"mass-matrix solve failed at t={t:g} (KSP reason {reason})")
+        return True
+
     def compute(self, t: float, dynamic: bool = True) -> np.ndarray:
         """Anchor forces ``N_a`` (n_anchors, 3) in N, identical on every rank; for a beam
         (n_anchors, 6): force and moment (N m, the rod's internal moment at the anchor).
@@ -230,9 +250,10 @@ class AnchorReactions:
         self._time = t
         if dynamic:
             acc = self._anchor_accelerations(t)
-            self._equilibrium(t, acc)  # leaves F(u, v, a_b) in self.R
-            self.M_full.mult(self.da, self.Mda)
-            self.R.axpy(1.0, self.Mda)  # R = F(u, v, a_b) + M da = F(u, v, a)
+            if not self._native(t, acc):
+                self._equilibrium(t, acc)  # leaves F(u, v, a_b) in self.R
+                self.M_full.mult(self.da, self.Mda)
+                self.R.axpy(1.0, self.Mda)  # R = F(u, v, a_b) + M da = F(u, v, a)
             arr = self.R.array_r
         else:
             m.a.x.array[:] = 0.0
