@@ -38,19 +38,30 @@ enum { ADD_VALUES_ = 2, MAT_FLUSH_ = 1, MAT_FINAL_ = 0 };
 typedef void (*kernel_t)(double *, const double *, const double *, const double *,
                          const int *, const uint8_t *);
 
-/* Filled by native_rows.py; every array is owned by the Python object (kept alive there). */
+/* One integral of the residual and its Jacobian's: over cells, or over interior facets
+ * (a vertex between two elements: both cells' nodes, coordinates and coefficients). */
 typedef struct {
-    int32_t n_cells, nodes, bs, coord_stride; /* cells; nodes and unknowns per node */
-    const int32_t *dofmap;                     /* nodes of each cell, in the cells' order */
-    const double *coords;                      /* each cell's coordinate dofs */
+    int32_t n, facets;                         /* entities; 1: interior facets */
+    int32_t nodes;                             /* nodes an entity's element vector has */
+    const int32_t *dofs;                       /* those nodes, entity by entity */
+    const double *coords;                      /* each entity's coordinate dofs */
+    int32_t coord_stride;
+    const int32_t *local;                      /* facets: the two cells' local facets */
+    const uint8_t *perms;                      /* facets: their two permutations */
     kernel_t kernel_f, kernel_j;
     double *w_f;                               /* the residual's packed coefficients */
-    int32_t stride_f, stride_j;
+    int32_t stride_f, stride_j;                /* per entity (facets: both cells') */
     const int32_t *cols_j;                     /* the Jacobian's columns of w_f */
-    const double *const_f, *const_j;
     int32_t n_state[3];                        /* u, v, a: how many values each packs */
     const int64_t *pos[3];                     /* where in w_f */
     const int32_t *src[3];                     /* from which entry of the state vector */
+} part_t;
+
+/* Filled by native_rows.py; every array is owned by the Python object (kept alive there). */
+typedef struct {
+    int32_t bs, n_parts;                       /* unknowns per node; parts: cells first */
+    part_t parts[2];
+    const double *const_f, *const_j;
     int32_t n_bc;                              /* the anchors' dofs x - g */
     const int32_t *bc_dofs;
     const double *g;                           /* the prescribed values' array */
@@ -58,50 +69,61 @@ typedef struct {
     const PetscInt *rows;
     double kappa;
     int32_t n_local;                           /* the vectors' length */
-    double *be, *ae, *wj;                      /* work: a cell's vector, matrix, coeffs */
-    PetscInt *cell_dofs;
+    double *be, *ae, *wj;                      /* work: an entity's vector, matrix, coeffs */
+    PetscInt *block_dofs;
 } rows_ctx;
 
 #define CHECK(call) do { PetscErrorCode ierr_ = (call); if (ierr_) return (int)ierr_; } while (0)
 
-static int gather(rows_ctx *c, int s, Vec X) {
-    if (c->n_state[s] == 0 || X == NULL)
-        return 0;
-    const double *x;
-    CHECK(VecGetArrayRead(X, &x));
-    const int64_t *pos = c->pos[s];
-    const int32_t *src = c->src[s];
-    for (int32_t k = 0; k < c->n_state[s]; ++k)
-        c->w_f[pos[k]] = x[src[k]];
-    CHECK(VecRestoreArrayRead(X, &x));
+static int gather(rows_ctx *c, Vec U, Vec V, Vec A) {
+    Vec X[3] = {U, V, A};
+    for (int s = 0; s < 3; ++s) {
+        if (X[s] == NULL)
+            continue;
+        const double *x;
+        CHECK(VecGetArrayRead(X[s], &x));
+        for (int32_t p = 0; p < c->n_parts; ++p) {
+            part_t *q = &c->parts[p];
+            const int64_t *pos = q->pos[s];
+            const int32_t *src = q->src[s];
+            for (int32_t k = 0; k < q->n_state[s]; ++k)
+                q->w_f[pos[k]] = x[src[k]];
+        }
+        CHECK(VecRestoreArrayRead(X[s], &x));
+    }
     return 0;
 }
 
-/* The cell loop of dolfinx's assemble_vector into b (not zeroed here). */
-static void add_cells(rows_ctx *c, double *b) {
-    const int32_t nd = c->nodes * c->bs;
-    for (int32_t i = 0; i < c->n_cells; ++i) {
-        memset(c->be, 0, sizeof(double) * nd);
-        c->kernel_f(c->be, c->w_f + (int64_t)i * c->stride_f, c->const_f,
-                    c->coords + (int64_t)i * c->coord_stride, NULL, NULL);
-        const int32_t *dofs = c->dofmap + (int64_t)i * c->nodes;
-        for (int32_t j = 0; j < c->nodes; ++j)
-            for (int32_t k = 0; k < c->bs; ++k)
-                b[c->bs * dofs[j] + k] += c->be[c->bs * j + k];
+/* The entity loops of dolfinx's assemble_vector (cells, then interior facets) into b (not
+ * zeroed here). */
+static void add_parts(rows_ctx *c, double *b) {
+    const int32_t bs = c->bs;
+    for (int32_t p = 0; p < c->n_parts; ++p) {
+        const part_t *q = &c->parts[p];
+        const int32_t nd = q->nodes * bs;
+        for (int32_t i = 0; i < q->n; ++i) {
+            memset(c->be, 0, sizeof(double) * nd);
+            q->kernel_f(c->be, q->w_f + (int64_t)i * q->stride_f, c->const_f,
+                        q->coords + (int64_t)i * q->coord_stride,
+                        q->facets ? q->local + 2 * i : NULL,
+                        q->facets ? q->perms + 2 * i : NULL);
+            const int32_t *dofs = q->dofs + (int64_t)i * q->nodes;
+            for (int32_t j = 0; j < q->nodes; ++j)
+                for (int32_t k = 0; k < bs; ++k)
+                    b[bs * dofs[j] + k] += c->be[bs * j + k];
+        }
     }
 }
 
 /* The residual with the state U, V, A (V, A may be NULL when the form lacks them) into F:
- * the cells' sum, then the anchors' rows kappa (x - g). */
+ * the entities' sum, then the anchors' rows kappa (x - g). */
 int cablefem_residual(rows_ctx *c, Vec U, Vec V, Vec A, Vec F) {
-    CHECK(gather(c, 0, U));
-    CHECK(gather(c, 1, V));
-    CHECK(gather(c, 2, A));
+    CHECK(gather(c, U, V, A));
     double *b;
     const double *x;
     CHECK(VecGetArray(F, &b));
     memset(b, 0, sizeof(double) * c->n_local);
-    add_cells(c, b);
+    add_parts(c, b);
     CHECK(VecGetArrayRead(U, &x));
     for (int32_t i = 0; i < c->n_bc; ++i) { /* dolfinx's set_bc with scale -1 */
         const int32_t d = c->bc_dofs[i];
@@ -114,15 +136,13 @@ int cablefem_residual(rows_ctx *c, Vec U, Vec V, Vec A, Vec F) {
     return 0;
 }
 
-/* The cells' sum alone at the state already packed (the anchor forces' residual). */
+/* The entities' sum alone at the state U, V, A (the anchor forces' residual). */
 int cablefem_cells(rows_ctx *c, Vec U, Vec V, Vec A, Vec F) {
-    CHECK(gather(c, 0, U));
-    CHECK(gather(c, 1, V));
-    CHECK(gather(c, 2, A));
+    CHECK(gather(c, U, V, A));
     double *b;
     CHECK(VecGetArray(F, &b));
     memset(b, 0, sizeof(double) * c->n_local);
-    add_cells(c, b);
+    add_parts(c, b);
     CHECK(VecRestoreArray(F, &b));
     return 0;
 }
@@ -131,20 +151,24 @@ int cablefem_cells(rows_ctx *c, Vec U, Vec V, Vec A, Vec F) {
  * anchors' rows kappa times identity rows. One rank: the local numbers are the global ones
  * (dolfinx's local-to-global map is then the identity), so no map is applied. */
 int cablefem_jacobian(rows_ctx *c, Mat J) {
-    const int32_t nd = c->nodes * c->bs;
     CHECK(MatZeroEntries(J));
-    for (int32_t i = 0; i < c->n_cells; ++i) {
-        const double *w = c->w_f + (int64_t)i * c->stride_f;
-        for (int32_t k = 0; k < c->stride_j; ++k)
-            c->wj[k] = w[c->cols_j[k]];
-        memset(c->ae, 0, sizeof(double) * nd * nd);
-        c->kernel_j(c->ae, c->wj, c->const_j, c->coords + (int64_t)i * c->coord_stride,
-                    NULL, NULL);
-        const int32_t *dofs = c->dofmap + (int64_t)i * c->nodes;
-        for (int32_t j = 0; j < c->nodes; ++j)
-            c->cell_dofs[j] = (PetscInt)dofs[j];
-        CHECK(MatSetValuesBlocked(J, c->nodes, c->cell_dofs, c->nodes, c->cell_dofs, c->ae,
-                                  ADD_VALUES_));
+    for (int32_t p = 0; p < c->n_parts; ++p) {
+        const part_t *q = &c->parts[p];
+        const int32_t nd = q->nodes * c->bs;
+        for (int32_t i = 0; i < q->n; ++i) {
+            const double *w = q->w_f + (int64_t)i * q->stride_f;
+            for (int32_t k = 0; k < q->stride_j; ++k)
+                c->wj[k] = w[q->cols_j[k]];
+            memset(c->ae, 0, sizeof(double) * nd * nd);
+            q->kernel_j(c->ae, c->wj, c->const_j, q->coords + (int64_t)i * q->coord_stride,
+                        q->facets ? q->local + 2 * i : NULL,
+                        q->facets ? q->perms + 2 * i : NULL);
+            const int32_t *dofs = q->dofs + (int64_t)i * q->nodes;
+            for (int32_t j = 0; j < q->nodes; ++j)
+                c->block_dofs[j] = (PetscInt)dofs[j];
+            CHECK(MatSetValuesBlocked(J, q->nodes, c->block_dofs, q->nodes, c->block_dofs,
+                                      c->ae, ADD_VALUES_));
+        }
     }
     CHECK(MatAssemblyBegin(J, MAT_FINAL_));
     CHECK(MatAssemblyEnd(J, MAT_FINAL_));

@@ -43,20 +43,28 @@ _SOURCE = Path(__file__).with_name("native_rows.c")
 _LIB: list = []  # [the loaded library or None], once per process
 
 
+_p = ctypes.c_void_p
+
+
+class _Part(ctypes.Structure):
+    """``part_t`` of native_rows.c, field for field."""
+
+    _fields_ = [("n", ctypes.c_int32), ("facets", ctypes.c_int32), ("nodes", ctypes.c_int32),
+                ("dofs", _p), ("coords", _p), ("coord_stride", ctypes.c_int32),
+                ("local", _p), ("perms", _p), ("kernel_f", _p), ("kernel_j", _p),
+                ("w_f", _p), ("stride_f", ctypes.c_int32), ("stride_j", ctypes.c_int32),
+                ("cols_j", _p), ("n_state", ctypes.c_int32 * 3), ("pos", _p * 3),
+                ("src", _p * 3)]
+
+
 class _Ctx(ctypes.Structure):
     """``rows_ctx`` of native_rows.c, field for field."""
 
-    _p = ctypes.c_void_p
-    _fields_ = [("n_cells", ctypes.c_int32), ("nodes", ctypes.c_int32),
-                ("bs", ctypes.c_int32), ("coord_stride", ctypes.c_int32),
-                ("dofmap", _p), ("coords", _p), ("kernel_f", _p), ("kernel_j", _p),
-                ("w_f", _p), ("stride_f", ctypes.c_int32), ("stride_j", ctypes.c_int32),
-                ("cols_j", _p), ("const_f", _p), ("const_j", _p),
-                ("n_state", ctypes.c_int32 * 3), ("pos", _p * 3), ("src", _p * 3),
-                ("n_bc", ctypes.c_int32), ("bc_dofs", _p), ("g", _p),
-                ("n_rows", ctypes.c_int32), ("rows", _p), ("kappa", ctypes.c_double),
-                ("n_local", ctypes.c_int32), ("be", _p), ("ae", _p), ("wj", _p),
-                ("cell_dofs", _p)]
+    _fields_ = [("bs", ctypes.c_int32), ("n_parts", ctypes.c_int32), ("parts", _Part * 2),
+                ("const_f", _p), ("const_j", _p), ("n_bc", ctypes.c_int32), ("bc_dofs", _p),
+                ("g", _p), ("n_rows", ctypes.c_int32), ("rows", _p),
+                ("kappa", ctypes.c_double), ("n_local", ctypes.c_int32), ("be", _p),
+                ("ae", _p), ("wj", _p), ("block_dofs", _p)]
 
 
 def _petsc_library() -> str | None:
@@ -122,18 +130,26 @@ def _address(cdata) -> int:
     return int(cffi.FFI().cast("uintptr_t", cdata))
 
 
-def _cell_kernel(form) -> tuple[int, int] | None:
-    """``form``'s one cell integral: (its id, its kernel's address); None when the form
-    has other integrals too."""
+def _integrals(F, J) -> list[tuple] | None:
+    """The integrals of the residual ``F`` and its Jacobian ``J``, cells first:
+    [(key, F's kernel's address, J's kernel's address)]; None unless each form has one
+    integral over the cells and at most one over interior facets, the same in both."""
     types = dcpp.fem.IntegralType
-    ids = form.integral_ids(types.cell)
-    if (len(ids) != 1 or form.integral_ids(types.exterior_facet)
-            or form.integral_ids(types.interior_facet)):
-        return None
-    uf = form.ufcx_form
-    if uf.num_integrals(0) != 1:
-        return None
-    return ids[0], _address(uf.integrals(0)[0].tabulate_tensor_float64)
+    out = []
+    for kind, cls, most in ((types.cell, 0, 1), (types.interior_facet, 2, 1),
+                            (types.exterior_facet, 1, 0)):
+        ids = F.integral_ids(kind)
+        if list(ids) != list(J.integral_ids(kind)) or len(ids) > most or (
+                kind == types.cell and len(ids) != 1):
+            return None
+        for form in (F, J):
+            if form.ufcx_form.num_integrals(cls) != len(ids):
+                return None
+        if ids:
+            out.append(((kind, ids[0]),
+                        *(_address(form.ufcx_form.integrals(cls)[0].tabulate_tensor_float64)
+                          for form in (F, J))))
+    return out
 
 
 def native_rows(model, rows, options_prefix: str) -> NativeRows | None:
@@ -142,21 +158,20 @@ def native_rows(model, rows, options_prefix: str) -> NativeRows | None:
     option ``-<options_prefix>native_assembly`` is false, or it cannot be compiled."""
     if not PETSc.Options().getBool(options_prefix + "native_assembly", True):
         return None
-    F, J = rows.F, rows.J
     if (model.comm.size != 1 or rows.extra is not None or rows.parts is not None
             or rows.gather is None or rows.others is None or rows.cols is None
             or model.V.element.needs_dof_transformations
             or model.V.dofmap.index_map.local_range[0] != 0):  # local numbers: global
         return None
-    kf, kj = _cell_kernel(F), _cell_kernel(J)
-    if kf is None or kj is None or kf[0] != kj[0]:
+    integrals = _integrals(rows.F, rows.J)
+    if integrals is None:
         return None
     if any(not np.shares_memory(bc.g.x.array, model.u_bc.x.array) for bc in rows.bcs):
         return None  # the prescribed values: model.u_bc's
     lib = library()
     if lib is None:
         return None
-    return NativeRows(lib, model, rows, kf, kj)
+    return NativeRows(lib, model, rows, integrals)
 
 
 class NativeRows:
@@ -166,46 +181,26 @@ class NativeRows:
     vectors given; :meth:`at` brings the time, the constants and the other coefficients up
     to date."""
 
-    def __init__(self, lib, model, rows, kf, kj) -> None:
+    def __init__(self, lib, model, rows, integrals) -> None:
         self.lib, self.model, self.rows = lib, model, rows
-        key = (dcpp.fem.IntegralType.cell, kf[0])
-        F = rows.F
-        cells = np.asarray(F.domains(key[0], key[1]), np.int32)
-        dofmap = model.V.dofmap.list.array.reshape(-1, model.V.dofmap.dof_layout.num_dofs)
-        geo = model.mesh.geometry
-        gdofs = geo.dofmap.array.reshape(len(geo.dofmap), -1)
-        keep = self._keep = []  # every array the C side points into
-
-        def ptr(a):
-            keep.append(a)
-            return a.ctypes.data
-
-        bs = model.V.dofmap.bs
-        nodes = dofmap.shape[1]
-        c = self.ctx = _Ctx()
-        c.n_cells, c.nodes, c.bs = cells.size, nodes, bs
-        c.dofmap = ptr(np.ascontiguousarray(dofmap[cells], np.int32))
-        coords = np.ascontiguousarray(geo.x[gdofs[cells]], np.float64)
-        c.coord_stride = coords[0].size if cells.size else 0
-        c.coords = ptr(coords)
-        c.kernel_f, c.kernel_j = kf[1], kj[1]
-        self.key = key
-        self.w_f = np.array(rows.coefficients(None)[key], np.float64, order="C")  # its shape
+        self._keep = []  # every array the C side points into
+        ptr = self._ptr
+        packed = rows.coefficients(None)  # the packing's shapes
         rows.forget()  # packed now, before the caller sets its time and state
-        c.w_f = ptr(self.w_f)
-        c.stride_f = self.w_f.shape[1] if self.w_f.ndim == 2 else 0
-        cols = np.ascontiguousarray(rows.cols[key], np.int32)
-        c.stride_j, c.cols_j = cols.size, ptr(cols)
-        self.const_f = np.zeros(dcpp.fem.pack_constants(F).size + 1)  # never empty
+        bs = model.V.dofmap.bs
+        c = self.ctx = _Ctx()
+        c.bs, c.n_parts = bs, len(integrals)
+        #: (key, the C side's copy of the residual's packing there), per integral
+        self.packs = []
+        widest = [1, 1]  # an element vector's nodes, the Jacobian's coefficients
+        for part, (key, kf, kj) in zip(c.parts, integrals):
+            w = np.array(packed[key], np.float64, order="C")
+            self.packs.append((key, w))
+            self._part(part, key, w, kf, kj)
+            widest = [max(widest[0], part.nodes), max(widest[1], part.stride_j)]
+        self.const_f = np.zeros(dcpp.fem.pack_constants(rows.F).size + 1)  # never empty
         self.const_j = np.zeros(dcpp.fem.pack_constants(rows.J).size + 1)
         c.const_f, c.const_j = ptr(self.const_f), ptr(self.const_j)
-        arrays = [f.x.array for f in (model.u, model.v, model.a)]
-        for pos, arr, src in rows.gather.get(key, []):
-            s = next(i for i, a in enumerate(arrays) if a is arr
-                     or np.shares_memory(a, arr))
-            c.n_state[s] = pos.size
-            c.pos[s] = ptr(np.ascontiguousarray(pos, np.int64))
-            c.src[s] = ptr(np.ascontiguousarray(src, np.int32))
         bc_dofs = np.concatenate([bc.dof_indices()[0] for bc in rows.bcs]
                                  ).astype(np.int32) if rows.bcs else np.zeros(0, np.int32)
         c.n_bc, c.bc_dofs = bc_dofs.size, ptr(bc_dofs)
@@ -213,13 +208,53 @@ class NativeRows:
         anchor_rows = np.ascontiguousarray(rows.rows, PETSc.IntType)
         c.n_rows, c.rows, c.kappa = anchor_rows.size, ptr(anchor_rows), rows.kappa
         c.n_local = model.u.x.array.size
-        nd = nodes * bs
-        c.be, c.ae = ptr(np.zeros(nd)), ptr(np.zeros(nd * nd))
-        c.wj = ptr(np.zeros(max(cols.size, 1)))
-        c.cell_dofs = ptr(np.zeros(nodes, PETSc.IntType))
+        nd = widest[0] * bs
+        c.be, c.ae, c.wj = ptr(np.zeros(nd)), ptr(np.zeros(nd * nd)), ptr(np.zeros(widest[1]))
+        c.block_dofs = ptr(np.zeros(widest[0], PETSc.IntType))
         self._ref = ctypes.byref(c)
         #: the time of the last :meth:`at` (None: :meth:`RowsAssembler.forget` since)
         self.time: float | None = None
+
+    def _ptr(self, a: np.ndarray) -> int:
+        self._keep.append(a)
+        return a.ctypes.data
+
+    def _part(self, part: _Part, key, w: np.ndarray, kf: int, kj: int) -> None:
+        """``part`` filled for the integral ``key``: its entities (cells, or interior
+        facets: both cells), their nodes, coordinates and coefficients ``w``, as
+        dolfinx's assemblers lay them out."""
+        model, rows, ptr = self.model, self.rows, self._ptr
+        dofmap = model.V.dofmap.list.array.reshape(-1, model.V.dofmap.dof_layout.num_dofs)
+        geo = model.mesh.geometry
+        gdofs = geo.dofmap.array.reshape(len(geo.dofmap), -1)
+        where = np.asarray(rows.F.domains(*key), np.int32)
+        part.facets = int(key[0] == dcpp.fem.IntegralType.interior_facet)
+        if part.facets:  # (facet, side, (cell, local facet)): both cells' nodes in turn
+            cells, local = where[:, :, 0], np.ascontiguousarray(where[:, :, 1])
+            part.local = ptr(local)
+            topology = model.mesh.topology
+            topology.create_entity_permutations()
+            per_cell = dcpp.mesh.cell_num_entities(topology.cell_type, topology.dim - 1)
+            perms = topology.get_facet_permutations()[cells * per_cell + local]
+            part.perms = ptr(np.ascontiguousarray(perms, np.uint8))
+        else:
+            cells = where.reshape(-1, 1)
+        part.n = cells.shape[0]
+        part.nodes = cells.shape[1] * dofmap.shape[1]
+        part.dofs = ptr(np.ascontiguousarray(dofmap[cells].reshape(part.n, -1), np.int32))
+        coords = np.ascontiguousarray(geo.x[gdofs[cells]].reshape(part.n, -1), np.float64)
+        part.coords, part.coord_stride = ptr(coords), coords.shape[1]
+        part.kernel_f, part.kernel_j = kf, kj
+        part.w_f = ptr(w)
+        part.stride_f = w.size // part.n if part.n else 0
+        cols = np.ascontiguousarray(rows.cols[key], np.int32)
+        part.stride_j, part.cols_j = cols.size, ptr(cols)
+        arrays = [f.x.array for f in (model.u, model.v, model.a)]
+        for pos, arr, src in rows.gather.get(key, []):
+            s = next(i for i, a in enumerate(arrays) if np.shares_memory(a, arr))
+            part.n_state[s] = pos.size
+            part.pos[s] = ptr(np.ascontiguousarray(pos, np.int64))
+            part.src[s] = ptr(np.ascontiguousarray(src, np.int32))
 
     def at(self, t: float) -> None:
         """The model's time ``t``, and the packed constants and other coefficients at it
@@ -228,7 +263,8 @@ class NativeRows:
             return
         self.model.set_time(t)
         packed, _ = self.rows.others_at(t)  # the state: copied in by the C side
-        np.copyto(self.w_f, packed[self.key])
+        for key, w in self.packs:
+            np.copyto(w, packed[key])
         self.constants()
         self.time = t
 

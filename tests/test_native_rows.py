@@ -13,7 +13,7 @@ from conftest import level_case
 from dolfinx.fem import petsc as fpetsc
 from mpi4py import MPI
 from petsc4py import PETSc
-from test_fastassembly import _assemblers, _moved_model
+from test_fastassembly import _assemblers, _moved, _moved_model
 
 from cablefem import native_rows as nr
 from cablefem.cable import CableModel
@@ -26,21 +26,41 @@ DAMPING = {"ratio": 0.005, "frequencies": [16.407, 32.814]}
 T = 0.0123  # the time _moved_model sets
 
 
+def _damped_model():
+    """A taut cable with a damper at an interior node (an integral over that vertex, an
+    interior facet: both elements' nodes, coordinates and coefficients), off its state."""
+    case = {"title": "damper", "section": {"EA": 1e8, "EI": 1e-6, "mass": 1.0},
+            "gravity": {"g": 9.81}, "geometry": {"length": 10.0},
+            "mesh": {"elements": 10},
+            "anchors": [{"name": "p", "position": [0.0, 0, 0], "type": "pinned"},
+                        {"name": "q", "position": [10.001, 0, 0], "type": "pinned",
+                         "motion": MOTION}],
+            "dampers": [{"anchor": "p", "distance": 2.0, "coefficient": 300.0,
+                         "direction": [0.0, 0.6, 0.8]}],
+            "damping": DAMPING, "solver": {"outer_correction": "none"}}
+    model = CableModel(MPI.COMM_WORLD, parse_case(case))
+    solve_static(model)
+    return _moved(model, 5, (1e-4, 1e-2, 1.0), T, (412.0, 8.1e4))
+
+
 def _dense(A: PETSc.Mat) -> np.ndarray:
     return A.copy().convert("dense").getDenseArray()  # convert() alone works in place
 
 
-def test_the_c_residual_and_jacobian_are_the_python_ones_bit_for_bit():
+@pytest.mark.parametrize("make", [_moved_model, _damped_model], ids=["cable", "damper"])
+def test_the_c_residual_and_jacobian_are_the_python_ones_bit_for_bit(make):
     """At a random state (every term of the residual non-zero, the anchors' rows ``x - g``
     too), residual and Jacobian equal RowsAssembler's exactly: difference 0, not a
-    tolerance, since the floating-point operations are the same."""
-    model = _moved_model()
+    tolerance, since the floating-point operations are the same. With a damper, the
+    integral over its vertex too."""
+    model = make()
     rows, _ = _assemblers(model)
     native = nr.native_rows(model, rows, model.prefix)
     if model.comm.size > 1:  # one rank only: the Python route
         assert native is None
         return
     assert native is not None, "the C route should be available on one rank"
+    assert len(native.packs) == (2 if make is _damped_model else 1)  # cells, the vertex
     U, V, A = (f.vector.copy() for f in (model.u, model.v, model.a))
     F_py, F_c = U.duplicate(), U.duplicate()
     rows.residual(F_py, model.u.vector, T)
