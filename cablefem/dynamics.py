@@ -181,7 +181,7 @@ def _make_ts(model, dt: float, rho_inf: float, history: SNESHistory,
             model.shift_v.value = shifts[0] = shift_v
             model.shift_a.value = shifts[1] = shift_a
         if rows.native is not None:  # at the residual's state, just before (SNES)
-            return rows.native.jacobian(J, changed)
+            return rows.native.jacobian(J, changed, newton.slow)
         # SNES evaluates the residual at the same state just before: model.u/v/a are current
         rows.jacobian(J, slow=newton.slow)
 
@@ -210,8 +210,7 @@ def _make_ts(model, dt: float, rho_inf: float, history: SNESHistory,
             n_dofs, reuse=not model.is_beam)
         newton = StepNewton(ts, prefix, costly, history)  # its test keeps the norms
         newton.split = rows.parts is not None
-        if newton.reuse == 0:  # a Jacobian assembled at every iteration: C may do both
-            rows.native = native_rows(model, rows, prefix)
+        rows.native = native_rows(model, rows, prefix)  # None: the Python route
     return ts, (F_vec, J_mat, newton), rows
 
 

@@ -97,7 +97,6 @@ longer than REGION_FRACTION of half the cable or of its chain to a junction) rai
 from __future__ import annotations
 
 import logging
-import math
 
 import numpy as np
 from mpi4py import MPI
@@ -400,19 +399,20 @@ class VirtualHinges:
         return hg.sigma + hg.sig_T * (np.clip(T, FLOOR * T0, CEILING * T0) - T0) \
             + hg.sig_C * dC
 
-    def fallback(self, forces: np.ndarray) -> dict[str, bool]:
+    def fallback(self, forces: np.ndarray) -> dict[str, np.ndarray]:
         """Per anchor: True when the anchor's tension in ``forces`` (n_anchors, >= 3: the
-        forces at the real anchors) is outside FLOOR to CEILING times its first element's
-        static tension: the layer's law no longer follows the tension there (module
-        docs). (The anchor force and the first element's tension differ by the layer's
-        weight, about 1e-3 of them: nothing next to the range's factors 4 and 2.)"""
+        forces at the real anchors; or (n_anchors, rows, >= 3): a block of rows, one flag
+        a row) is outside FLOOR to CEILING times its first element's static tension: the
+        layer's law no longer follows the tension there (module docs). (The anchor force
+        and the first element's tension differ by the layer's weight, about 1e-3 of them:
+        nothing next to the range's factors 4 and 2.)"""
         out = {}
-        for hg in self.items:  # called for every output row: the norm without NumPy's
-            f = forces[hg.index]  # per-call overhead (the same sqrt of the same sum)
-            T = math.sqrt(float(f[0]) ** 2 + float(f[1]) ** 2 + float(f[2]) ** 2)
+        for hg in self.items:
+            f = np.asarray(forces, float)[hg.index]
+            T = np.sqrt(f[..., 0] ** 2 + f[..., 1] ** 2 + f[..., 2] ** 2)
             started = hg.T_static > 0.0  # before start_dynamics: the statics' own law
-            out[hg.anchor.name] = started and not (FLOOR * hg.T_static <= T
-                                                   <= CEILING * hg.T_static)
+            out[hg.anchor.name] = started & ~((FLOOR * hg.T_static <= T)
+                                              & (T <= CEILING * hg.T_static))
         return out
 
     def report(self) -> dict[str, dict]:

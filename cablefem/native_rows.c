@@ -48,10 +48,10 @@ typedef struct {
     int32_t coord_stride;
     const int32_t *local;                      /* facets: the two cells' local facets */
     const uint8_t *perms;                      /* facets: their two permutations */
-    kernel_t kernel_f, kernel_j;
+    kernel_t kernel_f, kernel_j[3];            /* the Jacobian: whole, its fast, slow part */
     double *w_f;                               /* the residual's packed coefficients */
-    int32_t stride_f, stride_j;                /* per entity (facets: both cells') */
-    const int32_t *cols_j;                     /* the Jacobian's columns of w_f */
+    int32_t stride_f, stride_j[3];             /* per entity (facets: both cells') */
+    const int32_t *cols_j[3];                  /* each Jacobian's columns of w_f */
     int32_t n_state[3];                        /* u, v, a: how many values each packs */
     const int64_t *pos[3];                     /* where in w_f */
     const int32_t *src[3];                     /* from which entry of the state vector */
@@ -61,7 +61,7 @@ typedef struct {
 typedef struct {
     int32_t bs, n_parts;                       /* unknowns per node; parts: cells first */
     part_t parts[2];
-    const double *const_f, *const_j;
+    const double *const_f, *const_j[3];
     int32_t n_bc;                              /* the anchors' dofs x - g */
     const int32_t *bc_dofs;
     const double *g;                           /* the prescribed values' array */
@@ -147,20 +147,25 @@ int cablefem_cells(rows_ctx *c, Vec U, Vec V, Vec A, Vec F) {
     return 0;
 }
 
-/* The Jacobian at the state of the last residual into J (its pattern kept), then the
+/* Jacobian `which` (0: whole, 1: its fast part, 2: its slow part) at the state of the last
+ * residual into J (zeroed first, its pattern kept) and assembled; with `rows`, then the
  * anchors' rows kappa times identity rows. One rank: the local numbers are the global ones
  * (dolfinx's local-to-global map is then the identity), so no map is applied. */
-int cablefem_jacobian(rows_ctx *c, Mat J) {
+int cablefem_jacobian(rows_ctx *c, Mat J, int32_t which, int32_t rows) {
     CHECK(MatZeroEntries(J));
     for (int32_t p = 0; p < c->n_parts; ++p) {
         const part_t *q = &c->parts[p];
         const int32_t nd = q->nodes * c->bs;
+        if (q->kernel_j[which] == NULL) /* this Jacobian has no integral here */
+            continue;
         for (int32_t i = 0; i < q->n; ++i) {
             const double *w = q->w_f + (int64_t)i * q->stride_f;
-            for (int32_t k = 0; k < q->stride_j; ++k)
-                c->wj[k] = w[q->cols_j[k]];
+            const int32_t *cols = q->cols_j[which];
+            for (int32_t k = 0; k < q->stride_j[which]; ++k)
+                c->wj[k] = w[cols[k]];
             memset(c->ae, 0, sizeof(double) * nd * nd);
-            q->kernel_j(c->ae, c->wj, c->const_j, q->coords + (int64_t)i * q->coord_stride,
+            q->kernel_j[which](c->ae, c->wj, c->const_j[which],
+                        q->coords + (int64_t)i * q->coord_stride,
                         q->facets ? q->local + 2 * i : NULL,
                         q->facets ? q->perms + 2 * i : NULL);
             const int32_t *dofs = q->dofs + (int64_t)i * q->nodes;
@@ -172,7 +177,8 @@ int cablefem_jacobian(rows_ctx *c, Mat J) {
     }
     CHECK(MatAssemblyBegin(J, MAT_FINAL_));
     CHECK(MatAssemblyEnd(J, MAT_FINAL_));
-    CHECK(MatZeroRows(J, c->n_rows, c->rows, c->kappa, NULL, NULL));
+    if (rows)
+        CHECK(MatZeroRows(J, c->n_rows, c->rows, c->kappa, NULL, NULL));
     return 0;
 }
 

@@ -51,9 +51,9 @@ class _Part(ctypes.Structure):
 
     _fields_ = [("n", ctypes.c_int32), ("facets", ctypes.c_int32), ("nodes", ctypes.c_int32),
                 ("dofs", _p), ("coords", _p), ("coord_stride", ctypes.c_int32),
-                ("local", _p), ("perms", _p), ("kernel_f", _p), ("kernel_j", _p),
-                ("w_f", _p), ("stride_f", ctypes.c_int32), ("stride_j", ctypes.c_int32),
-                ("cols_j", _p), ("n_state", ctypes.c_int32 * 3), ("pos", _p * 3),
+                ("local", _p), ("perms", _p), ("kernel_f", _p), ("kernel_j", _p * 3),
+                ("w_f", _p), ("stride_f", ctypes.c_int32), ("stride_j", ctypes.c_int32 * 3),
+                ("cols_j", _p * 3), ("n_state", ctypes.c_int32 * 3), ("pos", _p * 3),
                 ("src", _p * 3)]
 
 
@@ -61,7 +61,8 @@ class _Ctx(ctypes.Structure):
     """``rows_ctx`` of native_rows.c, field for field."""
 
     _fields_ = [("bs", ctypes.c_int32), ("n_parts", ctypes.c_int32), ("parts", _Part * 2),
-                ("const_f", _p), ("const_j", _p), ("n_bc", ctypes.c_int32), ("bc_dofs", _p),
+                ("const_f", _p), ("const_j", _p * 3), ("n_bc", ctypes.c_int32),
+                ("bc_dofs", _p),
                 ("g", _p), ("n_rows", ctypes.c_int32), ("rows", _p),
                 ("kappa", ctypes.c_double), ("n_local", ctypes.c_int32), ("be", _p),
                 ("ae", _p), ("wj", _p), ("block_dofs", _p)]
@@ -117,7 +118,7 @@ def _load():
     for name in ("cablefem_residual", "cablefem_cells"):
         getattr(lib, name).argtypes = [ctypes.c_void_p] * 5
         getattr(lib, name).restype = ctypes.c_int
-    lib.cablefem_jacobian.argtypes = [ctypes.c_void_p] * 2
+    lib.cablefem_jacobian.argtypes = [ctypes.c_void_p] * 2 + [ctypes.c_int32] * 2
     lib.cablefem_jacobian.restype = ctypes.c_int
     lib.cablefem_forces.argtypes = [ctypes.c_void_p] * 10 + [ctypes.c_int32, ctypes.c_void_p,
                                                              ctypes.POINTER(ctypes.c_int)]
@@ -130,25 +131,33 @@ def _address(cdata) -> int:
     return int(cffi.FFI().cast("uintptr_t", cdata))
 
 
-def _integrals(F, J) -> list[tuple] | None:
-    """The integrals of the residual ``F`` and its Jacobian ``J``, cells first:
-    [(key, F's kernel's address, J's kernel's address)]; None unless each form has one
-    integral over the cells and at most one over interior facets, the same in both."""
+def _integrals(F, jacobians) -> list[tuple] | None:
+    """The integrals of the residual ``F``, cells first, with its Jacobians' (the whole
+    one, and its fast and slow parts or None): [(key, F's kernel's address, [each
+    Jacobian's kernel's address there, or None])]; None unless ``F`` has one integral over
+    the cells and at most one over interior facets, none over exterior ones, and each
+    Jacobian's integrals are among these."""
     types = dcpp.fem.IntegralType
-    out = []
-    for kind, cls, most in ((types.cell, 0, 1), (types.interior_facet, 2, 1),
-                            (types.exterior_facet, 1, 0)):
-        ids = F.integral_ids(kind)
-        if list(ids) != list(J.integral_ids(kind)) or len(ids) > most or (
-                kind == types.cell and len(ids) != 1):
-            return None
-        for form in (F, J):
-            if form.ufcx_form.num_integrals(cls) != len(ids):
+    kinds = ((types.cell, 0), (types.interior_facet, 2), (types.exterior_facet, 1))
+    ids = {kind: list(F.integral_ids(kind)) for kind, _ in kinds}
+    if len(ids[types.cell]) != 1 or len(ids[types.interior_facet]) > 1 or ids[
+            types.exterior_facet]:
+        return None
+    forms = [F, *jacobians]
+    for form in forms:
+        if form is None:
+            continue
+        for kind, cls in kinds:
+            own = list(form.integral_ids(kind))
+            if not set(own) <= set(ids[kind]) or form.ufcx_form.num_integrals(cls) != len(own):
                 return None
-        if ids:
-            out.append(((kind, ids[0]),
-                        *(_address(form.ufcx_form.integrals(cls)[0].tabulate_tensor_float64)
-                          for form in (F, J))))
+    out = []
+    for kind, cls in kinds[:2]:
+        for i in ids[kind]:
+            addr = [None if form is None or i not in list(form.integral_ids(kind)) else
+                    _address(form.ufcx_form.integrals(cls)[0].tabulate_tensor_float64)
+                    for form in forms]
+            out.append(((kind, i), addr[0], addr[1:]))
     return out
 
 
@@ -158,12 +167,14 @@ def native_rows(model, rows, options_prefix: str) -> NativeRows | None:
     option ``-<options_prefix>native_assembly`` is false, or it cannot be compiled."""
     if not PETSc.Options().getBool(options_prefix + "native_assembly", True):
         return None
-    if (model.comm.size != 1 or rows.extra is not None or rows.parts is not None
-            or rows.gather is None or rows.others is None or rows.cols is None
+    parts = rows.parts or [(None, None), (None, None)]  # the Jacobian's fast, slow part
+    if (model.comm.size != 1 or rows.extra is not None or rows.gather is None
+            or rows.others is None or rows.cols is None
+            or any(form is not None and cols is None for form, cols in parts)
             or model.V.element.needs_dof_transformations
             or model.V.dofmap.index_map.local_range[0] != 0):  # local numbers: global
         return None
-    integrals = _integrals(rows.F, rows.J)
+    integrals = _integrals(rows.F, [rows.J, parts[0][0], parts[1][0]])
     if integrals is None:
         return None
     if any(not np.shares_memory(bc.g.x.array, model.u_bc.x.array) for bc in rows.bcs):
@@ -193,14 +204,20 @@ class NativeRows:
         #: (key, the C side's copy of the residual's packing there), per integral
         self.packs = []
         widest = [1, 1]  # an element vector's nodes, the Jacobian's coefficients
+        #: the Jacobian's forms and their columns of the residual's packing: the whole
+        #: one, its fast and its slow part (None without a split)
+        self.jacobians = [(rows.J, rows.cols), *(rows.parts or [(None, None)] * 2)]
         for part, (key, kf, kj) in zip(c.parts, integrals):
             w = np.array(packed[key], np.float64, order="C")
             self.packs.append((key, w))
             self._part(part, key, w, kf, kj)
-            widest = [max(widest[0], part.nodes), max(widest[1], part.stride_j)]
-        self.const_f = np.zeros(dcpp.fem.pack_constants(rows.F).size + 1)  # never empty
-        self.const_j = np.zeros(dcpp.fem.pack_constants(rows.J).size + 1)
-        c.const_f, c.const_j = ptr(self.const_f), ptr(self.const_j)
+            widest = [max(widest[0], part.nodes), max(widest[1], *part.stride_j)]
+        #: the packed constants of the residual and of each Jacobian (never empty)
+        self.consts = [np.zeros(dcpp.fem.pack_constants(form).size + 1)
+                       for form in (rows.F, *(f for f, _ in self.jacobians)) if form is not None]
+        c.const_f = ptr(self.consts[0])
+        for k, arr in enumerate(self.consts[1:]):
+            c.const_j[k] = ptr(arr)
         bc_dofs = np.concatenate([bc.dof_indices()[0] for bc in rows.bcs]
                                  ).astype(np.int32) if rows.bcs else np.zeros(0, np.int32)
         c.n_bc, c.bc_dofs = bc_dofs.size, ptr(bc_dofs)
@@ -219,7 +236,7 @@ class NativeRows:
         self._keep.append(a)
         return a.ctypes.data
 
-    def _part(self, part: _Part, key, w: np.ndarray, kf: int, kj: int) -> None:
+    def _part(self, part: _Part, key, w: np.ndarray, kf: int, kj: list) -> None:
         """``part`` filled for the integral ``key``: its entities (cells, or interior
         facets: both cells), their nodes, coordinates and coefficients ``w``, as
         dolfinx's assemblers lay them out."""
@@ -244,11 +261,13 @@ class NativeRows:
         part.dofs = ptr(np.ascontiguousarray(dofmap[cells].reshape(part.n, -1), np.int32))
         coords = np.ascontiguousarray(geo.x[gdofs[cells]].reshape(part.n, -1), np.float64)
         part.coords, part.coord_stride = ptr(coords), coords.shape[1]
-        part.kernel_f, part.kernel_j = kf, kj
+        part.kernel_f = kf
         part.w_f = ptr(w)
         part.stride_f = w.size // part.n if part.n else 0
-        cols = np.ascontiguousarray(rows.cols[key], np.int32)
-        part.stride_j, part.cols_j = cols.size, ptr(cols)
+        for k, ((_, cols), kernel) in enumerate(zip(self.jacobians, kj)):
+            if kernel is not None:
+                cols = np.ascontiguousarray(cols[key], np.int32)
+                part.kernel_j[k], part.stride_j[k], part.cols_j[k] = kernel, cols.size, ptr(cols)
         arrays = [f.x.array for f in (model.u, model.v, model.a)]
         for pos, arr, src in rows.gather.get(key, []):
             s = next(i for i, a in enumerate(arrays) if np.shares_memory(a, arr))
@@ -270,9 +289,10 @@ class NativeRows:
 
     def constants(self) -> None:
         """The forms' constants packed again (the Jacobian's shifts, a time law's)."""
-        cf, cj = dcpp.fem.pack_constants(self.rows.F), dcpp.fem.pack_constants(self.rows.J)
-        self.const_f[:cf.size] = cf
-        self.const_j[:cj.size] = cj
+        forms = [self.rows.F, *(f for f, _ in self.jacobians if f is not None)]
+        for form, arr in zip(forms, self.consts):
+            packed = dcpp.fem.pack_constants(form)
+            arr[:packed.size] = packed
 
     def residual(self, t: float, U: PETSc.Vec, V: PETSc.Vec, A: PETSc.Vec,
                  F: PETSc.Vec) -> None:
@@ -311,12 +331,25 @@ class NativeRows:
             raise PETSc.Error(err)
         return reason.value
 
-    def jacobian(self, J: PETSc.Mat, constants: bool = False) -> None:
+    def jacobian(self, J: PETSc.Mat, constants: bool = False, slow: bool = True) -> None:
         """The Jacobian at the state of the last :meth:`residual` into ``J``:
-        :meth:`RowsAssembler.jacobian`'s numbers. ``constants``: pack the constants again
-        first (the time integrator's shifts changed)."""
+        :meth:`RowsAssembler.jacobian`'s numbers and steps (with a split Jacobian: its
+        fast part, and its slow part as last assembled unless ``slow``). ``constants``:
+        pack the constants again first (the time integrator's shifts changed)."""
         if constants:
             self.constants()
-        err = self.lib.cablefem_jacobian(self._ref, J.handle)
-        if err:
-            raise PETSc.Error(err)
+        lib, rows = self.lib, self.rows
+        if rows.parts is None:
+            return _check(lib.cablefem_jacobian(self._ref, J.handle, 0, 1))
+        _check(lib.cablefem_jacobian(self._ref, J.handle, 1, 0))
+        if slow or rows.A_slow is None:
+            if rows.A_slow is None:  # J's pattern (assembled: it can be duplicated)
+                rows.A_slow = J.duplicate()
+            _check(lib.cablefem_jacobian(self._ref, rows.A_slow.handle, 2, 0))
+        J.axpy(1.0, rows.A_slow, structure=PETSc.Mat.Structure.SAME_NONZERO_PATTERN)
+        J.zeroRowsLocal(rows.rows, diag=rows.kappa)
+
+
+def _check(err: int) -> None:
+    if err:
+        raise PETSc.Error(err)

@@ -14,6 +14,7 @@ from dolfinx.fem import petsc as fpetsc
 from mpi4py import MPI
 from petsc4py import PETSc
 from test_fastassembly import _assemblers, _moved, _moved_model
+from test_fluid import taut
 
 from cablefem import native_rows as nr
 from cablefem.cable import CableModel
@@ -102,13 +103,36 @@ def test_a_run_gives_the_same_anchor_forces_with_the_c_route_and_without(monkeyp
     assert np.array_equal(c, py)
 
 
-def test_terms_outside_ufl_and_a_split_jacobian_keep_the_python_route():
+def test_terms_outside_ufl_keep_the_python_route():
     model = _moved_model()
     rows, _ = _assemblers(model)
     rows.extra = (lambda arr: None, lambda A: None)  # a network's kink corners
     assert nr.native_rows(model, rows, model.prefix) is None
-    rows.extra, rows.parts = None, [(rows.J, rows.cols), (rows.J, rows.cols)]  # a fluid's
-    assert nr.native_rows(model, rows, model.prefix) is None
+
+
+def _wet_forces(native: bool) -> tuple[np.ndarray, int]:
+    """40 steps of a taut cable in a current, one anchor moving: the anchor forces, and
+    how many of its Jacobians' assemblies were whole ones (not the fast part alone)."""
+    case = taut(fluid={"current": [0.0, 0.3, 0.5]}, elements=12)
+    case["anchors"][1]["motion"] = MOTION
+    model = CableModel(MPI.COMM_WORLD, parse_case(case))
+    solve_static(model)
+    with DynamicProblem(model, 2e-3, petsc_options={"native_assembly": native}) as problem:
+        assert problem._rows.parts is not None  # the fluid's Jacobian kept apart
+        assert (problem._rows.native is not None) == (native and model.comm.size == 1)
+        forces = np.array([f for _, f in problem.run(40 * 2e-3)])
+        return forces, problem.newton.slow_assemblies
+
+
+def test_a_wet_cable_whose_jacobian_is_kept_in_parts_is_the_same_bit_for_bit():
+    """A fluid's drag and added mass: the Jacobian in a fast and a slow part, kept over
+    steps (both assembled in C, summed and given the anchors' rows as the Python route
+    does), the mass moving with the tangent (the anchor forces' mass assembled in Python):
+    the same anchor forces to the last bit, and the same number of slow assemblies."""
+    c, py = _wet_forces(True), _wet_forces(False)
+    assert c[0].shape == py[0].shape == (41, 2, 3)
+    assert np.array_equal(c[0], py[0])
+    assert c[1] == py[1] and c[1] >= 1
 
 
 def test_without_a_c_compiler_the_python_route(monkeypatch):

@@ -165,9 +165,6 @@ class RunOutput:
         """Record the anchor forces at ``t`` (written in batches)."""
         self.times.append(t)
         F = np.array(forces, float)  # a copy: the rows below are views of it
-        if self.model.hinges:  # rows outside the layer law's range
-            for name, flag in self.model.hinges.fallback(F).items():
-                self.fallback.setdefault(name, []).append(flag)
         for name, N in zip(self._names, F):
             self.forces[name].append(N[:3])
             if self.beam and name in self.rod:  # a rod's own moment
@@ -190,6 +187,9 @@ class RunOutput:
             return
         times = self.times[-n:].copy()
         N = np.array([self.forces[name][-n:] for name in self._names])  # (anchor, time, 3)
+        if self.model.hinges:  # rows outside the layer law's range
+            for name, flags in self.model.hinges.fallback(N).items():
+                self.fallback.setdefault(name, []).extend(flags.tolist())
         A = len(self._names)
         table = {"time": np.repeat(times, A), "anchor": self._names * n,
                  "tension": np.linalg.norm(N, axis=2).T.ravel()}

@@ -102,10 +102,10 @@ class TouchdownOutput:
     def add(self, t: float) -> None:
         """Record the touchdown at ``t`` (collective): a network's rows now; a single
         cable's node positions, its rows evaluated for the block at :meth:`flush`."""
-        from cablefem.seabed import positions
-
         if not self.active:
             return
+        from cablefem.seabed import positions
+
         if self.network:
             rows = self._network_rows(t)
             self.rows.extend(rows)
