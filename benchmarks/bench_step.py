@@ -5,13 +5,15 @@ In process, one rank: the case's model is built and its statics solved; then, fo
 ``--repeat`` fresh :class:`cablefem.dynamics.DynamicProblem` objects, ``--steps`` steps
 with the anchor forces at every step (what ``cablefem run`` does for ``anchors.csv``) and
 ``--steps`` steps without them, after 20 warm-up steps; the CPU time per step
-(``time.process_time``), the best of the repeats. The bare costs, best of 5 loops of
-``--calls`` calls: the residual kernel on packed data (``dolfinx.cpp.fem.assemble_vector``),
-the coefficients' packing, the Jacobian kernel with PETSc's matrix assembly, and the
-Jacobian with an LU factorisation and solve. Newton iterations, residuals and Jacobian
-assemblies per step come from the integrator's counters (over the whole run: warm-up and
-both loops). ``--option KEY=VALUE`` passes an option of the time integrator (without its
-``cable_`` prefix), e.g. ``--option newton_jacobian_reuse=0``.
+(``time.process_time``), the best of the repeats; each repeat on both assembly routes in
+turn, the C one (:mod:`cablefem.native_rows`) and the Python one, and their ratio. The
+bare costs, best of 5 loops of ``--calls`` calls: the residual kernel on packed data
+(``dolfinx.cpp.fem.assemble_vector``), the coefficients' packing, the Jacobian kernel with
+PETSc's matrix assembly, and the Jacobian with an LU factorisation and solve. Newton
+iterations, residuals and Jacobian assemblies per step come from the integrator's
+counters (over the whole run: warm-up and both loops). ``--option KEY=VALUE`` passes an
+option of the time integrator (without its ``cable_`` prefix), e.g. ``--option
+newton_jacobian_reuse=0``.
 
     python benchmarks/bench_step.py                           # case B
     python benchmarks/bench_step.py demos/paper_inplane.toml --steps 3000
@@ -25,35 +27,47 @@ import time
 
 
 def per_step(model, dt: float, steps: int, repeat: int, options: dict | None = None) -> dict:
+    """Both assembly routes (:mod:`cablefem.native_rows` in C, and the Python one), their
+    repeats alternated: ``{"c": ..., "python": ..., "ratio_c_to_python": ...}``."""
     from cablefem.dynamics import DynamicProblem
     from cablefem.statics import solve_static
 
-    with_forces, bare, newton, counts = [], [], [], {}
     solve_static(model)
-    for _ in range(repeat):  # each run from the static state
-        model.u.x.array[:] = model.u_static.x.array
-        model.v.x.array[:] = 0.0
-        with DynamicProblem(model, dt, petsc_options=options) as problem:
-            problem.anchor_forces()
-            for _ in range(20):
-                problem.step()
+    runs = {"c": ([], [], []), "python": ([], [], [])}
+    counts = {}
+    for _ in range(repeat):
+        for route, native in (("c", True), ("python", False)):
+            with_forces, bare, newton = runs[route]
+            model.u.x.array[:] = model.u_static.x.array  # each run from the static state
+            model.v.x.array[:] = 0.0
+            opts = {**(options or {}), "native_assembly": native}
+            with DynamicProblem(model, dt, petsc_options=opts) as problem:
+                if route == "c" and problem._rows.native is None:
+                    raise SystemExit("the C route is not available for this case here")
                 problem.anchor_forces()
-            t0 = time.process_time()
-            for _ in range(steps):
-                problem.step()
-                problem.anchor_forces()
-            t1 = time.process_time()
-            for _ in range(steps):
-                problem.step()
-            t2 = time.process_time()
-            with_forces.append((t1 - t0) / steps)
-            bare.append((t2 - t1) / steps)
-            n = problem.step_number
-            newton.append(problem.stats.newton_iterations / n)
-            counts = {"residuals_per_step": problem.newton.residuals / n,
-                      "jacobians_per_step": problem.newton.assemblies / n}
-    return {"step_and_anchor_forces_us": 1e6 * min(with_forces),
-            "step_us": 1e6 * min(bare), "newton_iterations_per_step": newton[-1], **counts}
+                for _ in range(20):
+                    problem.step()
+                    problem.anchor_forces()
+                t0 = time.process_time()
+                for _ in range(steps):
+                    problem.step()
+                    problem.anchor_forces()
+                t1 = time.process_time()
+                for _ in range(steps):
+                    problem.step()
+                t2 = time.process_time()
+                with_forces.append((t1 - t0) / steps)
+                bare.append((t2 - t1) / steps)
+                n = problem.step_number
+                newton.append(problem.stats.newton_iterations / n)
+                counts = {"residuals_per_step": problem.newton.residuals / n,
+                          "jacobians_per_step": problem.newton.assemblies / n}
+    out = {route: {"step_and_anchor_forces_us": 1e6 * min(w), "step_us": 1e6 * min(b),
+                   "newton_iterations_per_step": nw[-1], **counts}
+           for route, (w, b, nw) in runs.items()}
+    out["ratio_c_to_python"] = {k: out["c"][k] / out["python"][k]
+                                for k in ("step_and_anchor_forces_us", "step_us")}
+    return out
 
 
 def kernels(model, calls: int) -> dict:
