@@ -33,7 +33,8 @@ extern PetscErrorCode VecAXPY(Vec, double, Vec);
 extern PetscErrorCode KSPSolve(void *, Vec, Vec);
 extern PetscErrorCode KSPGetConvergedReason(void *, int *);
 
-enum { ADD_VALUES_ = 2, MAT_FLUSH_ = 1, MAT_FINAL_ = 0 };
+enum { ADD_VALUES_ = 2, MAT_FINAL_ = 0 };
+#define MAX_PARTS 8 /* integrals: native_rows.py's MAX_PARTS */
 
 typedef void (*kernel_t)(double *, const double *, const double *, const double *,
                          const int *, const uint8_t *);
@@ -60,7 +61,7 @@ typedef struct {
 /* Filled by native_rows.py; every array is owned by the Python object (kept alive there). */
 typedef struct {
     int32_t bs, n_parts;                       /* unknowns per node; parts: cells first */
-    part_t parts[2];
+    part_t parts[MAX_PARTS];
     const double *const_f, *const_j[3];
     int32_t n_bc;                              /* the anchors' dofs x - g */
     const int32_t *bc_dofs;

@@ -14,8 +14,8 @@ same.
 The C file is compiled once with the system's C compiler into the FFCx cache folder, next
 to the forms' kernels, and linked against the PETSc library petsc4py uses. Where it
 cannot be (no compiler), or the model is outside what it does (several ranks, terms
-outside UFL, a Jacobian kept in parts, integrals other than one over the cells, elements
-with dof transformations), :func:`native_rows` returns None and the caller keeps
+outside UFL, integrals over exterior facets, more than :data:`MAX_PARTS` integrals,
+elements with dof transformations), :func:`native_rows` returns None and the caller keeps
 :class:`~cablefem.petsc_utils.RowsAssembler`. ``-<prefix>native_assembly false`` (or
 ``solver.petsc_options``) asks for the Python route.
 """
@@ -44,6 +44,8 @@ _LIB: list = []  # [the loaded library or None], once per process
 
 
 _p = ctypes.c_void_p
+#: integrals the C side takes (``MAX_PARTS`` of native_rows.c)
+MAX_PARTS = 8
 
 
 class _Part(ctypes.Structure):
@@ -60,7 +62,8 @@ class _Part(ctypes.Structure):
 class _Ctx(ctypes.Structure):
     """``rows_ctx`` of native_rows.c, field for field."""
 
-    _fields_ = [("bs", ctypes.c_int32), ("n_parts", ctypes.c_int32), ("parts", _Part * 2),
+    _fields_ = [("bs", ctypes.c_int32), ("n_parts", ctypes.c_int32),
+                ("parts", _Part * MAX_PARTS),
                 ("const_f", _p), ("const_j", _p * 3), ("n_bc", ctypes.c_int32),
                 ("bc_dofs", _p),
                 ("g", _p), ("n_rows", ctypes.c_int32), ("rows", _p),
@@ -132,16 +135,16 @@ def _address(cdata) -> int:
 
 
 def _integrals(F, jacobians) -> list[tuple] | None:
-    """The integrals of the residual ``F``, cells first, with its Jacobians' (the whole
-    one, and its fast and slow parts or None): [(key, F's kernel's address, [each
-    Jacobian's kernel's address there, or None])]; None unless ``F`` has one integral over
-    the cells and at most one over interior facets, none over exterior ones, and each
-    Jacobian's integrals are among these."""
+    """The integrals of the residual ``F`` in dolfinx's order (over cells, then interior
+    facets, each by its id), with its Jacobians' (the whole one, and its fast and slow
+    parts or None): [(key, F's kernel's address, [each Jacobian's kernel's address there,
+    or None])]; None when ``F`` has no integral over the cells, one over exterior facets,
+    more than :data:`MAX_PARTS`, or a Jacobian has an integral ``F`` has not."""
     types = dcpp.fem.IntegralType
     kinds = ((types.cell, 0), (types.interior_facet, 2), (types.exterior_facet, 1))
     ids = {kind: list(F.integral_ids(kind)) for kind, _ in kinds}
-    if len(ids[types.cell]) != 1 or len(ids[types.interior_facet]) > 1 or ids[
-            types.exterior_facet]:
+    if (not ids[types.cell] or ids[types.exterior_facet]
+            or len(ids[types.cell]) + len(ids[types.interior_facet]) > MAX_PARTS):
         return None
     forms = [F, *jacobians]
     for form in forms:
@@ -154,9 +157,13 @@ def _integrals(F, jacobians) -> list[tuple] | None:
     out = []
     for kind, cls in kinds[:2]:
         for i in ids[kind]:
-            addr = [None if form is None or i not in list(form.integral_ids(kind)) else
-                    _address(form.ufcx_form.integrals(cls)[0].tabulate_tensor_float64)
-                    for form in forms]
+            addr = []
+            for form in forms:
+                uf = None if form is None else form.ufcx_form
+                own = [] if uf is None else [uf.integral_ids(cls)[k]
+                                             for k in range(uf.num_integrals(cls))]
+                addr.append(_address(uf.integrals(cls)[own.index(i)].tabulate_tensor_float64)
+                            if i in own else None)
             out.append(((kind, i), addr[0], addr[1:]))
     return out
 

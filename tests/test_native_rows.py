@@ -27,17 +27,18 @@ DAMPING = {"ratio": 0.005, "frequencies": [16.407, 32.814]}
 T = 0.0123  # the time _moved_model sets
 
 
-def _damped_model():
-    """A taut cable with a damper at an interior node (an integral over that vertex, an
-    interior facet: both elements' nodes, coordinates and coefficients), off its state."""
+def _damped_model(count: int = 1):
+    """A taut cable with ``count`` dampers at interior nodes (an integral over each vertex,
+    an interior facet: both elements' nodes, coordinates and coefficients), off its
+    state."""
     case = {"title": "damper", "section": {"EA": 1e8, "EI": 1e-6, "mass": 1.0},
             "gravity": {"g": 9.81}, "geometry": {"length": 10.0},
             "mesh": {"elements": 10},
             "anchors": [{"name": "p", "position": [0.0, 0, 0], "type": "pinned"},
                         {"name": "q", "position": [10.001, 0, 0], "type": "pinned",
                          "motion": MOTION}],
-            "dampers": [{"anchor": "p", "distance": 2.0, "coefficient": 300.0,
-                         "direction": [0.0, 0.6, 0.8]}],
+            "dampers": [{"anchor": "p", "distance": 2.0 + 5.0 * k, "coefficient": 300.0,
+                         "direction": [0.0, 0.6, 0.8]} for k in range(count)],
             "damping": DAMPING, "solver": {"outer_correction": "none"}}
     model = CableModel(MPI.COMM_WORLD, parse_case(case))
     solve_static(model)
@@ -48,7 +49,12 @@ def _dense(A: PETSc.Mat) -> np.ndarray:
     return A.copy().convert("dense").getDenseArray()  # convert() alone works in place
 
 
-@pytest.mark.parametrize("make", [_moved_model, _damped_model], ids=["cable", "damper"])
+def _two_dampers():
+    return _damped_model(2)
+
+
+@pytest.mark.parametrize("make", [_moved_model, _damped_model, _two_dampers],
+                         ids=["cable", "damper", "two-dampers"])
 def test_the_c_residual_and_jacobian_are_the_python_ones_bit_for_bit(make):
     """At a random state (every term of the residual non-zero, the anchors' rows ``x - g``
     too), residual and Jacobian equal RowsAssembler's exactly: difference 0, not a
@@ -61,7 +67,8 @@ def test_the_c_residual_and_jacobian_are_the_python_ones_bit_for_bit(make):
         assert native is None
         return
     assert native is not None, "the C route should be available on one rank"
-    assert len(native.packs) == (2 if make is _damped_model else 1)  # cells, the vertex
+    # the cells, and each damper's vertex
+    assert len(native.packs) == {_moved_model: 1, _damped_model: 2, _two_dampers: 3}[make]
     U, V, A = (f.vector.copy() for f in (model.u, model.v, model.a))
     F_py, F_c = U.duplicate(), U.duplicate()
     rows.residual(F_py, model.u.vector, T)
