@@ -304,8 +304,14 @@ class NativeRows:
     def residual(self, t: float, U: PETSc.Vec, V: PETSc.Vec, A: PETSc.Vec,
                  F: PETSc.Vec) -> None:
         """The time integrator's residual at ``t`` and the state ``U``, ``V``, ``A`` into
-        ``F``: :meth:`RowsAssembler.residual`'s numbers."""
+        ``F``: :meth:`RowsAssembler.residual`'s numbers. The state is also copied into
+        the model's Functions after the time is set, as the Python route does: a time law
+        that reads them (a wave's kinematics where the cable is) sees the state of the last
+        residual, also between outputs and in the integrator's start-up steps."""
         self.at(t)
+        m = self.model
+        for X, f in ((U, m.u), (V, m.v), (A, m.a)):
+            X.copy(f.vector)  # one rank: no ghosts
         err = self.lib.cablefem_residual(self._ref, U.handle, V.handle, A.handle, F.handle)
         if err:
             raise PETSc.Error(err)
