@@ -85,7 +85,7 @@ def _petsc_library() -> str | None:
 
 
 def library():
-    """The compiled ``native_rows.c`` (a :class:`ctypes.CDLL`), or None when it cannot be
+    """The compiled ``native_rows.c`` (a :class:`ctypes.PyDLL`), or None when it cannot be
     built here; built once into the FFCx cache folder and loaded once per process."""
     if _LIB:
         return _LIB[0]
@@ -117,7 +117,10 @@ def _load():
             subprocess.run([cc, *flags, os.fspath(_SOURCE), "-o", os.fspath(out), petsc],
                            check=True, capture_output=True, timeout=120)
             os.replace(out, target)
-    lib = ctypes.CDLL(os.fspath(target))
+    # the interpreter's lock stays held during the calls (they are short); a callback
+    # PETSc makes into Python from them (a preconditioner of type python in the mass
+    # solve) takes it again as its own
+    lib = ctypes.PyDLL(os.fspath(target))
     for name in ("cablefem_residual", "cablefem_cells"):
         getattr(lib, name).argtypes = [ctypes.c_void_p] * 5
         getattr(lib, name).restype = ctypes.c_int

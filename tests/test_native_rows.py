@@ -87,9 +87,9 @@ def test_the_c_residual_and_jacobian_are_the_python_ones_bit_for_bit(make):
     assert not np.array_equal(F_c.array, F_py.array)
 
 
-def _forces(native: bool, steps: int = 40) -> np.ndarray:
+def _forces(native: bool, steps: int = 40, **solver) -> np.ndarray:
     model = CableModel(MPI.COMM_WORLD, parse_case(level_case(elements=8, motion=MOTION,
-                                                             damping=DAMPING)))
+                                                             damping=DAMPING, solver=solver)))
     solve_static(model)
     with DynamicProblem(model, 2e-3, petsc_options={"native_assembly": native}) as problem:
         assert (problem._rows.native is not None) == (native and model.comm.size == 1)
@@ -107,6 +107,15 @@ def test_a_run_gives_the_same_anchor_forces_with_the_c_route_and_without(monkeyp
     py = _forces(False)
     assert len(calls) == (41 if MPI.COMM_WORLD.size == 1 else 0)
     assert c.shape == py.shape == (41, 2, 3)
+    assert np.array_equal(c, py)
+
+
+def test_a_mass_solve_through_python_from_c_is_the_same():
+    """The anchor forces' mass solve with a preconditioner of type python (PETSc calls
+    back into Python from the C call): the same forces as on the Python route."""
+    from cablefem.gathered_lu import PYTHON_TYPE
+    opts = {"petsc_options": {"mass_pc_type": "python", "mass_pc_python_type": PYTHON_TYPE}}
+    c, py = _forces(True, 10, **opts), _forces(False, 10, **opts)
     assert np.array_equal(c, py)
 
 
