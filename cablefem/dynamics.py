@@ -91,6 +91,7 @@ class DynamicsStats:
     output_times: list[float] = field(default_factory=list)
     #: every cut of the step: (the failed step's start time, the step the run went on with)
     cuts: list[tuple[float, float]] = field(default_factory=list)
+    assembly: str = ""  #: "c" (cablefem.native_rows) or "python": the residual's route
 
 
 def grid_time(step: int, dt: float) -> float:
@@ -160,8 +161,7 @@ def _make_ts(model, dt: float, rho_inf: float, history: SNESHistory,
     parts = None if slow is None else (model.j_dynamic_fast, slow)
     rows = RowsAssembler(F, model.j_dynamic, model.bcs, bc_rows, kappa, model.comm, extra,
                          (model.u, model.v, model.a), timed, parts)
-    serial = model.comm.size == 1
-    u, v, a = model.u, model.v, model.a
+    serial, (u, v, a) = model.comm.size == 1, (model.u, model.v, model.a)
 
     def I2Function(ts, t, U, V, A, F):
         if rows.native is not None:  # the same numbers in C (cablefem.native_rows)
@@ -299,6 +299,7 @@ class DynamicProblem:
         self.ts, self._work, self._rows = _make_ts(model, dt, rho_inf, self.history, self.prefix,
                                                    petsc_options)  # _work: F, J live as long as ts
         self.newton = self._work[-1]
+        self.stats.assembly = "python" if self._rows.native is None else "c"
         self.ts.setMaxTime(_NO_END)  # PETSc steps only with an end; step(t_end) sets it
         self.reactions = AnchorReactions(model)
         self.reactions.packer = self._rows  # the step's packing, its state copied in

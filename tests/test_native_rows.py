@@ -184,3 +184,19 @@ def test_the_option_asks_for_the_python_route(value):
         assert nr.native_rows(model, rows, model.prefix) is None
     finally:
         opts.delValue(model.prefix + "native_assembly")
+
+
+@pytest.mark.parametrize("native", [True, False])
+def test_summary_says_which_route_assembled(native, mpi_tmp_path):
+    """``summary.json``'s ``dynamics.assembly``: "c" on one rank unless the case asks for
+    the Python route; "python" on several ranks; the anchor forces the same either way
+    (compared by the test above)."""
+    from cablefem.app.run import run_case
+
+    case = level_case(elements=8, motion=MOTION, damping=DAMPING,
+                      dynamics={"t_end": 0.02, "dt": 2e-3},
+                      solver={"petsc_options": {"native_assembly": native}})
+    r = run_case(parse_case(case), mpi_tmp_path / f"r{native}", figures=False,
+                 progress=False)
+    expected = "c" if native and MPI.COMM_WORLD.size == 1 else "python"
+    assert r.summary["dynamics"]["assembly"] == expected

@@ -294,5 +294,7 @@ def _integrate(b: Built, output: RunOutput, outdir: Path, stats: DynamicsStats, 
         "newton_per_step": total["newton_iterations"] / max(stats.steps, 1),
         "outputs": total["outputs"],
         # this run's cuts of the step (a resumed run: since its checkpoint)
-        "step_cuts": [{"time": t, "dt": h} for t, h in stats.cuts]}
+        "step_cuts": [{"time": t, "dt": h} for t, h in stats.cuts],
+        # the time integrator's assembly: in C (cablefem.native_rows) or in Python
+        "assembly": stats.assembly}
     return entries, total["wall_dynamics"]
