@@ -406,9 +406,9 @@ class VirtualHinges:
         layer's law no longer follows the tension there (module docs). (The anchor force
         and the first element's tension differ by the layer's weight, about 1e-3 of them:
         nothing next to the range's factors 4 and 2.)"""
-        out = {}
+        out, forces = {}, np.asarray(forces, float)
         for hg in self.items:
-            f = np.asarray(forces, float)[hg.index]
+            f = forces[hg.index]
             T = np.sqrt(f[..., 0] ** 2 + f[..., 1] ** 2 + f[..., 2] ** 2)
             started = hg.T_static > 0.0  # before start_dynamics: the statics' own law
             out[hg.anchor.name] = started & ~((FLOOR * hg.T_static <= T)

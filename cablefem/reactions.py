@@ -205,9 +205,7 @@ class AnchorReactions:
         else:
             fpetsc.set_bc(self.rhs, m.bcs, scale=0.0)
         self.ksp.solve(self.rhs, self.da)
-        if self.ksp.getConvergedReason() < 0:
-            raise RuntimeError(f"mass-matrix solve failed at t={t:g} "
-                               f"(KSP reason {self.ksp.getConvergedReason()})")
+        _solved(t, self.ksp.getConvergedReason())
         if m.comm.size > 1:  # one rank: no ghosts to update
             self.da.ghostUpdate(addv=INSERT, mode=FORWARD)
         m.a.vector.axpy(1.0, self.da)
@@ -232,10 +230,8 @@ class AnchorReactions:
             return False
         self._time = t
         self._anchors_only(acc)
-        reason = native.forces(t, self.ksp, self.M_full, self.R, (self.rhs, self.da, self.Mda),
-                               self._bc_rows)
-        if reason < 0:
-            raise RuntimeError(f"mass-matrix solve failed at t={t:g} (KSP reason {reason})")
+        _solved(t, native.forces(t, self.ksp, self.M_full, self.R,
+                                 (self.rhs, self.da, self.Mda), self._bc_rows))
         return True
 
     def compute(self, t: float, dynamic: bool = True) -> np.ndarray:
@@ -287,3 +283,8 @@ class AnchorReactions:
     def __exit__(self, *exc):
         self.destroy()
 
+
+def _solved(t: float, reason: int) -> None:
+    """RuntimeError when the mass solve at ``t`` failed (its KSP's converged reason)."""
+    if reason < 0:
+        raise RuntimeError(f"mass-matrix solve failed at t={t:g} (KSP reason {reason})")
