@@ -133,8 +133,11 @@ def _load():
 
 
 def _address(cdata) -> int:
-    import cffi
-    return int(cffi.FFI().cast("uintptr_t", cdata))
+    """A cffi function pointer's address, through cffi's compiled backend (``cffi.FFI()``
+    would import its C parser, pycparser: 0.1 s at every run's start)."""
+    import _cffi_backend
+
+    return int(_cffi_backend.FFI().cast("uintptr_t", cdata))
 
 
 def _integrals(F, jacobians) -> list[tuple] | None:

@@ -115,7 +115,9 @@ def test_a_cables_run_imports_no_scipy(tmp_path):
     (``original_cell_index``): SciPy's k-d tree, and with it about 0.1 s of SciPy's
     modules at every start (``python -X importtime``: 104 ms of 670), is not needed. Nor
     are HTTP and e-mail parsing, which ``xml.sax.saxutils`` (the XDMF files' attribute
-    quoting) imported through ``urllib.request``: 30 ms."""
+    quoting) imported through ``urllib.request``: 30 ms. Nor is cffi's C parser
+    (``pycparser``, 50 ms), which ``cffi.FFI()`` imports: the time integrator's C route
+    (``cablefem.native_rows``) takes its kernels' addresses through cffi's backend."""
     from conftest import level_case, toml_text
 
     case = level_case(elements=12, motion={"type": "harmonic", "amplitude": [0, 0, 1e-3],
@@ -130,7 +132,7 @@ def test_a_cables_run_imports_no_scipy(tmp_path):
         f"code = main(['run', {str(path)!r}, '--no-figures', '--quiet',"
         f" '--output', {str(tmp_path / 'out')!r}])\n"
         "print(code, sorted({m.split('.')[0] for m in sys.modules}"
-        " & {'scipy', 'http', 'email'}))")
+        " & {'scipy', 'http', 'email', 'pycparser'}))")
     assert out.splitlines()[-1] == "0 []"
     assert (tmp_path / "out" / "string.xdmf").exists()
 
