@@ -26,6 +26,7 @@ import ctypes
 import hashlib
 import logging
 import os
+import shlex
 import shutil
 import subprocess
 import tempfile
@@ -100,9 +101,9 @@ def library():
 
 def _load():
     petsc = _petsc_library()
-    cc = os.environ.get("CC", "cc")
-    if petsc is None or shutil.which(cc) is None:
-        raise OSError(f"no PETSc library found or no C compiler {cc!r}")
+    cc = shlex.split(os.environ.get("CC", "cc")) or ["cc"]  # "ccache gcc" too
+    if petsc is None or shutil.which(cc[0]) is None:
+        raise OSError(f"no PETSc library found or no C compiler {cc[0]!r}")
     int_type = "int64_t" if np.dtype(PETSc.IntType).itemsize == 8 else "int32_t"
     source = _SOURCE.read_bytes()
     flags = ["-O2", "-fPIC", "-shared", f"-DPETSC_INT={int_type}"]
@@ -114,7 +115,7 @@ def _load():
         folder.mkdir(parents=True, exist_ok=True)
         with tempfile.TemporaryDirectory(dir=folder) as tmp:  # then renamed: atomic
             out = Path(tmp) / target.name
-            subprocess.run([cc, *flags, os.fspath(_SOURCE), "-o", os.fspath(out), petsc],
+            subprocess.run([*cc, *flags, os.fspath(_SOURCE), "-o", os.fspath(out), petsc],
                            check=True, capture_output=True, timeout=120)
             os.replace(out, target)
     # the interpreter's lock stays held during the calls (they are short); a callback

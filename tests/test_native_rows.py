@@ -174,6 +174,16 @@ def test_without_a_c_compiler_the_python_route(monkeypatch):
     monkeypatch.setattr(nr, "_LIB", [])  # the next test loads it again
 
 
+def test_a_compiler_given_with_a_wrapper_command_compiles(monkeypatch):
+    """``CC="env cc"`` (a compiler behind a wrapper, as ``ccache gcc``): the command's
+    words, not one program named "env cc" (which fell back to the Python route). On 2
+    ranks both compile at once, each into a folder of its own, renamed into place."""
+    monkeypatch.setenv("CC", "env cc")
+    monkeypatch.setattr(nr, "_LIB", [])
+    assert nr.library() is not None
+    monkeypatch.setattr(nr, "_LIB", [])  # the next test loads the usual one
+
+
 @pytest.mark.parametrize("value", ["false", "0"])
 def test_the_option_asks_for_the_python_route(value):
     model = _moved_model()
