@@ -291,7 +291,8 @@ class NativeRows:
 
     def at(self, t: float) -> None:
         """The model's time ``t``, and the packed constants and other coefficients at it
-        (nothing at the time of the last call, without :meth:`forget` since)."""
+        (nothing at the time of the last call, without :meth:`RowsAssembler.forget`
+        since)."""
         if t == self.time:
             return
         self.model.set_time(t)
@@ -319,18 +320,15 @@ class NativeRows:
         m = self.model
         for X, f in ((U, m.u), (V, m.v), (A, m.a)):
             X.copy(f.vector)  # one rank: no ghosts
-        err = self.lib.cablefem_residual(self._ref, U.handle, V.handle, A.handle, F.handle)
-        if err:
-            raise PETSc.Error(err)
+        _check(self.lib.cablefem_residual(self._ref, U.handle, V.handle, A.handle,
+                                          F.handle))
 
     def cells(self, t: float, U: PETSc.Vec, V: PETSc.Vec, A: PETSc.Vec,
               F: PETSc.Vec) -> None:
         """The residual's cells alone (no anchor rows) at ``t`` and ``U``, ``V``, ``A``
         into ``F``: the anchor forces' assembly (:mod:`cablefem.reactions`)."""
         self.at(t)
-        err = self.lib.cablefem_cells(self._ref, U.handle, V.handle, A.handle, F.handle)
-        if err:
-            raise PETSc.Error(err)
+        _check(self.lib.cablefem_cells(self._ref, U.handle, V.handle, A.handle, F.handle))
 
     def forces(self, t: float, ksp: PETSc.KSP, M_full: PETSc.Mat, R: PETSc.Vec,
                work: tuple, zero: np.ndarray) -> int:
@@ -343,12 +341,10 @@ class NativeRows:
         self.at(t)
         m, reason = self.model, ctypes.c_int(0)
         rhs, da, Mda = work
-        err = self.lib.cablefem_forces(
+        _check(self.lib.cablefem_forces(
             self._ref, ksp.handle, M_full.handle, m.u.vector.handle, m.v.vector.handle,
             m.a.vector.handle, R.handle, rhs.handle, da.handle, Mda.handle, zero.size,
-            zero.ctypes.data, ctypes.byref(reason))
-        if err:
-            raise PETSc.Error(err)
+            zero.ctypes.data, ctypes.byref(reason)))
         return reason.value
 
     def jacobian(self, J: PETSc.Mat, constants: bool = False, slow: bool = True) -> None:
@@ -371,5 +367,6 @@ class NativeRows:
 
 
 def _check(err: int) -> None:
+    """A PETSc error code of a C call raised (PETSc has printed where it arose)."""
     if err:
         raise PETSc.Error(err)

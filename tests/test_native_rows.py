@@ -87,6 +87,23 @@ def test_the_c_residual_and_jacobian_are_the_python_ones_bit_for_bit(make):
     assert not np.array_equal(F_c.array, F_py.array)
 
 
+def test_a_petsc_error_in_the_c_call_is_raised():
+    """A matrix of the wrong size: PETSc's error code from the C side is raised, not
+    ignored."""
+    model = _moved_model()
+    rows, _ = _assemblers(model)
+    native = nr.native_rows(model, rows, model.prefix)
+    if native is None:  # several ranks: the Python route
+        return
+    U = model.u.vector.copy()
+    native.residual(T, U, U, U, U.duplicate())
+    small = PETSc.Mat().createAIJ([3, 3], bsize=3, comm=MPI.COMM_SELF)
+    small.setUp()
+    with pytest.raises(PETSc.Error):
+        native.jacobian(small)
+    small.destroy()
+
+
 def _forces(native: bool, steps: int = 40, **solver) -> np.ndarray:
     model = CableModel(MPI.COMM_WORLD, parse_case(level_case(elements=8, motion=MOTION,
                                                              damping=DAMPING, solver=solver)))
