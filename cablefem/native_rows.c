@@ -34,7 +34,9 @@ extern PetscErrorCode KSPSolve(void *, Vec, Vec);
 extern PetscErrorCode KSPGetConvergedReason(void *, int *);
 
 enum { ADD_VALUES_ = 2, MAT_FINAL_ = 0 };
-#define MAX_PARTS 8 /* integrals: native_rows.py's MAX_PARTS */
+#ifndef MAX_PARTS /* integrals: given by native_rows.py (its MAX_PARTS, which lays out */
+#error "compile with -DMAX_PARTS=n" /* the same struct): one number, one place */
+#endif
 
 typedef void (*kernel_t)(double *, const double *, const double *, const double *,
                          const int *, const uint8_t *);

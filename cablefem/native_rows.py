@@ -45,7 +45,7 @@ _LIB: list = []  # [the loaded library or None], once per process
 
 
 _p = ctypes.c_void_p
-#: integrals the C side takes (``MAX_PARTS`` of native_rows.c)
+#: integrals the C side takes (given to native_rows.c as ``-DMAX_PARTS``)
 MAX_PARTS = 8
 
 
@@ -106,7 +106,7 @@ def _load():
         raise OSError(f"no PETSc library found or no C compiler {cc[0]!r}")
     int_type = "int64_t" if np.dtype(PETSc.IntType).itemsize == 8 else "int32_t"
     source = _SOURCE.read_bytes()
-    flags = ["-O2", "-fPIC", "-shared", f"-DPETSC_INT={int_type}"]
+    flags = ["-O2", "-fPIC", "-shared", f"-DPETSC_INT={int_type}", f"-DMAX_PARTS={MAX_PARTS}"]
     key = hashlib.sha256(source + repr((cc, flags, petsc)).encode()).hexdigest()[:16]
     from dolfinx import jit
     folder = Path(jit.get_parameters()["cache_dir"]).expanduser()
