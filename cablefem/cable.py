@@ -286,11 +286,18 @@ class CableModel:
             return
         self._time = t
         arr = self.u_bc.x.array
-        fixed_done = getattr(self, "_fixed_written", False)
-        for anc in self.anchors:
-            # an anchor without motion is written once (again after invalidate_time)
-            if anc.dofs.size and not (fixed_done and anc.motion is None):
-                arr[anc.flat_dofs] = anc.prescribed("displacement", t)
+        if getattr(self, "_fixed_written", False):
+            # the moving anchors' rows: (position - reference + motion) + offset, the
+            # operations of AnchorBC.prescribed with its fixed part kept from the last
+            # invalidate_time (the anchors' positions and offsets change only with it)
+            for rows, values in self._moving:
+                arr[rows] = values(t)
+        else:  # every anchor once (again after invalidate_time)
+            for anc in self.anchors:
+                if anc.dofs.size:
+                    arr[anc.flat_dofs] = anc.prescribed("displacement", t)
+            self._moving = [(anc.flat_dofs, _displacement_rows(anc)) for anc in self.anchors
+                            if anc.dofs.size and anc.motion is not None]
         self._fixed_written = True
         for c, ld in self.loads:
             c.value[:] = np.asarray(ld.value) * ld.time.value(t)
@@ -299,7 +306,10 @@ class CableModel:
         self.forms.set_time(t)  # every term's time law (the fluid's: waves, gusts)
 
     def invalidate_time(self) -> None:
-        """Make the next :meth:`set_time` write everything again (the hinges changed)."""
+        """Make the next :meth:`set_time` write everything again: call it after changing
+        an anchor's position, offset, motion or degrees of freedom (the hinges do);
+        :meth:`set_time` otherwise keeps the fixed anchors' rows and the moving ones'
+        fixed parts from its first call."""
         self._time = None
         self._fixed_written = False
 
@@ -404,3 +414,14 @@ for _name in forms.COMPILED + forms.ON_DEMAND + ("F_static", "J_static", "F_stat
 for _name, _term in (("F_internal", "internal"), ("F_external", "external"),
                      ("F_inertia", "inertia"), ("F_damping", "damping")):
     setattr(CableModel, _name, _forwarded(_term))
+
+
+def _displacement_rows(anc):
+    """``t -> anc.prescribed("displacement", t)``, the same operations, with the anchor's
+    fixed part ``position - reference`` computed once (a string's anchor; a rod's: the
+    method itself)."""
+    if anc.bs != 3:
+        return lambda t: anc.prescribed("displacement", t)
+    fixed, motion, offset = anc.position - anc.reference, anc.motion.displacement, anc.offset
+    comps = anc._layout()[1]
+    return lambda t: ((fixed + motion(t)) + offset)[comps]

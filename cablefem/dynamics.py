@@ -37,31 +37,19 @@ from dataclasses import dataclass, field
 from decimal import Decimal
 
 import numpy as np
-from dolfinx.fem import petsc as fpetsc
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from cablefem import junctions
 from cablefem.alpha2 import BackwardEuler, retry_from_start
 from cablefem.errors import DynamicsError, Interrupted
 from cablefem.hinge import HingeError
 from cablefem.initial import initial_velocity
-from cablefem.native_rows import native_rows
-from cablefem.petsc_utils import (
-    RowsAssembler,
-    SNESHistory,
-    case_options,
-    copy_in,
-    default_options,
-    keeps_factorisation,
-    linear_solver_options,
-    model_dofs,
-)
+from cablefem.petsc_utils import SNESHistory, copy_in
 from cablefem.reactions import AnchorReactions
-from cablefem.stepnewton import StepNewton
+from cablefem.timestepper import bc_row_scale, make_ts
 
 __all__ = ["Checkpoint", "DynamicProblem", "DynamicsError", "DynamicsStats", "Interrupted",
-           "integrate", "initial_velocity", "grid_time"]
+           "integrate", "initial_velocity", "grid_time", "bc_row_scale"]
 
 log = logging.getLogger(__name__)
 
@@ -104,114 +92,6 @@ def grid_time(step: int, dt: float) -> float:
 _TS_REASONS = {-1: "Newton failed (TS_DIVERGED_NONLINEAR_SOLVE)",
                -2: "Newton failed and the step was rejected more than -cable_ts_max_reject "
                    "times (TS_DIVERGED_STEP_REJECTED)"}
-
-
-def bc_row_scale(model) -> float:
-    """The weight of the anchors' rows ``x − g`` in the time integrator's residual, N/m:
-    the largest force per metre of the cable, its force scale over its shortest element.
-    The rows hold a length; Newton's tolerance is a force. Unweighted, a prescribed motion
-    smaller than ``snes_atol`` (in metres) per step was not applied at all: Newton stopped
-    at its predictor, the anchor lagged until the gap exceeded the tolerance, then caught
-    up in one step, a jolt (a 192 m stay on 2000 elements, its deck starting a slow
-    harmonic motion: held still for 0.41 s, then a jump of 0.17 mm that Newton's divergence
-    test refused, and the run failed). Weighted, a gap of ``snes_atol/κ`` (1e-11 m there)
-    is seen."""
-    geo = model.mesh.geometry  # 1D cells of two nodes: their lengths
-    ends = geo.x[geo.dofmap.array.reshape(-1, 2)]
-    h = np.linalg.norm(ends[:, 1] - ends[:, 0], axis=1)
-    h_min = model.comm.allreduce(float(np.min(h, initial=np.inf)), op=MPI.MIN)
-    return float(model.force_scale / h_min)
-
-
-def _make_ts(model, dt: float, rho_inf: float, history: SNESHistory,
-             prefix: str | None = None, petsc_options: dict | None = None):
-    prefix = model.prefix if prefix is None else prefix
-    scale = model.force_scale
-    n_dofs = model_dofs(model)
-    defaults = {"ts_type": "alpha2", "ts_alpha_radius": rho_inf, "ts_max_reject": 0,
-                "ts_max_snes_failures": -1, "snes_type": "newtonls",
-                "snes_linesearch_type": "basic", "snes_rtol": 1e-9,
-                "snes_atol": max(1e-11 * scale, 10.0 * model.residual_floor()),
-                "snes_max_it": 25,
-                # large networks: the residual's round-off floor (stiffness x position
-                # round-off, summed over the dofs) can exceed atol; a relative update of
-                # 1e-13 is converged
-                "snes_stol": 1e-13,
-                **linear_solver_options(n_dofs, model.comm.size, reuse=not model.is_beam)}
-
-    n_owned = model.V.dofmap.index_map.size_local
-    bc_rows = np.concatenate([a.flat_dofs for a in model.anchors]).astype(np.int32)
-    bc_rows = bc_rows[bc_rows < model.bs * n_owned]  # owned rows; each rank zeroes its own
-    F_vec = fpetsc.create_vector(model.f_dynamic)
-    kappa = bc_row_scale(model)
-
-    # the residual and Jacobian of assemble_residual_rows / assemble_jacobian_rows, the
-    # anchors' rows x - g weighted by kappa (bc_row_scale), without per-call dispatch
-    extra = None
-    if model.node_terms:  # terms outside UFL (a network's kink corners), at model.u
-        extra = (lambda arr: junctions.add_residual(model, arr),
-                 lambda A: junctions.add_jacobian(model, A))
-    F = model.f_dynamic
-    # a term's time law may set its Functions (not only Constants) at a new time
-    timed = (any(model.forms.term(n).set_time is not None for n in model.forms.user)
-             or any(model.u_bc._cpp_object is c for c in F.coefficients))
-    # the Jacobian in a fast and a slow part (a fluid's: Term.slow_jacobian), the slow one
-    # kept longer; j_dynamic_slow is None without a slow term: the Jacobian whole
-    slow = model.j_dynamic_slow
-    parts = None if slow is None else (model.j_dynamic_fast, slow)
-    rows = RowsAssembler(F, model.j_dynamic, model.bcs, bc_rows, kappa, model.comm, extra,
-                         (model.u, model.v, model.a), timed, parts)
-    serial, (u, v, a) = model.comm.size == 1, (model.u, model.v, model.a)
-
-    def I2Function(ts, t, U, V, A, F):
-        if rows.native is not None:  # the same numbers in C (cablefem.native_rows)
-            return rows.native.residual(t, U, V, A, F)
-        model.set_time(t)
-        for X, f in ((U, u), (V, v), (A, a)):
-            copy_in(X, f, serial)
-        rows.residual(F, U, t)
-
-    shifts = [None, None]  # the shifts the Constants hold (set here only)
-
-    def I2Jacobian(ts, t, U, V, A, shift_v, shift_a, J, P):
-        if newton.keep_jacobian(shift_v, shift_a):  # J and its factorisation kept
-            return
-        changed = shifts[0] != shift_v or shifts[1] != shift_a  # equal steps: the same
-        if changed:
-            model.shift_v.value = shifts[0] = shift_v
-            model.shift_a.value = shifts[1] = shift_a
-        if rows.native is not None:  # at the residual's state, just before (SNES)
-            return rows.native.jacobian(J, changed, newton.slow)
-        # SNES evaluates the residual at the same state just before: model.u/v/a are current
-        rows.jacobian(J, slow=newton.slow)
-
-    newton = None  # the StepNewton, made once the options are read
-    ts = PETSc.TS().create(model.comm)
-    ts.setOptionsPrefix(prefix)
-    ts.setType(PETSc.TS.Type.ALPHA2)
-    ts.setI2Function(I2Function, F_vec)
-    ts.setTimeStep(dt)
-    ts.setExactFinalTime(PETSc.TS.ExactFinalTime.MATCHSTEP)
-    user = {**case_options(model, ""), **(petsc_options or {})}
-    with default_options(prefix, defaults, user):
-        # -cable_mat_type (default baij: bs x bs blocks, assembly and triangular solves
-        # faster than aij) is read here: the matrix must exist before the TS is configured
-        J_mat = junctions.create_matrix(model, model.j_dynamic,
-                                        PETSc.Options().getString(prefix + "mat_type"))
-        # zeroing the anchor rows must keep the sparsity pattern: otherwise every assembly
-        # changes it and every factorisation redoes its symbolic phase (and allocates)
-        J_mat.setOption(PETSc.Mat.Option.KEEP_NONZERO_PATTERN, True)
-        ts.setI2Jacobian(I2Jacobian, J_mat)
-        ts.setFromOptions()
-        # predictor, stopping test and Jacobian reuse (a fluid's, a seabed's Jacobian is
-        # dear, and so is the kink corners' complex-step one: docs/benchmarks.md, "Networks
-        # on 2 ranks"), and so is a large model's factorisation (linear_solver_options)
-        costly = bool(model.forms.medium_forms or model.node_terms) or keeps_factorisation(
-            n_dofs, reuse=not model.is_beam)
-        newton = StepNewton(ts, prefix, costly, history)  # its test keeps the norms
-        newton.split = rows.parts is not None
-        rows.native = native_rows(model, rows, prefix)  # None: the Python route
-    return ts, (F_vec, J_mat, newton), rows
 
 
 _NO_END = 1e300  #: the TS's end time when none is given: TSStep refuses to run without
@@ -296,8 +176,9 @@ class DynamicProblem:
         self.stats = stats if stats is not None else DynamicsStats()
         self.prefix = model.prefix if petsc_options_prefix is None else petsc_options_prefix
         self.history = SNESHistory()
-        self.ts, self._work, self._rows = _make_ts(model, dt, rho_inf, self.history, self.prefix,
-                                                   petsc_options)  # _work: F, J live as long as ts
+        # _work: F, J live as long as ts
+        self.ts, self._work, self._rows = make_ts(model, dt, rho_inf, self.history,
+                                                  self.prefix, petsc_options)
         self.newton = self._work[-1]
         self.stats.assembly = "python" if self._rows.native is None else "c"
         self.ts.setMaxTime(_NO_END)  # PETSc steps only with an end; step(t_end) sets it
@@ -416,6 +297,8 @@ class DynamicProblem:
                 with BackwardEuler(ts, changed):
                     ts.step()
             except PETSc.Error:  # raised when the step is rejected (ts_max_reject = 0)
+                if self._rows.native is not None:  # an exception in a call from C
+                    self._rows.native.reraise()
                 if ts.getConvergedReason() >= 0:  # any other error: not a failed step
                     raise
             reason = ts.getConvergedReason()

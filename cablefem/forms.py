@@ -449,7 +449,7 @@ class CableForms:
         from cablefem.jit import quiet_compiler
 
         with quiet_compiler():
-            out = {n: fem.form(self._ufl(n)) for n in COMPILED if not n.endswith("_expr")}
+            out = {n: _form(self._ufl(n)) for n in COMPILED if not n.endswith("_expr")}
             for name, expr in self.outputs.items():
                 out[f"{name}_expr"] = fem.Expression(expr, self.points)
         self._compiled = out
@@ -480,7 +480,7 @@ class CableForms:
             if name == "energy_forms":
                 return tuple(fem.form(e) for e in self.energies)
             form = self._ufl(name)
-            return None if form is None else fem.form(form)
+            return None if form is None else _form(form)
 
     def _ufl(self, name: str):
         """The UFL form compiled as ``name`` (``f_static``: ``F_static``, ...)."""
@@ -499,3 +499,14 @@ def _rates_jacobian(forms: CableForms, F):
     if forms._dynamic_depends_on(forms.v):
         J = J + forms.shift_v * ufl.derivative(F, forms.v, dw)
     return J
+
+
+def _form(form):
+    """``dolfinx.fem.form(form)`` with the form's Constants noted as ``cablefem_constants``
+    (dolfinx's own objects, in the order dolfinx packs them), so that a packing of them can
+    be kept and refreshed only when one changed (:mod:`cablefem.native_rows`)."""
+    from dolfinx import fem
+
+    compiled = fem.form(form)
+    compiled.cablefem_constants = [c._cpp_object for c in form.constants()]
+    return compiled

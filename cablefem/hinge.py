@@ -239,14 +239,20 @@ class VirtualHinges:
     def __bool__(self) -> bool:
         return bool(self.items)
 
-    def layer_force(self, i: int, acceleration: np.ndarray) -> np.ndarray:
-        """Weight and inertia of anchor ``i``'s layer, ``m sigma_h (g - a)``, N (zero for
-        an anchor without hinge)."""
-        for hg in self.items:
-            if hg.index == i:
+    def layer_forces(self, anchors: np.ndarray, accelerations: np.ndarray) -> np.ndarray:
+        """(n, 3) weight and inertia of the layers of ``anchors`` (n indices), ``m sigma_h
+        (g - a)`` with their ``accelerations`` (n, 3), N (zero rows for anchors without
+        hinge)."""
+        out = [[0.0, 0.0, 0.0] for _ in range(len(anchors))]
+        hinge = {hg.index: hg for hg in self.items}
+        g = self.g_vec.tolist()
+        # Python floats: the same operations as NumPy's on the arrays, a tenth of the time
+        for k, (i, a) in enumerate(zip(anchors.tolist(), accelerations.tolist())):
+            hg = hinge.get(i)
+            if hg is not None:
                 mass = hg.anchor.section.mass * hg.mass_length
-                return mass * (self.g_vec - np.asarray(acceleration, float))
-        return np.zeros(3)
+                out[k] = [mass * (gj - aj) for gj, aj in zip(g, a)]
+        return np.array(out, float).reshape(-1, 3)
 
     # ------------------------------------------------------------------ statics
     def place(self, forces: np.ndarray) -> np.ndarray:

@@ -32,6 +32,9 @@ extern PetscErrorCode MatMult(Mat, Vec, Vec);
 extern PetscErrorCode VecAXPY(Vec, double, Vec);
 extern PetscErrorCode KSPSolve(void *, Vec, Vec);
 extern PetscErrorCode KSPGetConvergedReason(void *, int *);
+extern PetscErrorCode VecCopy(Vec, Vec);
+extern PetscErrorCode TSSetI2Function(void *, Vec, void *, void *);
+extern PetscErrorCode TSSetI2Jacobian(void *, Mat, Mat, void *, void *);
 
 enum { ADD_VALUES_ = 2, MAT_FINAL_ = 0 };
 #ifndef MAX_PARTS /* integrals: given by native_rows.py (its MAX_PARTS, which lays out */
@@ -74,6 +77,13 @@ typedef struct {
     int32_t n_local;                           /* the vectors' length */
     double *be, *ae, *wj;                      /* work: an entity's vector, matrix, coeffs */
     PetscInt *block_dofs;
+    /* the time integrator's callbacks (cablefem_drive): the time Python last brought the
+     * coefficients to (NaN: none), Python's calls for a new time and for the Jacobian's
+     * decision, and the model's u, v, a (the state of each residual is copied there) */
+    double time;
+    int (*at)(double);
+    int (*decide)(double, double);
+    Vec state[3];
 } rows_ctx;
 
 #define CHECK(call) do { PetscErrorCode ierr_ = (call); if (ierr_) return (int)ierr_; } while (0)
@@ -212,5 +222,85 @@ int cablefem_forces(rows_ctx *c, void *ksp, Mat M_full, Vec U, Vec V, Vec A, Vec
     CHECK(VecAXPY(A, 1.0, da));
     CHECK(MatMult(M_full, da, Mda));
     CHECK(VecAXPY(R, 1.0, Mda));
+    return 0;
+}
+
+/* The anchors as AnchorReactions.compute reads them (one rank, three rows a node): the
+ * rows of model.a the anchors' accelerations go to (a_rows, from entry a_src of the
+ * accelerations (n, 3)), each anchor's first row of the residual, and with virtual hinges
+ * (hinges != 0) which anchors have one (mass: the layer's mass, section mass x length). */
+typedef struct {
+    int32_t n, n_a, hinges;
+    const PetscInt *a_rows;
+    const int32_t *a_src;
+    const PetscInt *row;
+    const int32_t *has_hinge;
+    const double *mass, *g;
+} anchors_t;
+
+/* AnchorReactions.compute's dynamic part on the C route, the same operations in the same
+ * order: model.a (A) the anchors' accelerations `acc` (n x 3) and zero elsewhere;
+ * cablefem_forces; then each anchor's force -R at its rows, plus, with virtual hinges, its
+ * layer's weight and inertia mass (g - acc) (0.0 for an anchor without one), into out
+ * (n x 3). */
+int cablefem_anchor_forces(rows_ctx *c, const anchors_t *an, const double *acc, double *out,
+                           void *ksp, Mat M_full, Vec U, Vec V, Vec A, Vec R, Vec rhs,
+                           Vec da, Vec Mda, int32_t n_zero, const PetscInt *zero,
+                           int *reason) {
+    double *a;
+    CHECK(VecGetArray(A, &a));
+    memset(a, 0, sizeof(double) * c->n_local);
+    for (int32_t j = 0; j < an->n_a; ++j)
+        a[an->a_rows[j]] = acc[an->a_src[j]];
+    CHECK(VecRestoreArray(A, &a));
+    CHECK(cablefem_forces(c, ksp, M_full, U, V, A, R, rhs, da, Mda, n_zero, zero, reason));
+    if (*reason < 0)
+        return 0;
+    const double *r;
+    CHECK(VecGetArrayRead(R, &r));
+    for (int32_t i = 0; i < an->n; ++i)
+        for (int32_t k = 0; k < 3; ++k)
+            out[3 * i + k] = -r[an->row[i] + k];
+    CHECK(VecRestoreArrayRead(R, &r));
+    if (an->hinges)
+        for (int32_t i = 0; i < an->n; ++i)
+            for (int32_t k = 0; k < 3; ++k)
+                out[3 * i + k] += an->has_hinge[i] ? an->mass[i] * (an->g[k] - acc[3 * i + k])
+                                                   : 0.0;
+    return 0;
+}
+
+/* The time integrator's residual, as TSSetI2Function calls it: Python brings the time, the
+ * constants and the other coefficients to t when t is new (c->at, which sets c->time); the
+ * state is copied into the model's u, v, a (as the Python route does: a time law may read
+ * them), then cablefem_residual. */
+static PetscErrorCode ts_residual(void *ts, double t, Vec U, Vec V, Vec A, Vec F, void *p) {
+    rows_ctx *c = p;
+    (void)ts;
+    if (!(t == c->time))
+        CHECK(c->at(t));
+    CHECK(VecCopy(U, c->state[0]));
+    CHECK(VecCopy(V, c->state[1]));
+    CHECK(VecCopy(A, c->state[2]));
+    return cablefem_residual(c, U, V, A, F);
+}
+
+/* The time integrator's Jacobian, as TSSetI2Jacobian calls it: Python decides (c->decide:
+ * negative, an error; 0, J is done: kept, or assembled there; 1, the whole Jacobian is to
+ * be assembled here, its constants packed), at the state of the residual just before. */
+static PetscErrorCode ts_jacobian(void *ts, double t, Vec U, Vec V, Vec A, double shift_v,
+                                  double shift_a, Mat J, Mat P, void *p) {
+    rows_ctx *c = p;
+    (void)ts, (void)t, (void)U, (void)V, (void)A, (void)P;
+    const int what = c->decide(shift_v, shift_a);
+    if (what < 0)
+        return -what;
+    return what == 1 ? cablefem_jacobian(c, J, 0, 1) : 0;
+}
+
+/* Have the TS call ts_residual and ts_jacobian with this context, into F and J. */
+int cablefem_drive(rows_ctx *c, void *ts, Vec F, Mat J) {
+    CHECK(TSSetI2Function(ts, F, (void *)ts_residual, c));
+    CHECK(TSSetI2Jacobian(ts, J, J, (void *)ts_jacobian, c));
     return 0;
 }

@@ -8,8 +8,9 @@ the cell loops, the copy of the state (u, v, a) into the packed coefficients and
 anchors' rows ``kappa (x - g)`` are one C call each, with the same kernels (FFCx's
 ``tabulate_tensor``), the same sums in the same order, so the same numbers to the last
 bit. Python still sets the model's time, the constants and the other coefficients (once
-per time: :meth:`NativeRows.at`), and PETSc's TS, SNES and KSP and their callbacks are the
-same.
+per time: :meth:`NativeRows.at`). PETSc's TS calls the C side directly
+(:meth:`NativeRows.drive`): Python only at a new time and for the Jacobian's decision.
+The anchor forces are one C call too (:meth:`NativeRows.anchor_forces`).
 
 The C file is compiled once with the system's C compiler into the FFCx cache folder, next
 to the forms' kernels, and linked against the PETSc library petsc4py uses. Where it
@@ -25,6 +26,7 @@ from __future__ import annotations
 import ctypes
 import hashlib
 import logging
+import math
 import os
 import shlex
 import shutil
@@ -36,7 +38,9 @@ import numpy as np
 from dolfinx import cpp as dcpp
 from petsc4py import PETSc
 
-__all__ = ["NativeRows", "native_rows", "library"]
+from cablefem.packing import copy_changed
+
+__all__ = ["Anchors", "NativeRows", "native_rows", "library"]
 
 log = logging.getLogger(__name__)
 
@@ -69,7 +73,25 @@ class _Ctx(ctypes.Structure):
                 ("bc_dofs", _p),
                 ("g", _p), ("n_rows", ctypes.c_int32), ("rows", _p),
                 ("kappa", ctypes.c_double), ("n_local", ctypes.c_int32), ("be", _p),
-                ("ae", _p), ("wj", _p), ("block_dofs", _p)]
+                ("ae", _p), ("wj", _p), ("block_dofs", _p), ("time", ctypes.c_double),
+                ("at", _p), ("decide", _p), ("state", _p * 3)]
+
+
+class Anchors(ctypes.Structure):
+    """``anchors_t`` of native_rows.c: the anchors as
+    :meth:`cablefem.reactions.AnchorReactions.compute` reads them (built there)."""
+
+    _fields_ = [("n", ctypes.c_int32), ("n_a", ctypes.c_int32), ("hinges", ctypes.c_int32),
+                ("a_rows", _p), ("a_src", _p), ("row", _p), ("has_hinge", _p),
+                ("mass", _p), ("g", _p)]
+
+
+#: the C side's calls into Python (:meth:`NativeRows.drive`): a new time; the Jacobian's
+#: decision from its two shifts
+_AT = ctypes.CFUNCTYPE(ctypes.c_int, ctypes.c_double)
+_DECIDE = ctypes.CFUNCTYPE(ctypes.c_int, ctypes.c_double, ctypes.c_double)
+#: the error code the C side returns for an exception in those calls (PETSC_ERR_USER)
+_PYTHON_ERROR = 83
 
 
 def _petsc_library() -> str | None:
@@ -130,6 +152,11 @@ def _load():
     lib.cablefem_forces.argtypes = [ctypes.c_void_p] * 10 + [ctypes.c_int32, ctypes.c_void_p,
                                                              ctypes.POINTER(ctypes.c_int)]
     lib.cablefem_forces.restype = ctypes.c_int
+    lib.cablefem_drive.argtypes = [ctypes.c_void_p] * 4
+    lib.cablefem_anchor_forces.argtypes = [ctypes.c_void_p] * 13 + [
+        ctypes.c_int32, ctypes.c_void_p, ctypes.POINTER(ctypes.c_int)]
+    lib.cablefem_anchor_forces.restype = ctypes.c_int
+    lib.cablefem_drive.restype = ctypes.c_int
     return lib
 
 
@@ -226,9 +253,19 @@ class NativeRows:
             self.packs.append((key, w))
             self._part(part, key, w, kf, kj)
             widest = [max(widest[0], part.nodes), max(widest[1], *part.stride_j)]
+        #: the other Functions (a time law's, a hinge's law), copied into this side's
+        #: packing where they changed, compared with what was packed here (their own notes:
+        #: the Python route's packing keeps its own)
+        self.others = [(arr, [arr.tobytes()], items) for arr, _, items in rows.others]
+        self.wpacks = dict(self.packs)
         #: the packed constants of the residual and of each Jacobian (never empty)
-        self.consts = [np.zeros(dcpp.fem.pack_constants(form).size + 1)
-                       for form in (rows.F, *(f for f, _ in self.jacobians)) if form is not None]
+        forms = [rows.F, *(f for f, _ in self.jacobians if f is not None)]
+        self.consts = [np.zeros(dcpp.fem.pack_constants(form).size + 1) for form in forms]
+        #: every form's Constants' values (views) where the forms name them and their
+        #: packing is theirs in that order (None: packed afresh at every new time), and
+        #: their bytes as last packed
+        self.constant_values = _constant_values(forms)
+        self.constant_bytes: list[bytes] | None = None
         c.const_f = ptr(self.consts[0])
         for k, arr in enumerate(self.consts[1:]):
             c.const_j[k] = ptr(arr)
@@ -245,6 +282,14 @@ class NativeRows:
         self._ref = ctypes.byref(c)
         #: the time of the last :meth:`at` (None: :meth:`RowsAssembler.forget` since)
         self.time: float | None = None
+        #: the model's u, v, a as PETSc vectors (the residual's state is copied into them)
+        self.state = [f.vector for f in (model.u, model.v, model.a)]
+        for k, vec in enumerate(self.state):
+            c.state[k] = vec.handle
+        c.time = math.nan
+        #: an exception raised in a call from the C side, raised again by :meth:`reraise`
+        self.error: BaseException | None = None
+        self._calls = None  # drive's callbacks (kept alive while the C side holds them)
 
     def _ptr(self, a: np.ndarray) -> int:
         self._keep.append(a)
@@ -296,11 +341,50 @@ class NativeRows:
         if t == self.time:
             return
         self.model.set_time(t)
-        packed, _ = self.rows.others_at(t)  # the state: copied in by the C side
-        for key, w in self.packs:
-            np.copyto(w, packed[key])
-        self.constants()
-        self.time = t
+        # the other Functions where they changed (the state: copied in by the C side)
+        copy_changed(self.wpacks, self.others)
+        if (self.constant_values is None
+                or [v.tobytes() for v in self.constant_values] != self.constant_bytes):
+            self.constants()
+        self.time = self.ctx.time = t
+
+    def forget(self) -> None:
+        """The next :meth:`at` brings everything up to date, even at the same time."""
+        self.time, self.ctx.time = None, math.nan
+
+    def drive(self, ts: PETSc.TS, F: PETSc.Vec, J: PETSc.Mat, decide) -> None:
+        """Have ``ts`` call the C side for its residual (into ``F``) and Jacobian (into
+        ``J``) without Python between them: Python is called at a new time (:meth:`at`)
+        and for the Jacobian's ``decide(shift_v, shift_a)``, which returns 0 when ``J``
+        is done (kept, or assembled by the caller) and 1 when the whole Jacobian is to be
+        assembled by the C side (its constants packed). The same numbers as
+        :meth:`residual` and :meth:`jacobian` called from Python. An exception in those
+        calls fails the step with a PETSc error: :meth:`reraise` raises it instead."""
+        def at(t: float) -> int:
+            try:
+                self.at(t)
+                return 0
+            except BaseException as err:  # noqa: BLE001 - handed back by reraise
+                self.error = err
+                return _PYTHON_ERROR
+
+        def decision(shift_v: float, shift_a: float) -> int:
+            try:
+                return int(decide(shift_v, shift_a))
+            except BaseException as err:  # noqa: BLE001 - handed back by reraise
+                self.error = err
+                return -_PYTHON_ERROR
+
+        self._calls = (_AT(at), _DECIDE(decision))
+        c = self.ctx
+        c.at, c.decide = (ctypes.cast(f, ctypes.c_void_p).value for f in self._calls)
+        _check(self.lib.cablefem_drive(self._ref, ts.handle, F.handle, J.handle))
+
+    def reraise(self) -> None:
+        """Raise the exception of a call from the C side, if one failed (once)."""
+        err, self.error = self.error, None
+        if err is not None:
+            raise err
 
     def constants(self) -> None:
         """The forms' constants packed again (the Jacobian's shifts, a time law's)."""
@@ -308,6 +392,8 @@ class NativeRows:
         for form, arr in zip(forms, self.consts):
             packed = dcpp.fem.pack_constants(form)
             arr[:packed.size] = packed
+        if self.constant_values is not None:
+            self.constant_bytes = [v.tobytes() for v in self.constant_values]
 
     def residual(self, t: float, U: PETSc.Vec, V: PETSc.Vec, A: PETSc.Vec,
                  F: PETSc.Vec) -> None:
@@ -317,9 +403,8 @@ class NativeRows:
         that reads them (a wave's kinematics where the cable is) sees the state of the last
         residual, also between outputs and in the integrator's start-up steps."""
         self.at(t)
-        m = self.model
-        for X, f in ((U, m.u), (V, m.v), (A, m.a)):
-            X.copy(f.vector)  # one rank: no ghosts
+        for X, y in zip((U, V, A), self.state):
+            X.copy(y)  # one rank: no ghosts
         _check(self.lib.cablefem_residual(self._ref, U.handle, V.handle, A.handle,
                                           F.handle))
 
@@ -347,6 +432,24 @@ class NativeRows:
             zero.ctypes.data, ctypes.byref(reason)))
         return reason.value
 
+    def anchor_forces(self, t: float, anchors: Anchors, acc: np.ndarray, out: np.ndarray,
+                      ksp: PETSc.KSP, M_full: PETSc.Mat, R: PETSc.Vec, work: tuple,
+                      zero: np.ndarray) -> int:
+        """:meth:`forces` with ``model.a`` first set to the anchors' accelerations ``acc``
+        (n, 3) at their rows and zero elsewhere, and the anchor forces then read into
+        ``out`` (n, 3): ``-R`` at each anchor's rows, plus a virtual hinge's layer force
+        (:class:`Anchors`; the operations of
+        :meth:`cablefem.reactions.AnchorReactions.compute`). Returns the KSP's reason."""
+        self.at(t)
+        m, reason = self.model, ctypes.c_int(0)
+        rhs, da, Mda = work
+        _check(self.lib.cablefem_anchor_forces(
+            self._ref, ctypes.byref(anchors), acc.ctypes.data, out.ctypes.data, ksp.handle,
+            M_full.handle, m.u.vector.handle, m.v.vector.handle, m.a.vector.handle,
+            R.handle, rhs.handle, da.handle, Mda.handle, zero.size, zero.ctypes.data,
+            ctypes.byref(reason)))
+        return reason.value
+
     def jacobian(self, J: PETSc.Mat, constants: bool = False, slow: bool = True) -> None:
         """The Jacobian at the state of the last :meth:`residual` into ``J``:
         :meth:`RowsAssembler.jacobian`'s numbers and steps (with a split Jacobian: its
@@ -364,6 +467,25 @@ class NativeRows:
             _check(lib.cablefem_jacobian(self._ref, rows.A_slow.handle, 2, 0))
         J.axpy(1.0, rows.A_slow, structure=PETSc.Mat.Structure.SAME_NONZERO_PATTERN)
         J.zeroRowsLocal(rows.rows, diag=rows.kappa)
+
+
+def _constant_values(forms: list) -> list[np.ndarray] | None:
+    """The values (views) of every Constant of ``forms``, in order, when each form names
+    its Constants (``cablefem_constants``: :func:`cablefem.forms._form`) and their values
+    side by side are its packing; None otherwise."""
+    out = []
+    for form in forms:
+        held = getattr(form, "cablefem_constants", None)
+        if held is None:
+            return None
+        values = [c.value for c in held]
+        packed = dcpp.fem.pack_constants(form)
+        mine = np.concatenate([v.ravel() for v in values]) if values else np.zeros(0)
+        if mine.tobytes() != packed.tobytes() or any(v.base is None and v.flags.owndata
+                                                      for v in values):
+            return None
+        out += values
+    return out
 
 
 def _check(err: int) -> None:

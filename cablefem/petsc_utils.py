@@ -285,7 +285,7 @@ class RowsAssembler:
         state (a new step: anything may have changed since); :attr:`native` too."""
         self._packed_at = None
         if self.native is not None:
-            self.native.time = None
+            self.native.forget()
 
     def coefficients(self, time):
         """``F``'s packed coefficients at the current state, the numbers a whole packing

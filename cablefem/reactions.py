@@ -61,7 +61,12 @@ class AnchorReactions:
         self._own = [(i, model.bs * int(anc.dofs[anc.dofs < n_owned][0]))
                      for i, anc in enumerate(model.anchors)
                      if np.any(anc.dofs < n_owned)]
+        #: the same as index arrays: the anchors, and their three force rows
+        self._own_index = np.array([i for i, _ in self._own], np.int64)
+        self._own_rows = np.array([[row, row + 1, row + 2] for _, row in self._own],
+                                  np.int64).reshape(-1, 3)
         #: force (and a rod's moment) per anchor
+        self._layout = None  # _native_forces' anchors (False: it does not apply)
         self._local = np.zeros((len(model.anchors), 6 if model.is_beam else model.bs))
         self._global = np.zeros_like(self._local)
         self.R = fpetsc.create_vector(model.f_dynamic)
@@ -220,19 +225,72 @@ class AnchorReactions:
             if anc.dofs.size and a is not None:  # the others: zero, set above
                 arr[anc.flat_dofs] = anc.prescribed_from(a)
 
-    def _native(self, t: float, acc: list) -> bool:
+    def _native(self, t: float, acc: list, check: bool = False) -> bool:
         """:meth:`compute`'s dynamic part in one C call where the residual has one
         (:mod:`cablefem.native_rows`: the same operations, the same numbers); False
-        otherwise (nothing done)."""
+        otherwise (nothing done). ``check``: only whether it applies."""
         native = getattr(self.packer, "native", None)
         if (native is None or self._mass_moves or not self._zero_rows
                 or self.packer.F is not self.model.f_dynamic):
             return False
+        if check:
+            return True
         self._time = t
         self._anchors_only(acc)
         _solved(t, native.forces(t, self.ksp, self.M_full, self.R,
                                  (self.rhs, self.da, self.Mda), self._bc_rows))
         return True
+
+    def _native_forces(self, t: float, acc: list) -> np.ndarray | None:
+        """:meth:`compute`'s dynamic evaluation in one C call, where :meth:`_native`
+        applies to a string whose every anchor is on this rank (the same operations and
+        numbers); None otherwise (nothing done)."""
+        if self._layout is None:
+            self._layout = self._anchor_layout()
+        if not self._layout or not self._native(t, acc, check=True):
+            return None
+        anchors, acc_arr, mass, has_hinge = self._layout[:4]
+        acc_arr[:] = 0.0
+        for i, a in enumerate(acc):
+            if a is not None:
+                acc_arr[i] = a
+        hinges = self.model.hinges
+        anchors.hinges = bool(hinges)
+        if hinges:
+            mass[:], has_hinge[:] = 0.0, 0
+            for hg in hinges.items:
+                mass[hg.index] = hg.anchor.section.mass * hg.mass_length
+                has_hinge[hg.index] = 1
+            self._layout[4][:] = hinges.g_vec
+        out = np.empty((len(acc), 3))
+        self._time = t
+        _solved(t, self.packer.native.anchor_forces(
+            t, anchors, acc_arr, out, self.ksp, self.M_full, self.R,
+            (self.rhs, self.da, self.Mda), self._bc_rows))
+        return out
+
+    def _anchor_layout(self) -> tuple | bool:
+        """The :class:`~cablefem.native_rows.Anchors` of :meth:`_native_forces` and the
+        arrays it points into (kept here), or False: a rod, or an anchor off this rank."""
+        from cablefem.native_rows import Anchors
+
+        m = self.model
+        n = len(m.anchors)
+        if (m.is_beam or m.bs != 3 or [i for i, _ in self._own] != list(range(n))
+                or any(anc.bs != 3 for anc in m.anchors)):
+            return False
+        rows = [anc.flat_dofs for anc in m.anchors if anc.dofs.size]
+        src = [3 * i + anc._layout()[1] for i, anc in enumerate(m.anchors) if anc.dofs.size]
+        keep = [np.ascontiguousarray(np.concatenate(rows), PETSc.IntType),
+                np.ascontiguousarray(np.concatenate(src), np.int32),
+                np.array([row for _, row in self._own], PETSc.IntType),
+                np.zeros(n, np.int32), np.zeros(n), np.zeros(3), np.zeros((n, 3))]
+        a_rows, a_src, first, has_hinge, mass, g, acc_arr = keep
+        an = Anchors(n=n, n_a=a_rows.size, hinges=0, a_rows=a_rows.ctypes.data,
+                     a_src=a_src.ctypes.data, row=first.ctypes.data,
+                     has_hinge=has_hinge.ctypes.data, mass=mass.ctypes.data,
+                     g=g.ctypes.data)
+        return an, acc_arr, mass, has_hinge, g, keep
 
     def compute(self, t: float, dynamic: bool = True) -> np.ndarray:
         """Anchor forces ``N_a`` (n_anchors, 3) in N, identical on every rank; for a beam
@@ -246,6 +304,9 @@ class AnchorReactions:
         self._time = t
         if dynamic:
             acc = self._anchor_accelerations(t)
+            forces = self._native_forces(t, acc)
+            if forces is not None:  # the whole evaluation in one C call
+                return forces
             if not self._native(t, acc):
                 self._equilibrium(t, acc)  # leaves F(u, v, a_b) in self.R
                 self.M_full.mult(self.da, self.Mda)
@@ -256,15 +317,19 @@ class AnchorReactions:
             self._time = None  # statics: packed afresh
             self._assemble()
             arr = self.R.array_r
-        local = self._local
+        local, own = self._local, self._own_index
         local[:] = 0.0
-        for i, row in self._own:
-            anc = m.anchors[i]
-            np.negative(arr[row: row + 3], out=local[i, :3])
-            if m.hinges:  # the layer's weight and inertia: the force at the real anchor
-                a = acc[i] if dynamic else None
-                local[i, :3] += m.hinges.layer_force(i, np.zeros(3) if a is None else a)
-            if m.is_beam:  # a rod: its rotation rows' reaction -> the moment (rod.py)
+        local[own, :3] = -arr[self._own_rows]
+        if m.hinges:  # the layers' weight and inertia: the forces at the real anchors
+            a = np.zeros((own.size, 3))
+            if dynamic:
+                for k, i in enumerate(own.tolist()):
+                    if acc[i] is not None:
+                        a[k] = acc[i]
+            local[own, :3] += m.hinges.layer_forces(own, a)
+        if m.is_beam:  # a rod: its rotation rows' reaction -> the moment (rod.py)
+            for i, row in self._own:
+                anc = m.anchors[i]
                 off = row + anc.rot_offset
                 local[i, 3:] = -(anc.moment_map @ arr[off: off + 3])
         if m.comm.size == 1:

@@ -382,3 +382,23 @@ def test_a_split_jacobian_is_the_whole_one_and_keeps_its_slow_part():
     split.destroy()
     for obj in (b, A, A_split, D, S_old, S_new):
         obj.destroy()
+
+
+def test_a_new_times_anchor_rows_are_the_prescribed_ones_and_follow_invalidate_time():
+    """``set_time`` writes a moving anchor's rows from the fixed part ``position -
+    reference`` kept since its first call (or the last ``invalidate_time``): the numbers
+    of ``AnchorBC.prescribed``, to the last bit, at any time; an offset changed with
+    ``invalidate_time`` (as the virtual hinges do) is taken at the next time."""
+    model = CableModel(MPI.COMM_WORLD, parse_case(level_case(elements=8, motion=MOTION)))
+    anc = next(a for a in model.anchors if a.motion is not None)
+    arr = model.u_bc.x.array
+    for t in (0.013, 0.5, 1.7):
+        model.set_time(t)
+        assert np.array_equal(arr[anc.flat_dofs], anc.prescribed("displacement", t))
+    before = arr[anc.flat_dofs].copy()
+    anc.offset = anc.offset + np.array([1e-3, -2e-3, 5e-4])
+    model.invalidate_time()
+    model.set_time(1.7)
+    assert np.array_equal(arr[anc.flat_dofs], anc.prescribed("displacement", 1.7))
+    if anc.dofs.size:  # the rank that holds the anchor's node
+        assert not np.array_equal(arr[anc.flat_dofs], before)

@@ -591,3 +591,28 @@ def test_modes_linearise_the_law_the_dynamics_solves():
         err = MPI.COMM_WORLD.allreduce(float(np.sum((Kphi - expected) ** 2)))
         ref = MPI.COMM_WORLD.allreduce(float(np.sum(expected ** 2)))
         assert np.sqrt(err / ref) < 1e-5, (w, np.sqrt(err / ref))
+
+
+def test_the_layers_forces_are_each_hinges_mass_times_g_minus_a():
+    """``VirtualHinges.layer_forces``: the layer's weight and inertia ``m sigma_h (g -
+    a)`` at each anchor with a hinge (the same floating-point operations: to the last
+    bit), exact zeros at an anchor without one."""
+    case = sagging_paper_case(0.01)
+    case["solver"] = {**case.get("solver", {}), "outer_correction": "hinge"}
+    model = CableModel(MPI.COMM_WORLD, parse_case(case))
+    solve_static(model)
+    hinges = model.hinges
+    assert hinges and all(hg.mass_length > 0 for hg in hinges.items)
+    n = len(model.anchors)
+    acc = np.random.default_rng(7).standard_normal((n, 3))
+    anchors = np.arange(n)
+    got = hinges.layer_forces(anchors, acc)
+    held = {hg.index: hg for hg in hinges.items}
+    for i in range(n):
+        if i in held:
+            hg = held[i]
+            expected = hg.anchor.section.mass * hg.mass_length * (hinges.g_vec - acc[i])
+            assert np.array_equal(got[i], expected)
+        else:
+            assert np.array_equal(got[i], np.zeros(3))
+    assert np.array_equal(hinges.layer_forces(anchors[::-1], acc[::-1]), got[::-1])

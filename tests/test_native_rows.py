@@ -115,16 +115,84 @@ def _forces(native: bool, steps: int = 40, **solver) -> np.ndarray:
 
 def test_a_run_gives_the_same_anchor_forces_with_the_c_route_and_without(monkeypatch):
     """40 steps of a moving, damped cable, the anchor forces at every step (on the C route
-    their residual, mass solve and sums are one C call too): equal to the last bit."""
+    their residual, mass solve, sums and the anchors' rows are one C call too): equal to
+    the last bit."""
     calls = []
-    real = nr.NativeRows.forces
-    monkeypatch.setattr(nr.NativeRows, "forces", lambda *a: calls.append(1) or real(*a))
+    real = nr.NativeRows.anchor_forces
+    monkeypatch.setattr(nr.NativeRows, "anchor_forces",
+                        lambda *a: calls.append(1) or real(*a))
     c = _forces(True)
     assert len(calls) == (41 if MPI.COMM_WORLD.size == 1 else 0)
     py = _forces(False)
     assert len(calls) == (41 if MPI.COMM_WORLD.size == 1 else 0)
     assert c.shape == py.shape == (41, 2, 3)
     assert np.array_equal(c, py)
+
+
+def _clamped_forces(native: bool, change=None) -> np.ndarray:
+    """60 steps of a clamped cable with virtual hinges (each anchor's force then holds its
+    layer's weight and inertia), one anchor moving: the anchor forces at every step;
+    ``change(model)`` called after the 30th."""
+    case = level_case(elements=12, motion=MOTION, damping=DAMPING,
+                      solver={"outer_correction": "hinge"})
+    model = CableModel(MPI.COMM_WORLD, parse_case(case))
+    solve_static(model)
+    assert model.hinges, "the clamps should have virtual hinges"
+    out = []
+    with DynamicProblem(model, 2e-3, petsc_options={"native_assembly": native}) as problem:
+        for k in range(60):
+            if k == 30 and change is not None:
+                change(model)
+            problem.step()
+            out.append(problem.anchor_forces())
+    return np.array(out)
+
+
+def test_virtual_hinges_layer_forces_are_the_same_on_the_c_route():
+    """The layers' weight and inertia, added to the anchor forces in C on the C route:
+    the same forces to the last bit as the Python route's."""
+    c, py = _clamped_forces(True), _clamped_forces(False)
+    assert c.shape == py.shape == (60, 2, 3)
+    assert np.array_equal(c, py)
+
+
+def test_a_constant_changed_between_steps_is_seen_by_the_c_route():
+    """The C route packs the forms' constants again only when one of them changed (their
+    bytes compared at each new time): gravity changed by the caller between two steps
+    (Python API) moves the forces as on the Python route, to the last bit; without the
+    comparison the old gravity would stay packed."""
+    def heavier(model):
+        model.gravity.value = 1.5 * model.gravity.value
+
+    c, py = _clamped_forces(True, heavier), _clamped_forces(False, heavier)
+    same = _clamped_forces(True)
+    assert np.array_equal(c, py)
+    assert not np.array_equal(c[-1], same[-1])  # the change does move the forces
+
+
+def test_an_exception_in_a_time_law_on_the_c_route_is_raised_as_itself(monkeypatch):
+    """On the C route the time integrator calls the C side, which calls Python at a new
+    time: an exception there fails the step and is raised as itself, as an exception in
+    a Python callback is on the Python route (not as a PETSc error, and never lost)."""
+    model = CableModel(MPI.COMM_WORLD, parse_case(level_case(elements=8, motion=MOTION)))
+    solve_static(model)
+
+    class Stop(Exception):
+        pass
+
+    real = CableModel.set_time
+
+    def set_time(self, t):
+        if t > 0.005:
+            raise Stop(t)
+        real(self, t)
+
+    with DynamicProblem(model, 2e-3) as problem:
+        monkeypatch.setattr(CableModel, "set_time", set_time)
+        with pytest.raises(Stop):
+            for _ in range(5):
+                problem.step()
+        assert problem._rows.native is None or problem._rows.native.error is None
 
 
 def test_a_mass_solve_through_python_from_c_is_the_same():
