@@ -10,7 +10,7 @@ import pytest
 from mpi4py import MPI
 
 from cablefem.cable import CableModel
-from cablefem.dynamics import _make_ts, integrate
+from cablefem.dynamics import integrate
 from cablefem.gathered_lu import PYTHON_TYPE as GATHERED
 from cablefem.petsc_utils import (
     GATHER_ABOVE,
@@ -20,6 +20,7 @@ from cablefem.petsc_utils import (
     linear_solver_options,
 )
 from cablefem.statics import solve_static
+from cablefem.timestepper import make_ts
 
 LAGGED = {"ksp_type": "gmres", "ksp_rtol": 1e-12, "ksp_max_it": 500,
           "snes_lag_preconditioner": 10, "snes_lag_preconditioner_persists": True}
@@ -58,7 +59,7 @@ def test_a_large_model_keeps_its_factorisation_over_steps(make_case):
     for elements, reuse in ((7000, JACOBIAN_REUSE), (30, 0)):
         model = CableModel(MPI.COMM_WORLD, make_case(elements=elements))
         assert (3 * (elements + 1) > LARGE_ABOVE) == (elements == 7000)
-        ts, (F, J, newton), _ = _make_ts(model, 0.005, 0.9, SNESHistory())
+        ts, (F, J, newton), _ = make_ts(model, 0.005, 0.9, SNESHistory())
         assert ts.getSNES().getKSP().getType() == "preonly"
         assert newton.reuse == reuse
         ts.destroy()
@@ -70,7 +71,7 @@ def _history(make_case, options):
     model = CableModel(MPI.COMM_WORLD, case)
     solve_static(model)
     model.u.x.array[:] = model.u_static.x.array
-    ts, (_, J, _), _ = _make_ts(model, 0.005, 0.9, SNESHistory())  # F, J, StepNewton; rows
+    ts, (_, J, _), _ = make_ts(model, 0.005, 0.9, SNESHistory())  # F, J, StepNewton; rows
     mat_type, pc = J.getType(), ts.getSNES().getKSP().getPC().getType()
     ts.destroy()
     hist = np.array([f.copy() for _, f in integrate(model, 0.2, 0.005, 0.9, 5)])
