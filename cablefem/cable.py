@@ -424,4 +424,6 @@ def _displacement_rows(anc):
         return lambda t: anc.prescribed("displacement", t)
     fixed, motion, offset = anc.position - anc.reference, anc.motion.displacement, anc.offset
     comps = anc._layout()[1]
+    if np.array_equal(comps, np.arange(3)):  # one node, all three components: as they are
+        return lambda t: (fixed + motion(t)) + offset
     return lambda t: ((fixed + motion(t)) + offset)[comps]

@@ -432,23 +432,30 @@ class NativeRows:
             zero.ctypes.data, ctypes.byref(reason)))
         return reason.value
 
-    def anchor_forces(self, t: float, anchors: Anchors, acc: np.ndarray, out: np.ndarray,
+    def anchor_forces(self, anchors: Anchors, acc: np.ndarray, out: np.ndarray,
                       ksp: PETSc.KSP, M_full: PETSc.Mat, R: PETSc.Vec, work: tuple,
-                      zero: np.ndarray) -> int:
-        """:meth:`forces` with ``model.a`` first set to the anchors' accelerations ``acc``
-        (n, 3) at their rows and zero elsewhere, and the anchor forces then read into
-        ``out`` (n, 3): ``-R`` at each anchor's rows, plus a virtual hinge's layer force
-        (:class:`Anchors`; the operations of
-        :meth:`cablefem.reactions.AnchorReactions.compute`). Returns the KSP's reason."""
-        self.at(t)
+                      zero: np.ndarray):
+        """A call ``f(t)`` (returning the KSP's reason) that does :meth:`forces` with
+        ``model.a`` first set to the anchors' accelerations ``acc`` (n, 3) at their rows
+        and zero elsewhere, and then reads the anchor forces into ``out`` (n, 3): ``-R``
+        at each anchor's rows, plus a virtual hinge's layer force (:class:`Anchors`; the
+        operations of :meth:`cablefem.reactions.AnchorReactions.compute`). Its arguments
+        are converted once: keep them (and their buffers) alive while ``f`` is used."""
         m, reason = self.model, ctypes.c_int(0)
         rhs, da, Mda = work
-        _check(self.lib.cablefem_anchor_forces(
-            self._ref, ctypes.byref(anchors), acc.ctypes.data, out.ctypes.data, ksp.handle,
-            M_full.handle, m.u.vector.handle, m.v.vector.handle, m.a.vector.handle,
-            R.handle, rhs.handle, da.handle, Mda.handle, zero.size, zero.ctypes.data,
-            ctypes.byref(reason)))
-        return reason.value
+        ptr = ctypes.c_void_p
+        args = (self._ref, ctypes.byref(anchors), *(ptr(a.ctypes.data) for a in (acc, out)),
+                *(ptr(obj.handle) for obj in (ksp, M_full, m.u.vector, m.v.vector,
+                                              m.a.vector, R, rhs, da, Mda)),
+                ctypes.c_int32(zero.size), ptr(zero.ctypes.data), ctypes.byref(reason))
+        call, at = self.lib.cablefem_anchor_forces, self.at
+
+        def forces(t: float) -> int:
+            at(t)
+            _check(call(*args))
+            return reason.value
+
+        return forces
 
     def jacobian(self, J: PETSc.Mat, constants: bool = False, slow: bool = True) -> None:
         """The Jacobian at the state of the last :meth:`residual` into ``J``:

@@ -15,6 +15,8 @@ balances the discrete equations exactly at that time.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 from dolfinx import cpp as dcpp
 from dolfinx.fem import petsc as fpetsc
@@ -245,33 +247,32 @@ class AnchorReactions:
         """:meth:`compute`'s dynamic evaluation in one C call, where :meth:`_native`
         applies to a string whose every anchor is on this rank (the same operations and
         numbers); None otherwise (nothing done)."""
+        if self._layout is False or not self._native(t, acc, check=True):
+            return None
         if self._layout is None:
             self._layout = self._anchor_layout()
-        if not self._layout or not self._native(t, acc, check=True):
-            return None
-        anchors, acc_arr, mass, has_hinge = self._layout[:4]
-        acc_arr[:] = 0.0
+            if self._layout is False:
+                return None
+        lay = self._layout
+        lay.acc[:] = 0.0
         for i, a in enumerate(acc):
             if a is not None:
-                acc_arr[i] = a
+                lay.acc[i] = a
         hinges = self.model.hinges
-        anchors.hinges = bool(hinges)
+        lay.anchors.hinges = bool(hinges)
         if hinges:
-            mass[:], has_hinge[:] = 0.0, 0
+            lay.mass[:], lay.has_hinge[:] = 0.0, 0
             for hg in hinges.items:
-                mass[hg.index] = hg.anchor.section.mass * hg.mass_length
-                has_hinge[hg.index] = 1
-            self._layout[4][:] = hinges.g_vec
-        out = np.empty((len(acc), 3))
+                lay.mass[hg.index] = hg.anchor.section.mass * hg.mass_length
+                lay.has_hinge[hg.index] = 1
+            lay.g[:] = hinges.g_vec
         self._time = t
-        _solved(t, self.packer.native.anchor_forces(
-            t, anchors, acc_arr, out, self.ksp, self.M_full, self.R,
-            (self.rhs, self.da, self.Mda), self._bc_rows))
-        return out
+        _solved(t, lay.call(t))
+        return lay.out.copy()
 
-    def _anchor_layout(self) -> tuple | bool:
-        """The :class:`~cablefem.native_rows.Anchors` of :meth:`_native_forces` and the
-        arrays it points into (kept here), or False: a rod, or an anchor off this rank."""
+    def _anchor_layout(self) -> _AnchorLayout | bool:
+        """The :class:`_AnchorLayout` of :meth:`_native_forces`, or False: a rod, or an
+        anchor off this rank."""
         from cablefem.native_rows import Anchors
 
         m = self.model
@@ -281,16 +282,18 @@ class AnchorReactions:
             return False
         rows = [anc.flat_dofs for anc in m.anchors if anc.dofs.size]
         src = [3 * i + anc._layout()[1] for i, anc in enumerate(m.anchors) if anc.dofs.size]
-        keep = [np.ascontiguousarray(np.concatenate(rows), PETSc.IntType),
-                np.ascontiguousarray(np.concatenate(src), np.int32),
-                np.array([row for _, row in self._own], PETSc.IntType),
-                np.zeros(n, np.int32), np.zeros(n), np.zeros(3), np.zeros((n, 3))]
-        a_rows, a_src, first, has_hinge, mass, g, acc_arr = keep
-        an = Anchors(n=n, n_a=a_rows.size, hinges=0, a_rows=a_rows.ctypes.data,
-                     a_src=a_src.ctypes.data, row=first.ctypes.data,
-                     has_hinge=has_hinge.ctypes.data, mass=mass.ctypes.data,
-                     g=g.ctypes.data)
-        return an, acc_arr, mass, has_hinge, g, keep
+        lay = _AnchorLayout(np.ascontiguousarray(np.concatenate(rows), PETSc.IntType),
+                            np.ascontiguousarray(np.concatenate(src), np.int32),
+                            np.array([row for _, row in self._own], PETSc.IntType),
+                            np.zeros(n, np.int32), np.zeros(n), np.zeros(3),
+                            np.zeros((n, 3)), np.zeros((n, 3)))
+        lay.anchors = Anchors(n=n, n_a=lay.a_rows.size, hinges=0,
+                              **{k: getattr(lay, k).ctypes.data for k in
+                                 ("a_rows", "a_src", "row", "has_hinge", "mass", "g")})
+        lay.call = self.packer.native.anchor_forces(
+            lay.anchors, lay.acc, lay.out, self.ksp, self.M_full, self.R,
+            (self.rhs, self.da, self.Mda), self._bc_rows)
+        return lay
 
     def compute(self, t: float, dynamic: bool = True) -> np.ndarray:
         """Anchor forces ``N_a`` (n_anchors, 3) in N, identical on every rank; for a beam
@@ -347,6 +350,25 @@ class AnchorReactions:
 
     def __exit__(self, *exc):
         self.destroy()
+
+
+@dataclass
+class _AnchorLayout:
+    """The arrays :class:`cablefem.native_rows.Anchors` points into (kept alive here):
+    the rows of ``model.a`` the accelerations go to and where from, each anchor's first
+    residual row, the hinges' flags, masses and gravity, the accelerations and the
+    forces; the Anchors and the prepared C call."""
+
+    a_rows: np.ndarray
+    a_src: np.ndarray
+    row: np.ndarray
+    has_hinge: np.ndarray
+    mass: np.ndarray
+    g: np.ndarray
+    acc: np.ndarray
+    out: np.ndarray
+    anchors: object = None
+    call: object = None
 
 
 def _solved(t: float, reason: int) -> None:
