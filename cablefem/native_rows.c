@@ -84,6 +84,12 @@ typedef struct {
     int (*at)(double);
     int (*decide)(double, double);
     Vec state[3];
+    /* the Jacobian's decision taken here, without Python, while the shifts are those of
+     * the last whole assembly Python decided (`same`: Python's decision is then always
+     * to assemble whole, with no other effect: no reuse, no split); those assemblies */
+    int32_t same;
+    double shift_v, shift_a;
+    int64_t assembled;
 } rows_ctx;
 
 #define CHECK(call) do { PetscErrorCode ierr_ = (call); if (ierr_) return (int)ierr_; } while (0)
@@ -270,6 +276,27 @@ int cablefem_anchor_forces(rows_ctx *c, const anchors_t *an, const double *acc, 
     return 0;
 }
 
+/* An array watched for changes: its values, and their copy as last seen. */
+typedef struct {
+    const void *now;
+    void *last;
+    int64_t nbytes;
+} watch_t;
+
+/* Compare each of the n watched arrays with its copy, byte for byte; flags[i] = 1 where
+ * they differ (the copy then updated), 0 elsewhere. Returns how many differed. */
+int32_t cablefem_changed(const watch_t *w, int32_t n, int32_t *flags) {
+    int32_t count = 0;
+    for (int32_t i = 0; i < n; ++i) {
+        flags[i] = memcmp(w[i].now, w[i].last, (size_t)w[i].nbytes) != 0;
+        if (flags[i]) {
+            memcpy(w[i].last, w[i].now, (size_t)w[i].nbytes);
+            ++count;
+        }
+    }
+    return count;
+}
+
 /* The time integrator's residual, as TSSetI2Function calls it: Python brings the time, the
  * constants and the other coefficients to t when t is new (c->at, which sets c->time); the
  * state is copied into the model's u, v, a (as the Python route does: a time law may read
@@ -287,15 +314,23 @@ static PetscErrorCode ts_residual(void *ts, double t, Vec U, Vec V, Vec A, Vec F
 
 /* The time integrator's Jacobian, as TSSetI2Jacobian calls it: Python decides (c->decide:
  * negative, an error; 0, J is done: kept, or assembled there; 1, the whole Jacobian is to
- * be assembled here, its constants packed), at the state of the residual just before. */
+ * be assembled here, its constants packed), at the state of the residual just before;
+ * with c->same, at the shifts of Python's last whole assembly, without asking. */
 static PetscErrorCode ts_jacobian(void *ts, double t, Vec U, Vec V, Vec A, double shift_v,
                                   double shift_a, Mat J, Mat P, void *p) {
     rows_ctx *c = p;
     (void)ts, (void)t, (void)U, (void)V, (void)A, (void)P;
+    if (c->same && shift_v == c->shift_v && shift_a == c->shift_a) {
+        c->assembled += 1;
+        return cablefem_jacobian(c, J, 0, 1);
+    }
     const int what = c->decide(shift_v, shift_a);
     if (what < 0)
         return -what;
-    return what == 1 ? cablefem_jacobian(c, J, 0, 1) : 0;
+    if (what != 1)
+        return 0;
+    c->shift_v = shift_v, c->shift_a = shift_a;
+    return cablefem_jacobian(c, J, 0, 1);
 }
 
 /* Have the TS call ts_residual and ts_jacobian with this context, into F and J. */

@@ -38,9 +38,7 @@ import numpy as np
 from dolfinx import cpp as dcpp
 from petsc4py import PETSc
 
-from cablefem.packing import copy_changed
-
-__all__ = ["Anchors", "NativeRows", "native_rows", "library"]
+__all__ = ["Anchors", "NativeRows", "Watched", "native_rows", "library"]
 
 log = logging.getLogger(__name__)
 
@@ -74,7 +72,9 @@ class _Ctx(ctypes.Structure):
                 ("g", _p), ("n_rows", ctypes.c_int32), ("rows", _p),
                 ("kappa", ctypes.c_double), ("n_local", ctypes.c_int32), ("be", _p),
                 ("ae", _p), ("wj", _p), ("block_dofs", _p), ("time", ctypes.c_double),
-                ("at", _p), ("decide", _p), ("state", _p * 3)]
+                ("at", _p), ("decide", _p), ("state", _p * 3), ("same", ctypes.c_int32),
+                ("shift_v", ctypes.c_double), ("shift_a", ctypes.c_double),
+                ("assembled", ctypes.c_int64)]
 
 
 class Anchors(ctypes.Structure):
@@ -84,6 +84,35 @@ class Anchors(ctypes.Structure):
     _fields_ = [("n", ctypes.c_int32), ("n_a", ctypes.c_int32), ("hinges", ctypes.c_int32),
                 ("a_rows", _p), ("a_src", _p), ("row", _p), ("has_hinge", _p),
                 ("mass", _p), ("g", _p)]
+
+
+class _Watch(ctypes.Structure):
+    """``watch_t`` of native_rows.c."""
+
+    _fields_ = [("now", _p), ("last", _p), ("nbytes", ctypes.c_int64)]
+
+
+class Watched:
+    """Arrays (C-contiguous; their memory kept) compared byte for byte with their copies
+    as last seen, in one C call (``cablefem_changed``): :meth:`changed` returns how many
+    differ, updates their copies and flags them in :attr:`flags`. The copies start as the
+    values now."""
+
+    def __init__(self, lib, arrays: list[np.ndarray]) -> None:
+        self.arrays = [np.asarray(a) for a in arrays]
+        if any(not a.flags.c_contiguous for a in self.arrays):
+            raise ValueError("watched arrays must be C-contiguous")
+        self.copies = [a.copy() for a in self.arrays]
+        n = len(self.arrays)
+        self.items = (_Watch * max(n, 1))(*(_Watch(a.ctypes.data, c.ctypes.data, a.nbytes)
+                                           for a, c in zip(self.arrays, self.copies)))
+        self.flags = np.zeros(n, np.int32)
+        self._args = (ctypes.byref(self.items), ctypes.c_int32(n),
+                      ctypes.c_void_p(self.flags.ctypes.data if n else None))
+        self._call = lib.cablefem_changed
+
+    def changed(self) -> int:
+        return self._call(*self._args) if self.arrays else 0
 
 
 #: the C side's calls into Python (:meth:`NativeRows.drive`): a new time; the Jacobian's
@@ -153,6 +182,8 @@ def _load():
                                                              ctypes.POINTER(ctypes.c_int)]
     lib.cablefem_forces.restype = ctypes.c_int
     lib.cablefem_drive.argtypes = [ctypes.c_void_p] * 4
+    lib.cablefem_changed.argtypes = [ctypes.c_void_p, ctypes.c_int32, ctypes.c_void_p]
+    lib.cablefem_changed.restype = ctypes.c_int32
     lib.cablefem_anchor_forces.argtypes = [ctypes.c_void_p] * 13 + [
         ctypes.c_int32, ctypes.c_void_p, ctypes.POINTER(ctypes.c_int)]
     lib.cablefem_anchor_forces.restype = ctypes.c_int
@@ -256,8 +287,9 @@ class NativeRows:
         #: the other Functions (a time law's, a hinge's law), copied into this side's
         #: packing where they changed, compared with what was packed here (their own notes:
         #: the Python route's packing keeps its own)
-        self.others = [(arr, [arr.tobytes()], items) for arr, _, items in rows.others]
+        self.others = [(arr, items) for arr, _, items in rows.others]
         self.wpacks = dict(self.packs)
+        self._others_seen = Watched(lib, [arr for arr, _ in self.others])
         #: the packed constants of the residual and of each Jacobian (never empty)
         forms = [rows.F, *(f for f, _ in self.jacobians if f is not None)]
         self.consts = [np.zeros(dcpp.fem.pack_constants(form).size + 1) for form in forms]
@@ -265,7 +297,9 @@ class NativeRows:
         #: packing is theirs in that order (None: packed afresh at every new time), and
         #: their bytes as last packed
         self.constant_values = _constant_values(forms)
-        self.constant_bytes: list[bytes] | None = None
+        self._constants_seen = (None if self.constant_values is None
+                                else Watched(lib, self.constant_values))
+        self._constants_packed = False
         c.const_f = ptr(self.consts[0])
         for k, arr in enumerate(self.consts[1:]):
             c.const_j[k] = ptr(arr)
@@ -342,9 +376,14 @@ class NativeRows:
             return
         self.model.set_time(t)
         # the other Functions where they changed (the state: copied in by the C side)
-        copy_changed(self.wpacks, self.others)
-        if (self.constant_values is None
-                or [v.tobytes() for v in self.constant_values] != self.constant_bytes):
+        seen = self._others_seen
+        if seen.changed():
+            for i in np.flatnonzero(seen.flags).tolist():
+                arr, items = self.others[i]
+                for key, pos, src in items:
+                    self.wpacks[key].reshape(-1)[pos] = arr[src]
+        if (self._constants_seen is None or not self._constants_packed
+                or self._constants_seen.changed()):
             self.constants()
         self.time = self.ctx.time = t
 
@@ -352,14 +391,18 @@ class NativeRows:
         """The next :meth:`at` brings everything up to date, even at the same time."""
         self.time, self.ctx.time = None, math.nan
 
-    def drive(self, ts: PETSc.TS, F: PETSc.Vec, J: PETSc.Mat, decide) -> None:
+    def drive(self, ts: PETSc.TS, F: PETSc.Vec, J: PETSc.Mat, decide,
+              same: bool = False) -> None:
         """Have ``ts`` call the C side for its residual (into ``F``) and Jacobian (into
         ``J``) without Python between them: Python is called at a new time (:meth:`at`)
         and for the Jacobian's ``decide(shift_v, shift_a)``, which returns 0 when ``J``
         is done (kept, or assembled by the caller) and 1 when the whole Jacobian is to be
-        assembled by the C side (its constants packed). The same numbers as
-        :meth:`residual` and :meth:`jacobian` called from Python. An exception in those
-        calls fails the step with a PETSc error: :meth:`reraise` raises it instead."""
+        assembled by the C side (its constants packed). ``same``: ``decide`` returns 1
+        and changes nothing else whenever the shifts are those of its last 1 (no reuse,
+        no split): the C side then assembles without asking, and counts those
+        assemblies (:attr:`assembled`). The same numbers as :meth:`residual` and
+        :meth:`jacobian` called from Python. An exception in those calls fails the step
+        with a PETSc error: :meth:`reraise` raises it instead."""
         def at(t: float) -> int:
             try:
                 self.at(t)
@@ -377,8 +420,15 @@ class NativeRows:
 
         self._calls = (_AT(at), _DECIDE(decision))
         c = self.ctx
+        c.same, c.shift_v, c.shift_a = int(same), math.nan, math.nan
         c.at, c.decide = (ctypes.cast(f, ctypes.c_void_p).value for f in self._calls)
         _check(self.lib.cablefem_drive(self._ref, ts.handle, F.handle, J.handle))
+
+    @property
+    def assembled(self) -> int:
+        """Whole Jacobians the C side assembled without asking (:meth:`drive`'s
+        ``same``)."""
+        return self.ctx.assembled
 
     def reraise(self) -> None:
         """Raise the exception of a call from the C side, if one failed (once)."""
@@ -392,8 +442,9 @@ class NativeRows:
         for form, arr in zip(forms, self.consts):
             packed = dcpp.fem.pack_constants(form)
             arr[:packed.size] = packed
-        if self.constant_values is not None:
-            self.constant_bytes = [v.tobytes() for v in self.constant_values]
+        if self._constants_seen is not None:
+            self._constants_seen.changed()  # the values packed: those seen now
+            self._constants_packed = True
 
     def residual(self, t: float, U: PETSc.Vec, V: PETSc.Vec, A: PETSc.Vec,
                  F: PETSc.Vec) -> None:

@@ -177,10 +177,18 @@ class StepNewton:
         self.stale = False  # the last iteration solved with a kept Jacobian
         self.next: PETSc.Vec | None = None  # the simplified Newton correction
         #: counts, for the statistics (a split Jacobian's slow part: ``slow_assemblies``)
-        self.assemblies = self.residuals = self.slow_assemblies = 0
+        self._assemblies = self.residuals = self.slow_assemblies = 0
+        #: whole Jacobians assembled without asking :meth:`keep_jacobian` (the C route,
+        #: where its answer is known: no reuse, no split)
+        self.elsewhere = lambda: 0
         if predictor == "velocity":
             snes.setInitialGuess(self.guess)
         snes.setConvergenceTest(self.test)
+
+    @property
+    def assemblies(self) -> int:
+        """Jacobians assembled (a split one's fast part; for the statistics)."""
+        return self._assemblies + self.elsewhere()
 
     def expect(self, h: float, cut: bool = False) -> None:
         """The next ``ts.step()`` takes a step of ``h``; ``cut``: a sub-step of a cut step
@@ -239,7 +247,7 @@ class StepNewton:
             self.stale = True
             return True
         self.kept, self.age, self.stale = (shift_v, shift_a), 0, False
-        self.assemblies += 1
+        self._assemblies += 1
         # a split Jacobian's slow part: assembled too unless kept under the same rule
         kept_slow = self.slow_kept
         self.slow = not (self.split and self.slow_reuse > 0 and own and kept_slow is not None

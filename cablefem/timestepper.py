@@ -150,6 +150,9 @@ def make_ts(model, dt: float, rho_inf: float, history: SNESHistory,
         newton = StepNewton(ts, prefix, costly, history)  # its test keeps the norms
         newton.split = rows.parts is not None
         rows.native = native_rows(model, rows, prefix)  # None: the Python route
-        if rows.native is not None:
-            rows.native.drive(ts, F_vec, J_mat, lambda sv, sa: decide(sv, sa, J_mat))
+        if rows.native is not None:  # without reuse or a split Jacobian, the C side
+            # assembles at unchanged shifts without asking (the same decision every time)
+            rows.native.drive(ts, F_vec, J_mat, lambda sv, sa: decide(sv, sa, J_mat),
+                              same=newton.reuse == 0 and not newton.split)
+            newton.elsewhere = lambda: rows.native.assembled
     return ts, (F_vec, J_mat, newton), rows

@@ -299,3 +299,23 @@ def test_summary_says_which_route_assembled(native, mpi_tmp_path):
                  progress=False)
     expected = "c" if native and MPI.COMM_WORLD.size == 1 else "python"
     assert r.summary["dynamics"]["assembly"] == expected
+
+
+def test_watched_arrays_flag_exactly_those_whose_bytes_changed():
+    """``Watched.changed`` (one C call at each new time for the other coefficients and the
+    constants): the arrays whose bytes differ from their copies as last seen, flagged and
+    counted, their copies then updated (a second call finds nothing); a sign of zero is a
+    change, as byte comparison makes it."""
+    lib = nr.library()
+    if lib is None:
+        pytest.skip("no C compiler here")
+    arrays = [np.arange(5.0), np.zeros(()), np.ones(3)]
+    seen = nr.Watched(lib, arrays)
+    assert seen.changed() == 0 and not seen.flags.any()
+    arrays[0][3] = 7.5
+    arrays[1][()] = -0.0
+    assert seen.changed() == 2
+    assert seen.flags.tolist() == [1, 1, 0]
+    assert np.array_equal(seen.copies[0], arrays[0])
+    assert seen.changed() == 0
+    assert nr.Watched(lib, []).changed() == 0
