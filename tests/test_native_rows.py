@@ -16,6 +16,7 @@ from petsc4py import PETSc
 from test_fastassembly import _assemblers, _moved, _moved_model
 from test_fluid import taut
 
+from cablefem import native_lib as nl
 from cablefem import native_rows as nr
 from cablefem.cable import CableModel
 from cablefem.case import parse_case
@@ -255,12 +256,12 @@ def test_between_outputs_the_model_holds_the_state_the_python_route_leaves():
 def test_without_a_c_compiler_the_python_route(monkeypatch):
     """No compiler: no library, the Python route, the run the same."""
     monkeypatch.setenv("CC", "/nonexistent/cc")
-    monkeypatch.setattr(nr, "_LIB", [])
+    monkeypatch.setattr(nl, "_LIB", [])
     assert nr.library() is None
     model = _moved_model()
     rows, _ = _assemblers(model)
     assert nr.native_rows(model, rows, model.prefix) is None
-    monkeypatch.setattr(nr, "_LIB", [])  # the next test loads it again
+    monkeypatch.setattr(nl, "_LIB", [])  # the next test loads it again
 
 
 def test_a_compiler_given_with_a_wrapper_command_compiles(monkeypatch):
@@ -268,9 +269,9 @@ def test_a_compiler_given_with_a_wrapper_command_compiles(monkeypatch):
     words, not one program named "env cc" (which fell back to the Python route). On 2
     ranks both compile at once, each into a folder of its own, renamed into place."""
     monkeypatch.setenv("CC", "env cc")
-    monkeypatch.setattr(nr, "_LIB", [])
+    monkeypatch.setattr(nl, "_LIB", [])
     assert nr.library() is not None
-    monkeypatch.setattr(nr, "_LIB", [])  # the next test loads the usual one
+    monkeypatch.setattr(nl, "_LIB", [])  # the next test loads the usual one
 
 
 @pytest.mark.parametrize("value", ["false", "0"])
