@@ -313,13 +313,14 @@ class StepNewton:
             if self.work is None:
                 self.work = X0.duplicate()
             self.work.waxpy(-1.0, X0, snes.getSolution())
+            allowed = self.eta * self.work.norm()
             if self.stale:  # modified Newton: the next correction from the kept factors
                 error = self._error_left(snes, ynorm)
             else:  # at the residual's round-off floor (no contraction left) the step itself
                 error = ynorm * min(1.0, fnorm / f_prev)
-                if error > self.eta * self.work.norm():  # the residual's ratio can overstate
+                if error > allowed:  # the residual's ratio can overstate
                     error = min(error, self._error_left(snes, ynorm))
-            if error <= self.eta * self.work.norm():
+            if error <= allowed:
                 if it == 1 and self.stale:
                     self.backoff = 0  # a kept Jacobian finished the step in one iteration
                 return _SNORM  # the error left small against the step's increment

@@ -51,7 +51,13 @@ def bc_row_scale(model) -> float:
 
 
 def make_ts(model, dt: float, rho_inf: float, history: SNESHistory,
-             prefix: str | None = None, petsc_options: dict | None = None):
+            prefix: str | None = None, petsc_options: dict | None = None):
+    """``model``'s time integrator: ``(ts, (F, J, newton), rows)``, the TS (options prefix
+    ``prefix``, default the model's; ``petsc_options`` over the case file's, over the
+    defaults), its residual vector and Jacobian matrix (alive as long as the TS), its
+    :class:`~cablefem.stepnewton.StepNewton` (which records every residual norm in
+    ``history``) and its :class:`~cablefem.petsc_utils.RowsAssembler` (``rows.native``:
+    the C route, or None)."""
     prefix = model.prefix if prefix is None else prefix
     scale = model.force_scale
     n_dofs = model_dofs(model)
