@@ -244,15 +244,18 @@ class VirtualHinges:
         (g - a)`` with their ``accelerations`` (n, 3), N (zero rows for anchors without
         hinge)."""
         out = [[0.0, 0.0, 0.0] for _ in range(len(anchors))]
-        hinge = {hg.index: hg for hg in self.items}
+        masses = self.masses()
         g = self.g_vec.tolist()
         # Python floats: the same operations as NumPy's on the arrays, a tenth of the time
         for k, (i, a) in enumerate(zip(anchors.tolist(), accelerations.tolist())):
-            hg = hinge.get(i)
-            if hg is not None:
-                mass = hg.anchor.section.mass * hg.mass_length
+            mass = masses.get(i)
+            if mass is not None:
                 out[k] = [mass * (gj - aj) for gj, aj in zip(g, a)]
         return np.array(out, float).reshape(-1, 3)
+
+    def masses(self) -> dict[int, float]:
+        """Each hinged anchor's layer mass ``m sigma_h`` (kg), by the anchor's index."""
+        return {hg.index: hg.anchor.section.mass * hg.mass_length for hg in self.items}
 
     # ------------------------------------------------------------------ statics
     def place(self, forces: np.ndarray) -> np.ndarray:

@@ -227,44 +227,41 @@ class AnchorReactions:
             if anc.dofs.size and a is not None:  # the others: zero, set above
                 arr[anc.flat_dofs] = anc.prescribed_from(a)
 
-    def _native(self, t: float, acc: list, check: bool = False) -> bool:
+    def _native_applies(self) -> bool:
+        """Whether the residual has a C route (:mod:`cablefem.native_rows`) that does the
+        dynamic evaluation's operations: its own residual, a fixed mass, zeroed rows."""
+        return not (getattr(self.packer, "native", None) is None or self._mass_moves
+                    or not self._zero_rows or self.packer.F is not self.model.f_dynamic)
+
+    def _native(self, t: float, acc: list) -> bool:
         """:meth:`compute`'s dynamic part in one C call where the residual has one
-        (:mod:`cablefem.native_rows`: the same operations, the same numbers); False
-        otherwise (nothing done). ``check``: only whether it applies."""
-        native = getattr(self.packer, "native", None)
-        if (native is None or self._mass_moves or not self._zero_rows
-                or self.packer.F is not self.model.f_dynamic):
+        (the same operations, the same numbers); False otherwise (nothing done)."""
+        if not self._native_applies():
             return False
-        if check:
-            return True
         self._time = t
         self._anchors_only(acc)
-        _solved(t, native.forces(t, self.ksp, self.M_full, self.R,
-                                 (self.rhs, self.da, self.Mda), self._bc_rows))
+        _solved(t, self.packer.native.forces(t, self.ksp, self.M_full, self.R,
+                                             (self.rhs, self.da, self.Mda), self._bc_rows))
         return True
 
     def _native_forces(self, t: float, acc: list) -> np.ndarray | None:
         """:meth:`compute`'s dynamic evaluation in one C call, where :meth:`_native`
         applies to a string whose every anchor is on this rank (the same operations and
         numbers); None otherwise (nothing done)."""
-        if self._layout is False or not self._native(t, acc, check=True):
+        if self._layout is False or not self._native_applies():
             return None
         if self._layout is None:
             self._layout = self._anchor_layout()
             if self._layout is False:
                 return None
         lay = self._layout
-        lay.acc[:] = 0.0
-        for i, a in enumerate(acc):
-            if a is not None:
-                lay.acc[i] = a
+        lay.acc[:] = _rows(acc, range(len(acc)))
         hinges = self.model.hinges
         lay.anchors.hinges = bool(hinges)
         if hinges:
             lay.mass[:], lay.has_hinge[:] = 0.0, 0
-            for hg in hinges.items:
-                lay.mass[hg.index] = hg.anchor.section.mass * hg.mass_length
-                lay.has_hinge[hg.index] = 1
+            for i, mass in hinges.masses().items():
+                lay.mass[i], lay.has_hinge[i] = mass, 1
             lay.g[:] = hinges.g_vec
         self._time = t
         _solved(t, lay.call(t))
@@ -324,11 +321,7 @@ class AnchorReactions:
         local[:] = 0.0
         local[own, :3] = -arr[self._own_rows]
         if m.hinges:  # the layers' weight and inertia: the forces at the real anchors
-            a = np.zeros((own.size, 3))
-            if dynamic:
-                for k, i in enumerate(own.tolist()):
-                    if acc[i] is not None:
-                        a[k] = acc[i]
+            a = _rows(acc, own) if dynamic else np.zeros((own.size, 3))
             local[own, :3] += m.hinges.layer_forces(own, a)
         if m.is_beam:  # a rod: its rotation rows' reaction -> the moment (rod.py)
             for i, row in self._own:
@@ -369,6 +362,16 @@ class _AnchorLayout:
     out: np.ndarray
     anchors: object = None
     call: object = None
+
+
+def _rows(acc: list, which) -> np.ndarray:
+    """(len(which), 3): the accelerations ``acc[i]`` of the anchors ``which``, zero where
+    one is None (an anchor without motion)."""
+    out = np.zeros((len(which), 3))
+    for k, i in enumerate(which):
+        if acc[int(i)] is not None:
+            out[k] = acc[int(i)]
+    return out
 
 
 def _solved(t: float, reason: int) -> None:
