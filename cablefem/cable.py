@@ -286,18 +286,21 @@ class CableModel:
             return
         self._time = t
         arr = self.u_bc.x.array
-        if getattr(self, "_fixed_written", False):
+        if getattr(self, "_fixed_written", False) and all(
+                getattr(a, k) is v for a, held in self._held for k, v in zip(_HELD, held)):
             # the moving anchors' rows: (position - reference + motion) + offset, the
             # operations of AnchorBC.prescribed with its fixed part kept from the last
-            # invalidate_time (the anchors' positions and offsets change only with it)
+            # invalidate_time, or from the last time an anchor was given another motion,
+            # offset, position or dofs (checked above: the same objects)
             for rows, values in self._moving:
                 arr[rows] = values(t)
-        else:  # every anchor once (again after invalidate_time)
+        else:  # every anchor once (again after invalidate_time or such a change)
             for anc in self.anchors:
                 if anc.dofs.size:
                     arr[anc.flat_dofs] = anc.prescribed("displacement", t)
             self._moving = [(anc.flat_dofs, _displacement_rows(anc)) for anc in self.anchors
                             if anc.dofs.size and anc.motion is not None]
+            self._held = [(a, [getattr(a, k) for k in _HELD]) for a in self.anchors]
         self._fixed_written = True
         for c, ld in self.loads:
             c.value[:] = np.asarray(ld.value) * ld.time.value(t)
@@ -306,10 +309,11 @@ class CableModel:
         self.forms.set_time(t)  # every term's time law (the fluid's: waves, gusts)
 
     def invalidate_time(self) -> None:
-        """Make the next :meth:`set_time` write everything again: call it after changing
-        an anchor's position, offset, motion or degrees of freedom (the hinges do);
-        :meth:`set_time` otherwise keeps the fixed anchors' rows and the moving ones'
-        fixed parts from its first call."""
+        """Make the next :meth:`set_time` write everything again. :meth:`set_time` keeps
+        the fixed anchors' rows and the moving ones' fixed parts; it writes them again by
+        itself when an anchor is given another ``motion``, ``offset``, ``position``,
+        ``reference`` or ``dofs`` (other objects), so call this after changing one of
+        those arrays in place."""
         self._time = None
         self._fixed_written = False
 
@@ -416,6 +420,10 @@ for _name, _term in (("F_internal", "internal"), ("F_external", "external"),
     setattr(CableModel, _name, _forwarded(_term))
 
 
+#: what set_time keeps an anchor's rows from (the same objects: else written again)
+_HELD = ("motion", "offset", "position", "reference", "dofs")
+
+
 def _displacement_rows(anc):
     """``t -> anc.prescribed("displacement", t)``, the same operations, with the anchor's
     fixed part ``position - reference`` computed once (a string's anchor; a rod's: the
@@ -427,3 +435,4 @@ def _displacement_rows(anc):
     if np.array_equal(comps, np.arange(3)):  # one node, all three components: as they are
         return lambda t: (fixed + motion(t)) + offset
     return lambda t: ((fixed + motion(t)) + offset)[comps]
+

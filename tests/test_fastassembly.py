@@ -402,3 +402,20 @@ def test_a_new_times_anchor_rows_are_the_prescribed_ones_and_follow_invalidate_t
     assert np.array_equal(arr[anc.flat_dofs], anc.prescribed("displacement", 1.7))
     if anc.dofs.size:  # the rank that holds the anchor's node
         assert not np.array_equal(arr[anc.flat_dofs], before)
+
+
+def test_an_anchor_given_another_motion_is_moved_by_it_at_the_next_time():
+    """An anchor's ``motion`` replaced between two times, without ``invalidate_time``
+    (the Python API): ``set_time`` sees the other object and writes the new motion's
+    rows, ``AnchorBC.prescribed``'s to the last bit (not the kept ones of the old)."""
+    from cablefem.motion import HarmonicMotion
+
+    model = CableModel(MPI.COMM_WORLD, parse_case(level_case(elements=8, motion=MOTION)))
+    anc = next(a for a in model.anchors if a.motion is not None)
+    model.set_time(0.3)
+    anc.motion = HarmonicMotion([0.0, 3e-4, 1e-4], 20.0)
+    model.set_time(0.4)
+    arr = model.u_bc.x.array
+    assert np.array_equal(arr[anc.flat_dofs], anc.prescribed("displacement", 0.4))
+    if anc.dofs.size:  # the old motion would give other rows
+        assert np.abs(anc.motion.displacement(0.4)).max() > 1e-5
