@@ -243,14 +243,11 @@ class VirtualHinges:
         """(n, 3) weight and inertia of the layers of ``anchors`` (n indices), ``m sigma_h
         (g - a)`` with their ``accelerations`` (n, 3), N (zero rows for anchors without
         hinge)."""
-        out = [[0.0, 0.0, 0.0] for _ in range(len(anchors))]
-        masses = self.masses()
-        g = self.g_vec.tolist()
+        out, masses, g = [[0.0] * 3 for _ in range(len(anchors))], self.masses(), self.g_vec
         # Python floats: the same operations as NumPy's on the arrays, a tenth of the time
         for k, (i, a) in enumerate(zip(anchors.tolist(), accelerations.tolist())):
-            mass = masses.get(i)
-            if mass is not None:
-                out[k] = [mass * (gj - aj) for gj, aj in zip(g, a)]
+            if i in masses:
+                out[k] = [masses[i] * (gj - aj) for gj, aj in zip(g.tolist(), a)]
         return np.array(out, float).reshape(-1, 3)
 
     def masses(self) -> dict[int, float]:
