@@ -2,7 +2,8 @@
 can copy only what changed: the state Functions (:func:`state_gather`), the other Functions
 that a time law changed (:func:`other_functions`, :func:`copy_changed`), and a Jacobian's
 coefficients as columns of its residual's (:func:`jacobian_columns`, :func:`take_columns`).
-Used by :class:`cablefem.petsc_utils.RowsAssembler` and :mod:`cablefem.native_rows`."""
+Used by :class:`cablefem.petsc_utils.RowsAssembler`, whose results :mod:`cablefem.native_rows`
+reads."""
 
 from __future__ import annotations
 
